@@ -1,0 +1,302 @@
+//! Plain scene data: planar polygons with a diffuse material, an optional camera, and the
+//! loaders and built-in scenes that produce them.
+//!
+//! **Units.** Lengths are in the scene's own unit (the Cornell box is in millimetres, the built-in
+//! cubes in metres, OBJ files in whatever their author used); nothing in the engine depends on it
+//! except the absolute size of areas in the output. Emission `E` is radiant exitance, power per
+//! unit area leaving a surface by emission, in W/m² (or W per square scene unit: radiosity is
+//! linear in `E`, so only ratios matter for pictures). Radiosity `B` has the same unit as `E`; the
+//! radiance of a Lambertian surface is `B/π`. Reflectance `ρ` is the diffuse albedo, in `[0, 1)`.
+
+pub mod builtin;
+pub mod obj;
+pub mod spectrum;
+
+use crate::color::Rgb;
+use crate::geom::{Aabb, Vec3};
+use std::path::{Path, PathBuf};
+
+/// A diffuse material: reflectance and emission per colour channel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name (from the MTL file or the built-in scene).
+    pub name: String,
+    /// Diffuse reflectance ρ per channel, each in `[0, 1)`.
+    pub reflectance: Rgb,
+    /// Emitted radiant exitance E per channel, W/m² (≥ 0).
+    pub emission: Rgb,
+}
+
+impl Material {
+    /// A material that reflects but does not emit.
+    pub fn diffuse(name: &str, reflectance: Rgb) -> Self {
+        Self {
+            name: name.to_string(),
+            reflectance,
+            emission: Rgb::BLACK,
+        }
+    }
+
+    /// A material that emits `emission` and reflects `reflectance`.
+    pub fn emitter(name: &str, reflectance: Rgb, emission: Rgb) -> Self {
+        Self {
+            name: name.to_string(),
+            reflectance,
+            emission,
+        }
+    }
+}
+
+/// A planar polygon. Its front side, the side that reflects and emits, is the one from which the
+/// vertices are seen counter-clockwise (right-hand rule: normal = (v1 − v0) × (v2 − v0) for a
+/// triangle).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Polygon {
+    /// Vertices in order (at least three).
+    pub vertices: Vec<Vec3>,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Line of the scene file that defined it (0 for built-in scenes), for error messages.
+    pub line: u32,
+}
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye point.
+    pub eye: Vec3,
+    /// Point looked at.
+    pub target: Vec3,
+    /// Up direction (need not be orthogonal to the view direction).
+    pub up: Vec3,
+    /// Vertical field of view in degrees, in `(0, 180)`.
+    pub fov_y_deg: f32,
+}
+
+impl Camera {
+    /// A camera that frames the bounds `b` from the front (+z side), slightly above, looking at
+    /// the centre, with a 45° vertical field of view.
+    pub fn framing(b: &Aabb) -> Self {
+        let centre = b.centre();
+        let radius = (b.diagonal() * 0.5).max(1e-3);
+        let fov = 45.0f32;
+        let dir = Vec3::new(0.25, 0.35, 1.0).normalize();
+        let dist = radius / (fov.to_radians() * 0.5).sin() * 1.05;
+        Self {
+            eye: centre + dir * dist,
+            target: centre,
+            up: Vec3::Y,
+            fov_y_deg: fov,
+        }
+    }
+
+    /// Check the camera is usable: finite, eye ≠ target, up not parallel to the view, fov in range.
+    pub fn validate(&self) -> Result<(), String> {
+        let finite = self.eye.is_finite() && self.target.is_finite() && self.up.is_finite();
+        if !finite {
+            return Err("camera has a non-finite coordinate".into());
+        }
+        let view = self.target - self.eye;
+        if view.length() <= 0.0 {
+            return Err("camera eye and target coincide".into());
+        }
+        if view.normalize().cross(self.up).length() < 1e-6 {
+            return Err("camera up vector is parallel to the view direction".into());
+        }
+        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
+            return Err(format!(
+                "camera field of view {}° is outside (0, 180)",
+                self.fov_y_deg
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A scene: polygons, their materials, and optionally a camera.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// Name shown in reports (built-in name or file stem).
+    pub name: String,
+    /// File the scene was read from, if any (for error messages).
+    pub source: Option<PathBuf>,
+    /// Materials referenced by the polygons.
+    pub materials: Vec<Material>,
+    /// The geometry.
+    pub polygons: Vec<Polygon>,
+    /// The scene's own camera, if it defines one.
+    pub camera: Option<Camera>,
+    /// Non-fatal remarks from loading (ignored statements, defaults applied).
+    pub warnings: Vec<String>,
+}
+
+/// Why a scene could not be loaded or is not fit to solve.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// A file could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's reason.
+        source: std::io::Error,
+    },
+    /// A problem at a known place (`file:line`, or a polygon of a built-in scene).
+    #[error("{place}: {message}")]
+    Invalid {
+        /// Where: `file:line` or `scene polygon N`.
+        place: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A scene name that is neither a built-in scene nor an existing file.
+    #[error("'{0}' is neither a built-in scene ({list}) nor a readable file", list = builtin::NAMES.join(", "))]
+    Unknown(String),
+}
+
+impl Scene {
+    /// Where polygon `i` came from, for messages: `file:line` or `scene 'name' polygon i`.
+    pub fn place_of(&self, i: usize) -> String {
+        match (&self.source, self.polygons.get(i)) {
+            (Some(path), Some(p)) if p.line > 0 => format!("{}:{}", path.display(), p.line),
+            (Some(path), _) => format!("{} (polygon {})", path.display(), i),
+            (None, _) => format!("scene '{}' polygon {}", self.name, i),
+        }
+    }
+
+    /// Where the scene as a whole came from.
+    pub fn place(&self) -> String {
+        match &self.source {
+            Some(p) => p.display().to_string(),
+            None => format!("scene '{}'", self.name),
+        }
+    }
+
+    /// Bounds of all vertices.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(self.polygons.iter().flat_map(|p| p.vertices.iter()))
+    }
+
+    /// Total area of the polygons (each as a fan of triangles; exact for planar polygons).
+    pub fn total_area(&self) -> f64 {
+        self.polygons.iter().map(|p| polygon_area(&p.vertices)).sum()
+    }
+
+    /// Total emitted power Σ E·A per channel.
+    pub fn emitted_power(&self) -> Rgb {
+        self.polygons
+            .iter()
+            .map(|p| self.materials[p.material].emission * polygon_area(&p.vertices))
+            .sum()
+    }
+
+    /// The camera to use: the scene's own, or one that frames its bounds.
+    pub fn camera_or_default(&self) -> Camera {
+        self.camera.unwrap_or_else(|| Camera::framing(&self.bounds()))
+    }
+
+    /// Check everything the engine relies on: materials physical (ρ in `[0, 1)`, E ≥ 0, all
+    /// finite), polygons with at least three finite vertices and non-zero area, valid material
+    /// indices, a valid camera, and at least one light.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let bad = |place: String, message: String| SceneError::Invalid { place, message };
+        for m in &self.materials {
+            let place = || format!("{} (material '{}')", self.place(), m.name);
+            let rho = m.reflectance;
+            if !rho.is_finite() || rho.min_channel() < 0.0 || rho.max_channel() >= 1.0 {
+                return Err(bad(
+                    place(),
+                    format!("reflectance {rho} must have every channel in [0, 1)"),
+                ));
+            }
+            if !m.emission.is_finite() || m.emission.min_channel() < 0.0 {
+                return Err(bad(
+                    place(),
+                    format!("emission {} must be finite and non-negative", m.emission),
+                ));
+            }
+        }
+        if self.polygons.is_empty() {
+            return Err(bad(self.place(), "the scene has no polygons".into()));
+        }
+        let size = self.bounds().diagonal().max(f32::MIN_POSITIVE) as f64;
+        for (i, p) in self.polygons.iter().enumerate() {
+            if p.vertices.len() < 3 {
+                return Err(bad(
+                    self.place_of(i),
+                    format!("polygon has {} vertices; at least 3 needed", p.vertices.len()),
+                ));
+            }
+            if let Some(v) = p.vertices.iter().find(|v| !v.is_finite()) {
+                return Err(bad(
+                    self.place_of(i),
+                    format!("vertex ({}, {}, {}) is not finite", v.x, v.y, v.z),
+                ));
+            }
+            if p.material >= self.materials.len() {
+                return Err(bad(
+                    self.place_of(i),
+                    format!("material index {} out of range", p.material),
+                ));
+            }
+            // Zero area relative to the scene: below (1e-7 · size)², the patch would be
+            // numerically empty in f32.
+            if polygon_area(&p.vertices) <= (1e-7 * size).powi(2) {
+                return Err(bad(
+                    self.place_of(i),
+                    "polygon has zero area (degenerate face)".into(),
+                ));
+            }
+        }
+        if let Some(c) = &self.camera {
+            c.validate().map_err(|m| bad(self.place(), m))?;
+        }
+        if self.emitted_power().max_channel() <= 0.0 {
+            return Err(bad(
+                self.place(),
+                "the scene has no light source: no polygon has a material with emission > 0".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Area of a polygon as the length of its vector area (exact for planar polygons, the area of
+/// the projection onto the best plane otherwise).
+pub fn polygon_area(v: &[Vec3]) -> f64 {
+    vector_area(v).length() as f64
+}
+
+/// The vector area ½ Σ vᵢ × vᵢ₊₁ (Newell's method): normal direction times area.
+pub fn vector_area(v: &[Vec3]) -> Vec3 {
+    if v.len() < 3 {
+        return Vec3::ZERO;
+    }
+    // Relative to v[0] for precision.
+    let o = v[0];
+    let mut s = Vec3::ZERO;
+    for k in 1..v.len() - 1 {
+        s += (v[k] - o).cross(v[k + 1] - o);
+    }
+    s * 0.5
+}
+
+/// Load a scene by built-in name or from a file (`.obj`).
+pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+    if let Some(s) = builtin::by_name(name_or_path) {
+        return Ok(s);
+    }
+    let path = Path::new(name_or_path);
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("obj") => obj::load(path),
+        _ if !path.exists() => Err(SceneError::Unknown(name_or_path.to_string())),
+        _ => Err(SceneError::Invalid {
+            place: path.display().to_string(),
+            message: "unsupported scene format (supported: .obj with .mtl)".into(),
+        }),
+    }
+}
