@@ -1,11 +1,58 @@
 //! Diffuse global illumination by the radiosity method.
-#![doc = include_str!("../README.md")]
+//!
+//! The pipeline: a [`scene::Scene`] of planar polygons with diffuse materials is cut into
+//! patches ([`mesh`]), a bounding-volume hierarchy makes them ray-castable ([`accel`]), form
+//! factors are estimated ([`formfactor`]) and the radiosity system is solved ([`solve`]); the
+//! result is rendered ([`render`]) or written out ([`export`]). [`pipeline`] runs the stages in
+//! order.
+//!
+//! ```
+//! use radiosity::{mesh::MeshParams, pipeline, scene::builtin};
+//!
+//! let scene = builtin::furnace();
+//! let settings = pipeline::Settings { mesh: MeshParams::Patches(200), ..Default::default() };
+//! let solution = pipeline::solve(&scene, &settings, &mut |_| {}).unwrap();
+//! // Closed furnace: every patch's radiosity is near E/(1 − ρ) = 2 in the green channel.
+//! let mean: f64 = solution.radiosity.iter().map(|b| b.g).sum::<f64>() / solution.radiosity.len() as f64;
+//! assert!((mean - 2.0).abs() < 0.1);
+//! ```
 
 pub mod accel;
 pub mod color;
+pub mod export;
+pub mod formfactor;
 pub mod geom;
 pub mod mesh;
+pub mod pipeline;
+pub mod render;
 pub mod sampling;
 pub mod scene;
-pub mod formfactor;
 pub mod solve;
+
+pub use color::Rgb;
+
+/// Any failure of the library's stages.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The scene could not be read or is not fit to solve.
+    #[error(transparent)]
+    Scene(#[from] scene::SceneError),
+    /// The linear system is malformed.
+    #[error(transparent)]
+    Solve(#[from] solve::SolveError),
+    /// An output could not be written.
+    #[error(transparent)]
+    Export(#[from] export::ExportError),
+    /// The job would not fit in memory.
+    #[error("{what} would need about {} MiB but only {} MiB are available; use {alternative}", needed >> 20, limit >> 20)]
+    OutOfMemory {
+        /// What was asked for.
+        what: String,
+        /// Estimated bytes.
+        needed: u64,
+        /// Bytes available.
+        limit: u64,
+        /// What to do instead.
+        alternative: String,
+    },
+}

@@ -1,0 +1,122 @@
+//! Command-line syntax (clap).
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+/// Diffuse global illumination by the radiosity method.
+#[derive(Debug, Parser)]
+#[command(name = "radiosity", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Solve a scene and render a picture (PNG, or linear HDR as .exr / .pfm).
+    Render(RenderArgs),
+    /// Solve a scene and write one CSV row per patch.
+    Solve(SolveCmdArgs),
+    /// Measure ray-casting speed and the time to converge the Cornell box.
+    Bench(BenchArgs),
+}
+
+/// Options shared by every command that solves a scene.
+#[derive(Debug, Args)]
+pub struct SolveArgs {
+    /// A built-in scene (cornell, cube-dim, cube-bright, furnace) or a path to an .obj file.
+    #[arg(default_value = "cornell")]
+    pub scene: String,
+    /// Approximate total number of patches.
+    #[arg(long, value_name = "N", conflicts_with = "max_edge")]
+    pub patches: Option<usize>,
+    /// Largest patch edge, in scene units (instead of --patches).
+    #[arg(long, value_name = "L")]
+    pub max_edge: Option<f32>,
+    /// Monte Carlo rays per form-factor row for a patch shooting an average share of the power
+    /// (emitters get proportionally more).
+    #[arg(long, value_name = "N", default_value_t = 256)]
+    pub rays: u32,
+    /// Seed of every random stream.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads (default: one per core). Results do not depend on it.
+    #[arg(long, value_name = "T")]
+    pub threads: Option<usize>,
+    /// Stop when the unshot energy is at most this fraction of the emitted energy.
+    #[arg(long, value_name = "F", default_value_t = 0.01)]
+    pub tolerance: f64,
+    /// Stop after this many shots at the latest.
+    #[arg(long, value_name = "K")]
+    pub max_iterations: Option<u64>,
+}
+
+/// Camera overrides.
+#[derive(Debug, Args)]
+pub struct CameraArgs {
+    /// Eye point x,y,z.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub eye: Option<String>,
+    /// Point looked at x,y,z.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub target: Option<String>,
+    /// Up direction x,y,z.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub up: Option<String>,
+    /// Vertical field of view, degrees.
+    #[arg(long, value_name = "DEG")]
+    pub fov: Option<f32>,
+}
+
+/// `radiosity render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub solve: SolveArgs,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    /// Output image: .png (tone-mapped sRGB), .exr or .pfm (linear radiance). Default SCENE.png.
+    #[arg(long, short, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Image width in pixels.
+    #[arg(long, value_name = "W", default_value_t = 512)]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, value_name = "H", default_value_t = 512)]
+    pub height: u32,
+    /// Camera rays per pixel.
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub spp: u32,
+    /// Exposure adjustment in stops, relative to automatic exposure (PNG only).
+    #[arg(long, value_name = "EV", default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure: f32,
+}
+
+/// `radiosity solve`.
+#[derive(Debug, Args)]
+pub struct SolveCmdArgs {
+    #[command(flatten)]
+    pub solve: SolveArgs,
+    /// Output CSV, one row per patch.
+    #[arg(long, short, value_name = "FILE")]
+    pub out: PathBuf,
+}
+
+/// `radiosity bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Patches of the Cornell box.
+    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    pub patches: usize,
+    /// Rays per ray-casting measurement.
+    #[arg(long, value_name = "N", default_value_t = 2_000_000)]
+    pub rays: usize,
+    /// Repetitions of each measurement (the median is reported).
+    #[arg(long, value_name = "K", default_value_t = 5)]
+    pub runs: usize,
+    /// Worker threads (default: one per core).
+    #[arg(long, value_name = "T")]
+    pub threads: Option<usize>,
+}

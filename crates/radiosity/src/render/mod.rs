@@ -1,0 +1,178 @@
+//! Pictures of a solution: primary visibility by ray casting through a pinhole camera, the
+//! radiosity interpolated across each surface from its patch vertices (Gouraud shading), several
+//! jittered samples per pixel, then exposure and the sRGB transfer curve.
+//!
+//! A Lambertian surface of radiosity `B` has radiance `B/π` in every direction; the image holds
+//! that linear radiance. The back side of a patch is one-sided and renders black, as does the
+//! background.
+
+use crate::accel::Bvh;
+use crate::color::Rgb;
+use crate::geom::{Ray, Vec3};
+use crate::mesh::Mesh;
+use crate::sampling::{stream, uniform};
+use crate::scene::Camera;
+use rayon::prelude::*;
+
+/// Image size and sampling.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderParams {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Jittered camera rays per pixel.
+    pub samples_per_pixel: u32,
+    /// Seed of the jitter.
+    pub seed: u64,
+}
+
+impl Default for RenderParams {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            samples_per_pixel: 4,
+            seed: 1,
+        }
+    }
+}
+
+/// A linear-radiance image, rows from top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width × height` RGB radiances (W·sr⁻¹·m⁻² in the scene's emission units).
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl Image {
+    /// The pixel at column `x`, row `y` (0 = top).
+    pub fn at(&self, x: u32, y: u32) -> [f32; 3] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+}
+
+/// Radiosity at each mesh vertex: the area-weighted mean of the patches that share it. Vertices
+/// are shared only inside a surface piece, so this smooths within a surface and keeps edges
+/// between surfaces hard.
+pub fn vertex_radiosity(mesh: &Mesh, patch_values: &[Rgb]) -> Vec<Rgb> {
+    let mut sum = vec![Rgb::BLACK; mesh.vertices.len()];
+    let mut weight = vec![0.0f64; mesh.vertices.len()];
+    for (p, b) in mesh.patches.iter().zip(patch_values) {
+        let n = if p.is_triangle() { 3 } else { 4 };
+        for &v in &p.vertices[..n] {
+            sum[v as usize] += *b * p.area as f64;
+            weight[v as usize] += p.area as f64;
+        }
+    }
+    sum.iter()
+        .zip(&weight)
+        .map(|(s, w)| if *w > 0.0 { *s / *w } else { Rgb::BLACK })
+        .collect()
+}
+
+/// The camera's orthonormal frame `(forward, right, up)`.
+fn frame(c: &Camera) -> (Vec3, Vec3, Vec3) {
+    let forward = (c.target - c.eye).normalize();
+    let right = forward.cross(c.up).normalize();
+    let up = right.cross(forward);
+    (forward, right, up)
+}
+
+/// Render the radiosity given at mesh vertices (`vertex_values`, e.g. from
+/// [`vertex_radiosity`]). `progress` is called with the number of rows finished so far.
+pub fn render(
+    mesh: &Mesh,
+    bvh: &Bvh,
+    vertex_values: &[Rgb],
+    camera: &Camera,
+    params: &RenderParams,
+    progress: &(dyn Fn(u32) + Sync),
+) -> Image {
+    let (w, h) = (params.width.max(1), params.height.max(1));
+    let spp = params.samples_per_pixel.max(1);
+    let (forward, right, up) = frame(camera);
+    let tan_y = (camera.fov_y_deg.to_radians() * 0.5).tan();
+    let tan_x = tan_y * w as f32 / h as f32;
+    let done = std::sync::atomic::AtomicU32::new(0);
+    let inv_pi = std::f64::consts::FRAC_1_PI;
+    let mut pixels = vec![[0.0f32; 3]; (w * h) as usize];
+    pixels
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let mut rng = stream(params.seed, 0x5245_4e44, y as u64, 0);
+            for (x, px) in row.iter_mut().enumerate() {
+                let mut acc = Rgb::BLACK;
+                for _ in 0..spp {
+                    let (jx, jy) = if spp == 1 {
+                        (0.5, 0.5)
+                    } else {
+                        (uniform(&mut rng), uniform(&mut rng))
+                    };
+                    let sx = (2.0 * (x as f32 + jx) / w as f32 - 1.0) * tan_x;
+                    let sy = (1.0 - 2.0 * (y as f32 + jy) / h as f32) * tan_y;
+                    let d = (forward + right * sx + up * sy).normalize();
+                    if let Some(hit) = bvh.closest_hit(&Ray::new(camera.eye, d), f32::INFINITY) {
+                        if hit.front {
+                            let p = &mesh.patches[hit.patch as usize];
+                            let [a, b, c, dd] = p.vertices;
+                            let (b, c) = if hit.sub == 0 { (b, c) } else { (c, dd) };
+                            let (u, v) = (hit.u as f64, hit.v as f64);
+                            acc += vertex_values[a as usize] * (1.0 - u - v)
+                                + vertex_values[b as usize] * u
+                                + vertex_values[c as usize] * v;
+                        }
+                    }
+                }
+                let l = acc * (inv_pi / spp as f64);
+                *px = [l.r as f32, l.g as f32, l.b as f32];
+            }
+            progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+        });
+    Image {
+        width: w,
+        height: h,
+        pixels,
+    }
+}
+
+/// The exposure scale that maps the 97th percentile of pixel luminance to 0.9 (so that a few
+/// percent of the pixels, typically the lights, may clip), or 1 for a black image.
+pub fn auto_exposure(image: &Image) -> f32 {
+    let mut lum: Vec<f32> = image
+        .pixels
+        .iter()
+        .map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
+        .filter(|l| *l > 0.0)
+        .collect();
+    if lum.is_empty() {
+        return 1.0;
+    }
+    let k = ((lum.len() as f64 * 0.97) as usize).min(lum.len() - 1);
+    let (_, v, _) = lum.select_nth_unstable_by(k, f32::total_cmp);
+    0.9 / *v
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) of a linear value in `[0, 1]`.
+pub fn srgb_encode(c: f32) -> f32 {
+    let c = c.clamp(0.0, 1.0);
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// 8-bit sRGB pixels (RGB, rows top to bottom) of `image` after multiplying by `scale`.
+pub fn to_srgb8(image: &Image, scale: f32) -> Vec<u8> {
+    image
+        .pixels
+        .iter()
+        .flat_map(|p| p.map(|c| (srgb_encode(c * scale) * 255.0 + 0.5) as u8))
+        .collect()
+}
