@@ -36,12 +36,19 @@ pub fn uniform(rng: &mut Rng64) -> f32 {
 /// point on the unit disc lifted onto the hemisphere).
 #[inline]
 pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let (t, b) = orthonormal_basis(n);
+    cosine_direction_in(n, t, b, u1, u2)
+}
+
+/// [`cosine_direction`] in a precomputed orthonormal frame `(t, b, n)`; unit length to within
+/// rounding.
+#[inline]
+pub fn cosine_direction_in(n: Vec3, t: Vec3, b: Vec3, u1: f32, u2: f32) -> Vec3 {
     let r = u1.sqrt();
     let phi = std::f32::consts::TAU * u2;
     let (s, c) = phi.sin_cos();
     let z = (1.0 - u1).max(0.0).sqrt();
-    let (t, b) = orthonormal_basis(n);
-    (t * (r * c) + b * (r * s) + n * z).normalize()
+    t * (r * c) + b * (r * s) + n * z
 }
 
 /// Barycentric weights `(1 − s − t, s, t)` of a point uniform over a triangle, from two uniforms.

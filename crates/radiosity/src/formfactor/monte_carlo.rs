@@ -21,7 +21,9 @@ use super::{Entry, FormFactorStats};
 use crate::accel::Bvh;
 use crate::geom::Ray;
 use crate::mesh::Mesh;
-use crate::sampling::{cosine_direction, stream, uniform};
+use crate::geom::orthonormal_basis;
+use crate::sampling::{cosine_direction_in, stream, uniform};
+use rand::Rng;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -88,6 +90,7 @@ pub fn estimate_row(
     let offset = bvh.ray_offset();
     let patch = &mesh.patches[i];
     let normal = patch.normal;
+    let (tangent, bitangent) = orthonormal_basis(normal);
     scratch.hits.clear();
     scratch.hits.resize(n, MISS);
     let trace = |c: usize, chunk: &mut [u32]| {
@@ -95,7 +98,7 @@ pub fn estimate_row(
         for slot in chunk.iter_mut() {
             let (u1, u2, u3) = (uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
             let p = mesh.sample_point(i, u1, u2, u3);
-            let d = cosine_direction(normal, uniform(&mut rng), uniform(&mut rng));
+            let d = cosine_direction_in(normal, tangent, bitangent, uniform(&mut rng), uniform(&mut rng));
             let ray = Ray::new(p + normal * offset, d);
             *slot = match bvh.closest_hit(&ray, f32::INFINITY) {
                 Some(h) if h.front && h.patch as usize != i => h.patch,
@@ -135,18 +138,13 @@ pub fn estimate_row(
     }
 }
 
-/// Trace `count` rays from random patches (chosen with probability proportional to area) in
-/// cosine-distributed directions, the incoherent rays of form-factor estimation; returns how
-/// many hit a front side. For measuring ray-casting speed.
+/// Trace `count` rays from random patches (uniform over patch indices), from uniform points in
+/// cosine-distributed directions: the incoherent rays of form-factor estimation, without the
+/// coherence of tracing one patch's row at a time. Returns how many hit a front side. For
+/// measuring ray-casting speed.
 pub fn trace_random_rays(mesh: &Mesh, bvh: &Bvh, count: usize, seed: u64) -> u64 {
     let offset = bvh.ray_offset();
-    // Cumulative areas for choosing patches.
-    let mut cdf = Vec::with_capacity(mesh.len());
-    let mut acc = 0.0f64;
-    for p in &mesh.patches {
-        acc += p.area as f64;
-        cdf.push(acc);
-    }
+    let n = mesh.len() as u64;
     let chunks = count.div_ceil(1024);
     (0..chunks)
         .into_par_iter()
@@ -155,11 +153,11 @@ pub fn trace_random_rays(mesh: &Mesh, bvh: &Bvh, count: usize, seed: u64) -> u64
             let todo = (count - c * 1024).min(1024);
             let mut hits = 0u64;
             for _ in 0..todo {
-                let x = uniform(&mut rng) as f64 * acc;
-                let i = cdf.partition_point(|&v| v < x).min(mesh.len() - 1);
+                let i = ((rng.random::<u32>() as u64 * n) >> 32) as usize;
                 let p = mesh.sample_point(i, uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
                 let n = mesh.patches[i].normal;
-                let d = cosine_direction(n, uniform(&mut rng), uniform(&mut rng));
+                let (t, b) = orthonormal_basis(n);
+                let d = cosine_direction_in(n, t, b, uniform(&mut rng), uniform(&mut rng));
                 if let Some(h) = bvh.closest_hit(&Ray::new(p + n * offset, d), f32::INFINITY) {
                     hits += h.front as u64;
                 }
