@@ -1,0 +1,194 @@
+//! The `radiosity` command as a user runs it: outputs, and bad input that must fail with one
+//! line naming the file and the problem, a non-zero exit, and no output file.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_radiosity"))
+}
+
+/// A fresh scratch folder for one test.
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("radiosity-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str], dir: &Path) -> Output {
+    bin().args(args).current_dir(dir).output().unwrap()
+}
+
+/// Assert a failure: non-zero exit, exactly one line on stderr containing every `needles`,
+/// no panic, and no file left in `dir` besides `keep`.
+fn assert_fails(out: &Output, needles: &[&str], dir: &Path, keep: &[&str]) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "succeeded: {err}");
+    assert_ne!(out.status.code(), Some(101), "panicked: {err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.contains("warning:")).collect();
+    assert_eq!(lines.len(), 1, "expected one line, got: {err}");
+    for n in needles {
+        assert!(lines[0].contains(n), "'{}' lacks '{n}'", lines[0]);
+    }
+    let left: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !keep.contains(&n.as_str()))
+        .collect();
+    assert!(left.is_empty(), "files left behind: {left:?}");
+}
+
+fn write(dir: &Path, name: &str, text: &str) {
+    std::fs::write(dir.join(name), text).unwrap();
+}
+
+/// A lit box as OBJ: floor, ceiling light, one wall.
+const GOOD_OBJ: &str = "mtllib box.mtl\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nv 0 1 0\nv 1 1 0\nv 1 1 1\nv 0 1 1\nusemtl white\nf 1 4 3 2\nf 1 2 6 5\nusemtl lamp\nf 5 6 7 8\n";
+const GOOD_MTL: &str = "newmtl white\nKd 0.7 0.7 0.7\nnewmtl lamp\nKd 0.5 0.5 0.5\nKe 10 10 10\n";
+
+#[test]
+fn bad_scenes_fail_cleanly() {
+    let cases: &[(&str, &str, &str, &[&str])] = &[
+        // (obj text, mtl text, expected fragments of the message)
+        ("v 0 0 0\nv 1 0 x\n", "", "", &["scene.obj:2", "malformed number 'x'"]),
+        ("v nan 0 0\n", "", "", &["scene.obj:1", "not finite"]),
+        ("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "", "", &["scene.obj:4", "zero area"]),
+        ("v 0 0 0\nv 1 0 0\nf 1 2\n", "", "", &["scene.obj:3", "at least 3"]),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "", "", &["scene.obj:4", "out of range"]),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "", "", &["scene.obj", "no light source"]),
+        ("mtllib box.mtl\n", "newmtl a\nKd 1.2 0.5 0.5\n", "", &["box.mtl:2", "Kd", "[0, 1)"]),
+        ("mtllib missing.mtl\n", "", "", &["scene.obj:1", "missing.mtl", "not found"]),
+        ("v 0 0 0\nusemtl nothing\n", "", "", &["scene.obj:2", "unknown material 'nothing'"]),
+    ];
+    for (k, (obj, mtl, _, needles)) in cases.iter().enumerate() {
+        let dir = scratch(&format!("bad{k}"));
+        write(&dir, "scene.obj", obj);
+        let mut keep = vec!["scene.obj"];
+        if !mtl.is_empty() {
+            write(&dir, "box.mtl", mtl);
+            keep.push("box.mtl");
+        }
+        for args in [
+            vec!["render", "scene.obj", "--out", "out.png", "--patches", "50"],
+            vec!["solve", "scene.obj", "--out", "out.csv", "--patches", "50"],
+        ] {
+            let out = run(&args, &dir);
+            assert_fails(&out, needles, &dir, &keep);
+        }
+    }
+}
+
+#[test]
+fn missing_file_and_bad_options_fail_cleanly() {
+    let dir = scratch("opts");
+    let out = run(&["render", "nowhere.obj", "--out", "x.png"], &dir);
+    assert_fails(&out, &["nowhere.obj"], &dir, &[]);
+    let out = run(&["render", "no-such-scene"], &dir);
+    assert_fails(&out, &["no-such-scene", "cornell"], &dir, &[]);
+    let out = run(&["render", "cornell", "--rays", "0", "--out", "x.png"], &dir);
+    assert_fails(&out, &["--rays 0"], &dir, &[]);
+    let out = run(&["render", "cornell", "--out", "x.jpg"], &dir);
+    assert_fails(&out, &["x.jpg", "unsupported image format"], &dir, &[]);
+    let out = run(&["render", "cornell", "--out", "nofolder/x.png"], &dir);
+    assert_fails(&out, &["nofolder"], &dir, &[]);
+    let out = run(&["solve", "cornell", "--out", "x.txt"], &dir);
+    assert_fails(&out, &["x.txt", ".csv"], &dir, &[]);
+    let out = run(&["render", "cornell", "--eye", "1,2", "--out", "x.png"], &dir);
+    assert_fails(&out, &["--eye"], &dir, &[]);
+    let out = run(&["render", "cornell", "--tolerance", "1.5", "--out", "x.png"], &dir);
+    assert_fails(&out, &["--tolerance"], &dir, &[]);
+}
+
+#[test]
+fn solve_writes_the_documented_csv() {
+    let dir = scratch("csv");
+    let out = run(&["solve", "furnace", "--patches", "150", "--rays", "512", "--tolerance", "1e-6", "--out", "f.csv"], &dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(dir.join("f.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "patch,surface,area,cx,cy,cz,nx,ny,nz,reflectance_r,reflectance_g,reflectance_b,emission_r,emission_g,emission_b,radiosity_r,radiosity_g,radiosity_b"
+    );
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    assert!(rows.len() > 100);
+    let (mut area, mut weighted) = (0.0, 0.0);
+    for (k, r) in rows.iter().enumerate() {
+        assert_eq!(r.len(), 18);
+        assert_eq!(r[0] as usize, k);
+        area += r[2];
+        weighted += r[2] * r[16];
+    }
+    // Furnace, green channel: ρ = 0.5, E = 1, so the area-weighted mean radiosity is 2.
+    assert!((weighted / area - 2.0).abs() < 1e-4, "{}", weighted / area);
+    // Surface area of the 1 m box plus the inner block.
+    assert!((area - (6.0 + 2.0 * (0.4 * 0.35 + 0.35 * 0.3 + 0.4 * 0.3))).abs() < 1e-4);
+}
+
+#[test]
+fn solve_output_does_not_depend_on_threads() {
+    let dir = scratch("threads");
+    for t in ["1", "2"] {
+        let out = run(&["solve", "cornell", "--patches", "600", "--threads", t, "--out", &format!("t{t}.csv")], &dir);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let a = std::fs::read(dir.join("t1.csv")).unwrap();
+    let b = std::fs::read(dir.join("t2.csv")).unwrap();
+    assert!(a == b, "CSV differs between --threads 1 and --threads 2");
+}
+
+#[test]
+fn render_writes_png_exr_and_pfm() {
+    let dir = scratch("render");
+    let out = run(&["render", "--patches", "1500", "--width", "96", "--height", "96", "--out", "c.png"], &dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for key in ["patches", "rays", "shots", "unshot", "time"] {
+        assert!(stdout.contains(key), "summary lacks {key}: {stdout}");
+    }
+    let img = image::open(dir.join("c.png")).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (96, 96));
+    // The red wall is on the left, the green wall on the right (camera looks along +z, +x left).
+    let mean = |x0: u32, x1: u32| {
+        let mut s = [0f64; 3];
+        for y in 20..76 {
+            for x in x0..x1 {
+                for c in 0..3 {
+                    s[c] += img.get_pixel(x, y)[c] as f64;
+                }
+            }
+        }
+        s
+    };
+    let (l, r) = (mean(4, 14), mean(82, 92));
+    // sRGB encoding compresses ratios (linear green wall ≈ (0.09, 0.40, 0.08) under a warm
+    // light), so compare the walls with each other, with margin.
+    assert!(l[0] > 1.5 * l[1], "left is not red: {l:?}");
+    assert!(r[1] > 1.3 * r[0], "right is not green: {r:?}");
+    assert!(l[0] / l[1] > 3.0 * (r[0] / r[1]), "left {l:?} vs right {r:?}");
+    // Linear HDR outputs.
+    for name in ["c.exr", "c.pfm"] {
+        let out = run(&["render", "--patches", "300", "--width", "32", "--height", "24", "--out", name], &dir);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let pfm = std::fs::read(dir.join("c.pfm")).unwrap();
+    assert!(pfm.starts_with(b"PF\n32 24\n-1.0\n"));
+    assert_eq!(pfm.len(), b"PF\n32 24\n-1.0\n".len() + 32 * 24 * 12);
+    let exr = std::fs::read(dir.join("c.exr")).unwrap();
+    assert_eq!(&exr[..4], &[0x76, 0x2f, 0x31, 0x01], "not an OpenEXR file");
+}
+
+#[test]
+fn obj_scene_renders_with_camera_flags() {
+    let dir = scratch("obj");
+    write(&dir, "box.obj", GOOD_OBJ);
+    write(&dir, "box.mtl", GOOD_MTL);
+    let out = run(
+        &["render", "box.obj", "--patches", "200", "--width", "32", "--height", "32", "--eye", "0.5,0.5,3", "--target", "0.5,0.5,0", "--fov", "40"],
+        &dir,
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let img = image::open(dir.join("box.png")).unwrap().to_rgb8();
+    assert!(img.pixels().any(|p| p[0] > 0), "the picture is black");
+}

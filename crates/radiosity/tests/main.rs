@@ -1,0 +1,3 @@
+//! Integration tests of the library: physics against closed forms and invariants.
+
+mod physics;
