@@ -90,7 +90,12 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub spp: u32,
     /// Exposure adjustment in stops, relative to automatic exposure (PNG only).
-    #[arg(long, value_name = "EV", default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "EV",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub exposure: f32,
 }
 

@@ -52,18 +52,28 @@ fn solve_scene(a: &SolveArgs) -> Result<(Scene, Solution)> {
 }
 
 fn render(a: RenderArgs) -> Result<()> {
-    let out = a.out.clone().unwrap_or_else(|| default_output(&a.solve.scene, "png"));
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_output(&a.solve.scene, "png"));
     ImageFormat::from_path(&out)?;
     settings::check_output(&out)?;
     settings::settings(&a.solve)?;
     if a.width == 0 || a.height == 0 {
-        anyhow::bail!("--width {} --height {}: the image needs at least one pixel", a.width, a.height);
+        anyhow::bail!(
+            "--width {} --height {}: the image needs at least one pixel",
+            a.width,
+            a.height
+        );
     }
     if a.spp == 0 {
         anyhow::bail!("--spp 0: at least one sample per pixel is needed");
     }
     if !a.exposure.is_finite() {
-        anyhow::bail!("--exposure {}: must be a finite number of stops", a.exposure);
+        anyhow::bail!(
+            "--exposure {}: must be a finite number of stops",
+            a.exposure
+        );
     }
     settings::threads(a.solve.threads)?;
     let (scene, solution) = solve_scene(&a.solve)?;
@@ -84,12 +94,22 @@ fn render(a: RenderArgs) -> Result<()> {
     write_image(&out, &image, scale).context("writing the image")?;
     let write_s = t.elapsed().as_secs_f64();
     report::summary(&scene, &solution, Some((render_s, write_s)));
-    println!("wrote       {} ({}×{}, {} samples per pixel)", out.display(), a.width, a.height, a.spp);
+    println!(
+        "wrote       {} ({}×{}, {} samples per pixel)",
+        out.display(),
+        a.width,
+        a.height,
+        a.spp
+    );
     Ok(())
 }
 
 fn solve(a: SolveCmdArgs) -> Result<()> {
-    let ext = a.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+    let ext = a
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
     if ext.as_deref() != Some("csv") {
         anyhow::bail!("{}: unsupported output format (use .csv)", a.out.display());
     }
@@ -101,7 +121,11 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     write_patches_csv(&a.out, &scene, &solution.mesh, &solution.radiosity)?;
     let write_s = t.elapsed().as_secs_f64();
     report::summary(&scene, &solution, None);
-    println!("wrote       {} ({} patches) in {write_s:.3} s", a.out.display(), solution.mesh.len());
+    println!(
+        "wrote       {} ({} patches) in {write_s:.3} s",
+        a.out.display(),
+        solution.mesh.len()
+    );
     Ok(())
 }
 

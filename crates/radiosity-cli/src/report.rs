@@ -64,9 +64,11 @@ impl Progress {
 pub fn rows_bar(rows: u32) -> ProgressBar {
     let bar = ProgressBar::new(rows as u64);
     bar.set_style(
-        ProgressStyle::with_template("{spinner} rendering {pos}/{len} rows [{bar:30}] {elapsed_precise}")
-            .expect("valid template")
-            .progress_chars("=> "),
+        ProgressStyle::with_template(
+            "{spinner} rendering {pos}/{len} rows [{bar:30}] {elapsed_precise}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
     );
     bar
 }
@@ -76,13 +78,25 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
     let i = &s.info;
     let ff = &s.form_factors;
     let e = i.emitted.sum();
-    println!("scene       {} ({} polygons)", scene.name, scene.polygons.len());
-    println!("patches     {} (max edge {:.4} scene units)", s.mesh.len(), s.mesh.max_edge);
+    println!(
+        "scene       {} ({} polygons)",
+        scene.name,
+        scene.polygons.len()
+    );
+    println!(
+        "patches     {} (max edge {:.4} scene units)",
+        s.mesh.len(),
+        s.mesh.max_edge
+    );
     println!("rays        {} in {} form-factor rows", ff.rays, ff.rows);
     println!(
         "shots       {} ({}; unshot energy left {:.3}% of emitted)",
         i.iterations,
-        if i.converged { "converged" } else { "stopped at --max-iterations" },
+        if i.converged {
+            "converged"
+        } else {
+            "stopped at --max-iterations"
+        },
         100.0 * i.unshot_fraction
     );
     println!(

@@ -13,7 +13,9 @@ use std::path::Path;
 /// Library settings from the shared solve options.
 pub fn settings(a: &SolveArgs) -> Result<Settings> {
     let mesh = match (a.patches, a.max_edge) {
-        (_, Some(l)) if !(l.is_finite() && l > 0.0) => bail!("--max-edge {l}: must be a positive length"),
+        (_, Some(l)) if !(l.is_finite() && l > 0.0) => {
+            bail!("--max-edge {l}: must be a positive length")
+        }
         (_, Some(l)) => MeshParams::MaxEdge(l),
         (Some(0), _) => bail!("--patches 0: at least one patch is needed"),
         (Some(n), _) => MeshParams::Patches(n),
@@ -85,7 +87,11 @@ pub fn check_output(path: &Path) -> Result<()> {
         _ => Path::new("."),
     };
     if !dir.is_dir() {
-        bail!("{}: folder '{}' does not exist", path.display(), dir.display());
+        bail!(
+            "{}: folder '{}' does not exist",
+            path.display(),
+            dir.display()
+        );
     }
     if path.is_dir() {
         bail!("{}: is a folder, not a file name", path.display());

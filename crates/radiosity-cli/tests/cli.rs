@@ -51,15 +51,55 @@ const GOOD_MTL: &str = "newmtl white\nKd 0.7 0.7 0.7\nnewmtl lamp\nKd 0.5 0.5 0.
 fn bad_scenes_fail_cleanly() {
     let cases: &[(&str, &str, &str, &[&str])] = &[
         // (obj text, mtl text, expected fragments of the message)
-        ("v 0 0 0\nv 1 0 x\n", "", "", &["scene.obj:2", "malformed number 'x'"]),
+        (
+            "v 0 0 0\nv 1 0 x\n",
+            "",
+            "",
+            &["scene.obj:2", "malformed number 'x'"],
+        ),
         ("v nan 0 0\n", "", "", &["scene.obj:1", "not finite"]),
-        ("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "", "", &["scene.obj:4", "zero area"]),
-        ("v 0 0 0\nv 1 0 0\nf 1 2\n", "", "", &["scene.obj:3", "at least 3"]),
-        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "", "", &["scene.obj:4", "out of range"]),
-        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "", "", &["scene.obj", "no light source"]),
-        ("mtllib box.mtl\n", "newmtl a\nKd 1.2 0.5 0.5\n", "", &["box.mtl:2", "Kd", "[0, 1)"]),
-        ("mtllib missing.mtl\n", "", "", &["scene.obj:1", "missing.mtl", "not found"]),
-        ("v 0 0 0\nusemtl nothing\n", "", "", &["scene.obj:2", "unknown material 'nothing'"]),
+        (
+            "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n",
+            "",
+            "",
+            &["scene.obj:4", "zero area"],
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nf 1 2\n",
+            "",
+            "",
+            &["scene.obj:3", "at least 3"],
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+            "",
+            "",
+            &["scene.obj:4", "out of range"],
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "",
+            "",
+            &["scene.obj", "no light source"],
+        ),
+        (
+            "mtllib box.mtl\n",
+            "newmtl a\nKd 1.2 0.5 0.5\n",
+            "",
+            &["box.mtl:2", "Kd", "[0, 1)"],
+        ),
+        (
+            "mtllib missing.mtl\n",
+            "",
+            "",
+            &["scene.obj:1", "missing.mtl", "not found"],
+        ),
+        (
+            "v 0 0 0\nusemtl nothing\n",
+            "",
+            "",
+            &["scene.obj:2", "unknown material 'nothing'"],
+        ),
     ];
     for (k, (obj, mtl, _, needles)) in cases.iter().enumerate() {
         let dir = scratch(&format!("bad{k}"));
@@ -86,7 +126,10 @@ fn missing_file_and_bad_options_fail_cleanly() {
     assert_fails(&out, &["nowhere.obj"], &dir, &[]);
     let out = run(&["render", "no-such-scene"], &dir);
     assert_fails(&out, &["no-such-scene", "cornell"], &dir, &[]);
-    let out = run(&["render", "cornell", "--rays", "0", "--out", "x.png"], &dir);
+    let out = run(
+        &["render", "cornell", "--rays", "0", "--out", "x.png"],
+        &dir,
+    );
     assert_fails(&out, &["--rays 0"], &dir, &[]);
     let out = run(&["render", "cornell", "--out", "x.jpg"], &dir);
     assert_fails(&out, &["x.jpg", "unsupported image format"], &dir, &[]);
@@ -94,24 +137,50 @@ fn missing_file_and_bad_options_fail_cleanly() {
     assert_fails(&out, &["nofolder"], &dir, &[]);
     let out = run(&["solve", "cornell", "--out", "x.txt"], &dir);
     assert_fails(&out, &["x.txt", ".csv"], &dir, &[]);
-    let out = run(&["render", "cornell", "--eye", "1,2", "--out", "x.png"], &dir);
+    let out = run(
+        &["render", "cornell", "--eye", "1,2", "--out", "x.png"],
+        &dir,
+    );
     assert_fails(&out, &["--eye"], &dir, &[]);
-    let out = run(&["render", "cornell", "--tolerance", "1.5", "--out", "x.png"], &dir);
+    let out = run(
+        &["render", "cornell", "--tolerance", "1.5", "--out", "x.png"],
+        &dir,
+    );
     assert_fails(&out, &["--tolerance"], &dir, &[]);
 }
 
 #[test]
 fn solve_writes_the_documented_csv() {
     let dir = scratch("csv");
-    let out = run(&["solve", "furnace", "--patches", "150", "--rays", "512", "--tolerance", "1e-6", "--out", "f.csv"], &dir);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = run(
+        &[
+            "solve",
+            "furnace",
+            "--patches",
+            "150",
+            "--rays",
+            "512",
+            "--tolerance",
+            "1e-6",
+            "--out",
+            "f.csv",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = std::fs::read_to_string(dir.join("f.csv")).unwrap();
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
         "patch,surface,area,cx,cy,cz,nx,ny,nz,reflectance_r,reflectance_g,reflectance_b,emission_r,emission_g,emission_b,radiosity_r,radiosity_g,radiosity_b"
     );
-    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
     assert!(rows.len() > 100);
     let (mut area, mut weighted) = (0.0, 0.0);
     for (k, r) in rows.iter().enumerate() {
@@ -130,8 +199,24 @@ fn solve_writes_the_documented_csv() {
 fn solve_output_does_not_depend_on_threads() {
     let dir = scratch("threads");
     for t in ["1", "2"] {
-        let out = run(&["solve", "cornell", "--patches", "600", "--threads", t, "--out", &format!("t{t}.csv")], &dir);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let out = run(
+            &[
+                "solve",
+                "cornell",
+                "--patches",
+                "600",
+                "--threads",
+                t,
+                "--out",
+                &format!("t{t}.csv"),
+            ],
+            &dir,
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
     }
     let a = std::fs::read(dir.join("t1.csv")).unwrap();
     let b = std::fs::read(dir.join("t2.csv")).unwrap();
@@ -141,8 +226,25 @@ fn solve_output_does_not_depend_on_threads() {
 #[test]
 fn render_writes_png_exr_and_pfm() {
     let dir = scratch("render");
-    let out = run(&["render", "--patches", "1500", "--width", "96", "--height", "96", "--out", "c.png"], &dir);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = run(
+        &[
+            "render",
+            "--patches",
+            "1500",
+            "--width",
+            "96",
+            "--height",
+            "96",
+            "--out",
+            "c.png",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
     for key in ["patches", "rays", "shots", "unshot", "time"] {
         assert!(stdout.contains(key), "summary lacks {key}: {stdout}");
@@ -166,11 +268,31 @@ fn render_writes_png_exr_and_pfm() {
     // light), so compare the walls with each other, with margin.
     assert!(l[0] > 1.5 * l[1], "left is not red: {l:?}");
     assert!(r[1] > 1.3 * r[0], "right is not green: {r:?}");
-    assert!(l[0] / l[1] > 3.0 * (r[0] / r[1]), "left {l:?} vs right {r:?}");
+    assert!(
+        l[0] / l[1] > 3.0 * (r[0] / r[1]),
+        "left {l:?} vs right {r:?}"
+    );
     // Linear HDR outputs.
     for name in ["c.exr", "c.pfm"] {
-        let out = run(&["render", "--patches", "300", "--width", "32", "--height", "24", "--out", name], &dir);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let out = run(
+            &[
+                "render",
+                "--patches",
+                "300",
+                "--width",
+                "32",
+                "--height",
+                "24",
+                "--out",
+                name,
+            ],
+            &dir,
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
     }
     let pfm = std::fs::read(dir.join("c.pfm")).unwrap();
     assert!(pfm.starts_with(b"PF\n32 24\n-1.0\n"));
@@ -185,10 +307,29 @@ fn obj_scene_renders_with_camera_flags() {
     write(&dir, "box.obj", GOOD_OBJ);
     write(&dir, "box.mtl", GOOD_MTL);
     let out = run(
-        &["render", "box.obj", "--patches", "200", "--width", "32", "--height", "32", "--eye", "0.5,0.5,3", "--target", "0.5,0.5,0", "--fov", "40"],
+        &[
+            "render",
+            "box.obj",
+            "--patches",
+            "200",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--eye",
+            "0.5,0.5,3",
+            "--target",
+            "0.5,0.5,0",
+            "--fov",
+            "40",
+        ],
         &dir,
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let img = image::open(dir.join("box.png")).unwrap().to_rgb8();
     assert!(img.pixels().any(|p| p[0] > 0), "the picture is black");
 }

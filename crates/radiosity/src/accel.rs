@@ -13,8 +13,8 @@
 //! front hemisphere, a ray cannot hit its own patch.
 
 use crate::geom::{Aabb, Ray, Vec3};
-use glam::Vec4;
 use crate::mesh::Mesh;
+use glam::Vec4;
 
 /// Most triangles in a leaf.
 pub const MAX_LEAF: usize = 4;
@@ -218,7 +218,12 @@ impl Bvh {
     /// How far off a surface rays should start: large enough to clear `f32` rounding of the
     /// scene's coordinates (the largest coordinate times 2⁻¹⁸), small against any patch.
     pub fn ray_offset(&self) -> f32 {
-        let m = self.bounds.min.abs().max(self.bounds.max.abs()).max_element();
+        let m = self
+            .bounds
+            .min
+            .abs()
+            .max(self.bounds.max.abs())
+            .max_element();
         let d = self.bounds.diagonal();
         (m * 4e-6).max(d * 1e-6).max(f32::MIN_POSITIVE)
     }
@@ -297,7 +302,8 @@ impl Bvh {
                     & t.cmplt(Vec4::splat(best_t));
                 let mut mask = ok.bitmask();
                 if mask != 0 {
-                    let (ta, ua, va, da) = (t.to_array(), u.to_array(), v.to_array(), det.to_array());
+                    let (ta, ua, va, da) =
+                        (t.to_array(), u.to_array(), v.to_array(), det.to_array());
                     while mask != 0 {
                         let l = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
@@ -318,8 +324,16 @@ impl Bvh {
                 let ty1 = (n.max_y - oy) * iy;
                 let tz0 = (n.min_z - oz) * iz;
                 let tz1 = (n.max_z - oz) * iz;
-                let tmin = tx0.min(tx1).max(ty0.min(ty1)).max(tz0.min(tz1)).max(Vec4::ZERO);
-                let tmax = tx0.max(tx1).min(ty0.max(ty1)).min(tz0.max(tz1)).min(Vec4::splat(best_t));
+                let tmin = tx0
+                    .min(tx1)
+                    .max(ty0.min(ty1))
+                    .max(tz0.min(tz1))
+                    .max(Vec4::ZERO);
+                let tmax = tx0
+                    .max(tx1)
+                    .min(ty0.max(ty1))
+                    .min(tz0.max(tz1))
+                    .min(Vec4::splat(best_t));
                 let mut mask = tmin.cmple(tmax).bitmask();
                 if mask != 0 {
                     let dist = tmin.to_array();
@@ -378,18 +392,22 @@ impl Bvh {
     /// leaf's box, every triangle in exactly one leaf). Tests call it.
     pub fn validate(&self) -> Result<(), String> {
         let mut seen = vec![false; self.tris.len()];
-        let lane_box = |n: &Node4, l: usize| {
-            Aabb {
-                min: Vec3::new(n.min_x[l], n.min_y[l], n.min_z[l]),
-                max: Vec3::new(n.max_x[l], n.max_y[l], n.max_z[l]),
-            }
+        let lane_box = |n: &Node4, l: usize| Aabb {
+            min: Vec3::new(n.min_x[l], n.min_y[l], n.min_z[l]),
+            max: Vec3::new(n.max_x[l], n.max_y[l], n.max_z[l]),
         };
         let tol = |a: f32| 1e-4 * a.abs().max(1.0);
         let inside = |p: Vec3, b: &Aabb| {
             (0..3).all(|k| p[k] >= b.min[k] - tol(p[k]) && p[k] <= b.max[k] + tol(p[k]))
         };
         // (node, box of the node as its parent stores it)
-        let mut stack = vec![(0usize, Aabb { min: Vec3::splat(f32::NEG_INFINITY), max: Vec3::splat(f32::INFINITY) })];
+        let mut stack = vec![(
+            0usize,
+            Aabb {
+                min: Vec3::splat(f32::NEG_INFINITY),
+                max: Vec3::splat(f32::INFINITY),
+            },
+        )];
         while let Some((i, parent)) = stack.pop() {
             let n = &self.nodes[i];
             for l in 0..4 {
@@ -412,8 +430,15 @@ impl Bvh {
                     }
                     let get = |a: &[Vec4; 3]| Vec3::new(a[0][lane], a[1][lane], a[2][lane]);
                     let (v0, e1, e2) = (get(&blk.v0), get(&blk.e1), get(&blk.e2));
-                    let Some(k) = self.tris.iter().position(|t| t.id == blk.id[lane] && t.v0 == v0) else {
-                        return Err(format!("leaf lane holds an unknown triangle {}", blk.id[lane]));
+                    let Some(k) = self
+                        .tris
+                        .iter()
+                        .position(|t| t.id == blk.id[lane] && t.v0 == v0)
+                    else {
+                        return Err(format!(
+                            "leaf lane holds an unknown triangle {}",
+                            blk.id[lane]
+                        ));
                     };
                     if std::mem::replace(&mut seen[k], true) {
                         return Err(format!("triangle {k} in two leaves"));
@@ -433,7 +458,13 @@ impl Bvh {
 
 /// Collapse the binary tree under `b` into 4-wide nodes appended to `out`; returns the index of
 /// the node made for `b` (which must be interior, or the root).
-fn collapse(bin: &[Node], b: usize, tris: &[Tri], out: &mut Vec<Node4>, blocks: &mut Vec<TriBlock>) -> u32 {
+fn collapse(
+    bin: &[Node],
+    b: usize,
+    tris: &[Tri],
+    out: &mut Vec<Node4>,
+    blocks: &mut Vec<TriBlock>,
+) -> u32 {
     let area = |n: &Node| {
         Aabb {
             min: Vec3::from_array(n.min),
@@ -480,7 +511,10 @@ fn collapse(bin: &[Node], b: usize, tris: &[Tri], out: &mut Vec<Node4>, blocks: 
                 e2: [Vec4::ZERO; 3],
                 id: [EMPTY_LANE; 4],
             };
-            for (lane, t) in tris[n.first as usize..(n.first + n.count) as usize].iter().enumerate() {
+            for (lane, t) in tris[n.first as usize..(n.first + n.count) as usize]
+                .iter()
+                .enumerate()
+            {
                 for a in 0..3 {
                     blk.v0[a][lane] = t.v0[a];
                     blk.e1[a][lane] = t.e1[a];
@@ -554,7 +588,8 @@ fn sah_split(prims: &mut [Prim]) -> Option<usize> {
             let mut i = 0;
             let mut j = n;
             while i < j {
-                let bin = (((prims[i].centroid[axis] - cb.min[axis]) * scale) as usize).min(BINS - 1);
+                let bin =
+                    (((prims[i].centroid[axis] - cb.min[axis]) * scale) as usize).min(BINS - 1);
                 if bin < b {
                     i += 1;
                 } else {
@@ -594,7 +629,12 @@ mod tests {
                 let q = s.cross(e1);
                 let v = ray.direction.dot(q) / det;
                 let tt = e2.dot(q) / det;
-                if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && tt > 0.0 && best.is_none_or(|(bt, _)| tt < bt) {
+                if u >= 0.0
+                    && v >= 0.0
+                    && u + v <= 1.0
+                    && tt > 0.0
+                    && best.is_none_or(|(bt, _)| tt < bt)
+                {
                     best = Some((tt, k as u32));
                 }
             }
@@ -641,11 +681,21 @@ mod tests {
         let mesh = Mesh::build(&scene, MeshParams::Faces).unwrap();
         let bvh = Bvh::build(&mesh);
         // From inside the box straight down: the floor's front side.
-        let h = bvh.closest_hit(&Ray::new(Vec3::new(100.0, 400.0, 500.0), -Vec3::Y), f32::INFINITY).unwrap();
+        let h = bvh
+            .closest_hit(
+                &Ray::new(Vec3::new(100.0, 400.0, 500.0), -Vec3::Y),
+                f32::INFINITY,
+            )
+            .unwrap();
         assert!(h.front);
         assert!((h.t - 400.0).abs() < 1e-3);
         // From below the floor going up: its back side.
-        let h = bvh.closest_hit(&Ray::new(Vec3::new(100.0, -10.0, 500.0), Vec3::Y), f32::INFINITY).unwrap();
+        let h = bvh
+            .closest_hit(
+                &Ray::new(Vec3::new(100.0, -10.0, 500.0), Vec3::Y),
+                f32::INFINITY,
+            )
+            .unwrap();
         assert!(!h.front);
     }
 }

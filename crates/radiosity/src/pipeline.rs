@@ -110,7 +110,12 @@ impl Solution {
     }
 
     /// Render the display radiosity, Gouraud-interpolated within surfaces.
-    pub fn render(&self, camera: &Camera, params: &RenderParams, progress: &(dyn Fn(u32) + Sync)) -> Image {
+    pub fn render(
+        &self,
+        camera: &Camera,
+        params: &RenderParams,
+        progress: &(dyn Fn(u32) + Sync),
+    ) -> Image {
         let vertex = vertex_radiosity(&self.mesh, &self.display_radiosity());
         render(&self.mesh, &self.bvh, &vertex, camera, params, progress)
     }
@@ -129,7 +134,11 @@ pub fn available_memory() -> Option<u64> {
 }
 
 /// Validate, mesh and solve `scene`.
-pub fn solve(scene: &Scene, settings: &Settings, observer: &mut dyn FnMut(Event)) -> Result<Solution, Error> {
+pub fn solve(
+    scene: &Scene,
+    settings: &Settings,
+    observer: &mut dyn FnMut(Event),
+) -> Result<Solution, Error> {
     scene.validate()?;
     observer(Event::Stage(Stage::Mesh));
     let t = Instant::now();
@@ -177,7 +186,9 @@ pub fn solve(scene: &Scene, settings: &Settings, observer: &mut dyn FnMut(Event)
     system.validate()?;
     let mut rows = MonteCarloRows::new(&mesh, &bvh, monte_carlo);
     let mut pr = Progressive::new(system);
-    let info = pr.run(&mut rows, &settings.progressive, &mut |s| observer(Event::Solve(*s)));
+    let info = pr.run(&mut rows, &settings.progressive, &mut |s| {
+        observer(Event::Solve(*s))
+    });
     let form_factors = rows.stats();
     let radiosity = pr.radiosity().to_vec();
     let unshot = pr.unshot().to_vec();

@@ -78,7 +78,10 @@ mod tests {
         }
         let (m1, m2) = (s1 / m as f64, s2 / m as f64);
         // Standard errors: sd(cos)=sqrt(1/2-4/9)≈0.236 → 0.236/√m ≈ 5.3e-4; 5σ tolerance.
-        assert!((m1 - 2.0 / 3.0).abs() < 5.0 * 0.236 / (m as f64).sqrt(), "{m1}");
+        assert!(
+            (m1 - 2.0 / 3.0).abs() < 5.0 * 0.236 / (m as f64).sqrt(),
+            "{m1}"
+        );
         assert!((m2 - 0.5).abs() < 5.0 * 0.29 / (m as f64).sqrt(), "{m2}");
     }
 

@@ -35,7 +35,16 @@ fn factor(scene: &Scene, n: u32) -> (f64, f64, Vec<(u32, f32)>) {
     assert_eq!(mesh.len(), 2);
     let bvh = Bvh::build(&mesh);
     let mut row = Vec::new();
-    estimate_row(&mesh, &bvh, 0, n, 11, 0, &mut RowScratch::default(), &mut row);
+    estimate_row(
+        &mesh,
+        &bvh,
+        0,
+        n,
+        11,
+        0,
+        &mut RowScratch::default(),
+        &mut row,
+    );
     let f = row.iter().find(|e| e.0 == 1).map_or(0.0, |e| e.1 as f64);
     (f, (f * (1.0 - f) / n as f64).sqrt(), row)
 }
@@ -85,7 +94,12 @@ fn reciprocity_between_unequal_patches() {
     let (a0, a1) = (1.0, 4.0);
     let diff = (a0 * f01 - a1 * f10).abs();
     let sigma = ((a0 * s01).powi(2) + (a1 * s10).powi(2)).sqrt();
-    assert!(f01 > 0.1 && diff < 4.0 * sigma, "A0F01 = {}, A1F10 = {}, σ = {sigma}", a0 * f01, a1 * f10);
+    assert!(
+        f01 > 0.1 && diff < 4.0 * sigma,
+        "A0F01 = {}, A1F10 = {}, σ = {sigma}",
+        a0 * f01,
+        a1 * f10
+    );
 }
 
 /// In a closed enclosure every ray hits a front side: every row of F̂ sums to 1 (a test of the
@@ -133,14 +147,24 @@ fn furnace_solution(rays: u32, patches: usize) -> pipeline::Solution {
 #[test]
 fn furnace_gives_e_over_one_minus_rho() {
     let rho = builtin::FURNACE_REFLECTANCE;
-    let exact = Rgb::new(1.0 / (1.0 - rho.r), 1.0 / (1.0 - rho.g), 1.0 / (1.0 - rho.b));
+    let exact = Rgb::new(
+        1.0 / (1.0 - rho.r),
+        1.0 / (1.0 - rho.g),
+        1.0 / (1.0 - rho.b),
+    );
     let mut rms = Vec::new();
     for rays in [256, 1024] {
         let s = furnace_solution(rays, 600);
         assert!(s.info.converged);
         let total_area: f64 = s.area.iter().sum();
         let mean_area = total_area / s.area.len() as f64;
-        let mean: Rgb = s.radiosity.iter().zip(&s.area).map(|(b, a)| *b * *a).sum::<Rgb>() / total_area;
+        let mean: Rgb = s
+            .radiosity
+            .iter()
+            .zip(&s.area)
+            .map(|(b, a)| *b * *a)
+            .sum::<Rgb>()
+            / total_area;
         for (m, x) in mean.to_array().iter().zip(exact.to_array()) {
             assert!((m / x - 1.0).abs() < 1e-5, "area-weighted mean {m} vs {x}");
         }
@@ -165,7 +189,10 @@ fn furnace_gives_e_over_one_minus_rho() {
         rms.push((sum_rel2 / n).sqrt());
     }
     let ratio = rms[0] / rms[1];
-    assert!((1.5..2.7).contains(&ratio), "error ratio for 4× rays: {ratio} (1/√n predicts 2)");
+    assert!(
+        (1.5..2.7).contains(&ratio),
+        "error ratio for 4× rays: {ratio} (1/√n predicts 2)"
+    );
 }
 
 /// Energy balance of a converged open scene: emitted = absorbed + escaped + unshot, and the
@@ -180,7 +207,10 @@ fn energy_balance_in_the_cornell_box() {
     let i = s.info;
     assert!(i.converged && i.unshot_fraction <= 0.01);
     let balance = i.emitted - i.absorbed - i.escaped - i.unshot;
-    assert!(balance.max_abs_diff(Rgb::BLACK) < 1e-9 * i.emitted.max_channel(), "{balance}");
+    assert!(
+        balance.max_abs_diff(Rgb::BLACK) < 1e-9 * i.emitted.max_channel(),
+        "{balance}"
+    );
     // The box is open at the front: some light leaves.
     assert!(i.escaped.sum() > 0.05 * i.emitted.sum());
     let mut absorbed = Rgb::BLACK;
@@ -213,7 +243,10 @@ fn energy_balance_in_the_cornell_box() {
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
     let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         pool.install(|| {
             let settings = Settings {
                 mesh: MeshParams::Patches(800),

@@ -154,7 +154,23 @@ pub fn write_patches_csv(
             writeln!(
                 out,
                 "{k},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                p.surface, p.area, c.x, c.y, c.z, n.x, n.y, n.z, r.r, r.g, r.b, e.r, e.g, e.b, b.r, b.g, b.b
+                p.surface,
+                p.area,
+                c.x,
+                c.y,
+                c.z,
+                n.x,
+                n.y,
+                n.z,
+                r.r,
+                r.g,
+                r.b,
+                e.r,
+                e.g,
+                e.b,
+                b.r,
+                b.g,
+                b.b
             )?;
         }
         Ok(())

@@ -19,9 +19,9 @@
 
 use super::{Entry, FormFactorStats};
 use crate::accel::Bvh;
+use crate::geom::orthonormal_basis;
 use crate::geom::Ray;
 use crate::mesh::Mesh;
-use crate::geom::orthonormal_basis;
 use crate::sampling::{cosine_direction_in, stream, uniform};
 use rand::Rng;
 use rayon::prelude::*;
@@ -62,7 +62,9 @@ impl MonteCarloParams {
     /// `max_rays`. So every ray carries at most the power that a ray of an average patch carries.
     pub fn rays_for(&self, share: f64, patches: usize) -> u32 {
         let want = (self.rays as f64 * patches as f64 * share).ceil();
-        (want.min(self.max_rays as f64) as u32).max(self.rays).max(1)
+        (want.min(self.max_rays as f64) as u32)
+            .max(self.rays)
+            .max(1)
     }
 }
 
@@ -98,7 +100,13 @@ pub fn estimate_row(
         for slot in chunk.iter_mut() {
             let (u1, u2, u3) = (uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
             let p = mesh.sample_point(i, u1, u2, u3);
-            let d = cosine_direction_in(normal, tangent, bitangent, uniform(&mut rng), uniform(&mut rng));
+            let d = cosine_direction_in(
+                normal,
+                tangent,
+                bitangent,
+                uniform(&mut rng),
+                uniform(&mut rng),
+            );
             let ray = Ray::new(p + normal * offset, d);
             *slot = match bvh.closest_hit(&ray, f32::INFINITY) {
                 Some(h) if h.front && h.patch as usize != i => h.patch,
@@ -154,7 +162,8 @@ pub fn trace_random_rays(mesh: &Mesh, bvh: &Bvh, count: usize, seed: u64) -> u64
             let mut hits = 0u64;
             for _ in 0..todo {
                 let i = ((rng.random::<u32>() as u64 * n) >> 32) as usize;
-                let p = mesh.sample_point(i, uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
+                let p =
+                    mesh.sample_point(i, uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
                 let n = mesh.patches[i].normal;
                 let (t, b) = orthonormal_basis(n);
                 let d = cosine_direction_in(n, t, b, uniform(&mut rng), uniform(&mut rng));

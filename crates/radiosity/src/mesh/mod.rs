@@ -171,9 +171,15 @@ fn pieces(scene: &Scene, i: usize) -> Result<Vec<Piece>, SceneError> {
         if !planar {
             // Split along the shorter diagonal: both halves are planar.
             return Ok(if (q[2] - q[0]).length() <= (q[3] - q[1]).length() {
-                vec![Piece::Tri([q[0], q[1], q[2]]), Piece::Tri([q[0], q[2], q[3]])]
+                vec![
+                    Piece::Tri([q[0], q[1], q[2]]),
+                    Piece::Tri([q[0], q[2], q[3]]),
+                ]
             } else {
-                vec![Piece::Tri([q[0], q[1], q[3]]), Piece::Tri([q[1], q[2], q[3]])]
+                vec![
+                    Piece::Tri([q[0], q[1], q[3]]),
+                    Piece::Tri([q[1], q[2], q[3]]),
+                ]
             });
         }
     }
@@ -336,7 +342,8 @@ impl Mesh {
                     row_start.push(self.vertices.len() as u32);
                     for i in 0..=(n - j) {
                         let (s, r) = (i as f32 / n as f32, j as f32 / n as f32);
-                        self.vertices.push(t[0] + (t[1] - t[0]) * s + (t[2] - t[0]) * r);
+                        self.vertices
+                            .push(t[0] + (t[1] - t[0]) * s + (t[2] - t[0]) * r);
                     }
                 }
                 let at = |i: u32, j: u32| row_start[j as usize] + i;
@@ -404,10 +411,12 @@ impl Mesh {
                     self.vertices[t[2] as usize],
                 );
                 if tn.dot(p.normal) < 0.0 {
-                    return Err(format!("patch {k}: a triangle faces against the patch normal"));
+                    return Err(format!(
+                        "patch {k}: a triangle faces against the patch normal"
+                    ));
                 }
             }
-            if !(p.area > 0.0) {
+            if p.area.is_nan() || p.area <= 0.0 {
                 return Err(format!("patch {k}: area {} is not positive", p.area));
             }
             if (p.normal.length() - 1.0).abs() > 1e-4 {
@@ -421,14 +430,18 @@ impl Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{builtin, polygon_area, Material, Polygon};
     use crate::color::Rgb;
+    use crate::scene::{builtin, polygon_area, Material, Polygon};
 
     fn one_polygon(vertices: Vec<Vec3>) -> Scene {
         Scene {
             name: "t".into(),
             materials: vec![Material::emitter("m", Rgb::splat(0.5), Rgb::splat(1.0))],
-            polygons: vec![Polygon { vertices, material: 0, line: 0 }],
+            polygons: vec![Polygon {
+                vertices,
+                material: 0,
+                line: 0,
+            }],
             ..Default::default()
         }
     }

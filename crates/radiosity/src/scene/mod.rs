@@ -179,7 +179,10 @@ impl Scene {
 
     /// Total area of the polygons (each as a fan of triangles; exact for planar polygons).
     pub fn total_area(&self) -> f64 {
-        self.polygons.iter().map(|p| polygon_area(&p.vertices)).sum()
+        self.polygons
+            .iter()
+            .map(|p| polygon_area(&p.vertices))
+            .sum()
     }
 
     /// Total emitted power Σ E·A per channel.
@@ -192,7 +195,8 @@ impl Scene {
 
     /// The camera to use: the scene's own, or one that frames its bounds.
     pub fn camera_or_default(&self) -> Camera {
-        self.camera.unwrap_or_else(|| Camera::framing(&self.bounds()))
+        self.camera
+            .unwrap_or_else(|| Camera::framing(&self.bounds()))
     }
 
     /// Check everything the engine relies on: materials physical (ρ in `[0, 1)`, E ≥ 0, all
@@ -224,7 +228,10 @@ impl Scene {
             if p.vertices.len() < 3 {
                 return Err(bad(
                     self.place_of(i),
-                    format!("polygon has {} vertices; at least 3 needed", p.vertices.len()),
+                    format!(
+                        "polygon has {} vertices; at least 3 needed",
+                        p.vertices.len()
+                    ),
                 ));
             }
             if let Some(v) = p.vertices.iter().find(|v| !v.is_finite()) {

@@ -33,7 +33,10 @@ fn read(path: &Path) -> Result<String, SceneError> {
     })?;
     String::from_utf8(bytes).map_err(|e| SceneError::Invalid {
         place: path.display().to_string(),
-        message: format!("not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()),
+        message: format!(
+            "not UTF-8 text (invalid byte at offset {})",
+            e.utf8_error().valid_up_to()
+        ),
     })
 }
 
@@ -42,7 +45,11 @@ fn parse_f64(path: &Path, line: usize, tok: &str, what: &str) -> Result<f64, Sce
         .parse()
         .map_err(|_| invalid(path, line, format!("malformed number '{tok}' in {what}")))?;
     if !v.is_finite() {
-        return Err(invalid(path, line, format!("{what} value '{tok}' is not finite")));
+        return Err(invalid(
+            path,
+            line,
+            format!("{what} value '{tok}' is not finite"),
+        ));
     }
     Ok(v)
 }
@@ -61,7 +68,11 @@ fn parse_rgb(path: &Path, line: usize, args: &[&str], what: &str) -> Result<Rgb,
 }
 
 /// Read an MTL file into `materials` (name → material).
-fn load_mtl(path: &Path, out: &mut Vec<Material>, names: &mut HashMap<String, usize>) -> Result<(), SceneError> {
+fn load_mtl(
+    path: &Path,
+    out: &mut Vec<Material>,
+    names: &mut HashMap<String, usize>,
+) -> Result<(), SceneError> {
     let text = read(path)?;
     let mut current: Option<usize> = None;
     for (k, raw) in text.lines().enumerate() {
@@ -100,7 +111,11 @@ fn load_mtl(path: &Path, out: &mut Vec<Material>, names: &mut HashMap<String, us
                     out[m].reflectance = c;
                 } else {
                     if c.min_channel() < 0.0 {
-                        return Err(invalid(path, line, format!("Ke {} {} {}: emission must be non-negative", c.r, c.g, c.b)));
+                        return Err(invalid(
+                            path,
+                            line,
+                            format!("Ke {} {} {}: emission must be non-negative", c.r, c.g, c.b),
+                        ));
                     }
                     out[m].emission = c;
                 }
@@ -131,7 +146,10 @@ fn vertex_index(path: &Path, line: usize, tok: &str, count: usize) -> Result<usi
 /// Load an OBJ file (and the MTL files it names, relative to its folder).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let text = read(path)?;
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+    let dir = path
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
     let mut positions: Vec<Vec3> = Vec::new();
     let mut materials: Vec<Material> = Vec::new();
     let mut names: HashMap<String, usize> = HashMap::new();
@@ -153,11 +171,19 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                 }
                 let mut c = [0f32; 3];
                 for a in 0..3 {
-                    let x = args[a]
-                        .parse::<f32>()
-                        .map_err(|_| invalid(path, line, format!("malformed number '{}' in vertex", args[a])))?;
+                    let x = args[a].parse::<f32>().map_err(|_| {
+                        invalid(
+                            path,
+                            line,
+                            format!("malformed number '{}' in vertex", args[a]),
+                        )
+                    })?;
                     if !x.is_finite() {
-                        return Err(invalid(path, line, format!("vertex coordinate '{}' is not finite", args[a])));
+                        return Err(invalid(
+                            path,
+                            line,
+                            format!("vertex coordinate '{}' is not finite", args[a]),
+                        ));
                     }
                     c[a] = x;
                 }
@@ -178,7 +204,10 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                 let material = match current {
                     Some(m) => m,
                     None => *default_material.get_or_insert_with(|| {
-                        materials.push(Material::diffuse("default", Rgb::splat(DEFAULT_REFLECTANCE)));
+                        materials.push(Material::diffuse(
+                            "default",
+                            Rgb::splat(DEFAULT_REFLECTANCE),
+                        ));
                         materials.len() - 1
                     }),
                 };
@@ -195,14 +224,22 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                 }
                 let mtl = dir.join(rest);
                 if !mtl.exists() {
-                    return Err(invalid(path, line, format!("material library '{}' not found", mtl.display())));
+                    return Err(invalid(
+                        path,
+                        line,
+                        format!("material library '{}' not found", mtl.display()),
+                    ));
                 }
                 load_mtl(&mtl, &mut materials, &mut names)?;
             }
             "usemtl" => {
                 let name = s[key.len()..].trim();
                 current = Some(*names.get(name).ok_or_else(|| {
-                    invalid(path, line, format!("unknown material '{name}' (not defined by any mtllib)"))
+                    invalid(
+                        path,
+                        line,
+                        format!("unknown material '{name}' (not defined by any mtllib)"),
+                    )
                 })?);
             }
             "vt" | "vn" | "o" | "g" | "s" => {}
@@ -212,7 +249,11 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let mut warnings = Vec::new();
     if !ignored.is_empty() {
         let list: Vec<String> = ignored.iter().map(|(k, n)| format!("{k} ×{n}")).collect();
-        warnings.push(format!("{}: ignored statements: {}", path.display(), list.join(", ")));
+        warnings.push(format!(
+            "{}: ignored statements: {}",
+            path.display(),
+            list.join(", ")
+        ));
     }
     if default_material.is_some() {
         warnings.push(format!(
@@ -221,7 +262,11 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         ));
     }
     Ok(Scene {
-        name: path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_string(),
+        name: path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("scene")
+            .to_string(),
         source: Some(path.to_path_buf()),
         materials,
         polygons,

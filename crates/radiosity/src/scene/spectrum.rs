@@ -104,10 +104,19 @@ mod tests {
                 .fold((0, f64::MIN), |m, v| if v.1 > m.1 { v } else { m })
         };
         let (ny, vy) = argmax(1);
-        assert!((550..=562).contains(&ny) && (vy - 1.0).abs() < 0.03, "{ny} {vy}");
+        assert!(
+            (550..=562).contains(&ny) && (vy - 1.0).abs() < 0.03,
+            "{ny} {vy}"
+        );
         let (nx, vx) = argmax(0);
-        assert!((595..=605).contains(&nx) && (vx - 1.06).abs() < 0.04, "{nx} {vx}");
+        assert!(
+            (595..=605).contains(&nx) && (vx - 1.06).abs() < 0.04,
+            "{nx} {vx}"
+        );
         let (nz, vz) = argmax(2);
-        assert!((440..=450).contains(&nz) && (vz - 1.78).abs() < 0.06, "{nz} {vz}");
+        assert!(
+            (440..=450).contains(&nz) && (vz - 1.78).abs() < 0.06,
+            "{nz} {vz}"
+        );
     }
 }

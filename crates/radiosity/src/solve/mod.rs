@@ -60,7 +60,9 @@ impl System<'_> {
         for i in 0..n {
             let (a, r, e) = (self.area[i], self.reflectance[i], self.emission[i]);
             if !(a.is_finite() && a > 0.0) {
-                return Err(SolveError::Invalid(format!("patch {i}: area {a} is not positive")));
+                return Err(SolveError::Invalid(format!(
+                    "patch {i}: area {a} is not positive"
+                )));
             }
             if !r.is_finite() || r.min_channel() < 0.0 || r.max_channel() >= 1.0 {
                 return Err(SolveError::Invalid(format!(
@@ -68,11 +70,15 @@ impl System<'_> {
                 )));
             }
             if !e.is_finite() || e.min_channel() < 0.0 {
-                return Err(SolveError::Invalid(format!("patch {i}: emission {e} is negative or not finite")));
+                return Err(SolveError::Invalid(format!(
+                    "patch {i}: emission {e} is negative or not finite"
+                )));
             }
         }
         if self.emitted_power().max_channel() <= 0.0 {
-            return Err(SolveError::Invalid("no patch emits: the solution is zero".into()));
+            return Err(SolveError::Invalid(
+                "no patch emits: the solution is zero".into(),
+            ));
         }
         Ok(())
     }

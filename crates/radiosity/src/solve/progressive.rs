@@ -220,7 +220,11 @@ mod tests {
         // Direct solve of (I − diag(ρ) F) B = E by Cramer's rule, with F rounded to f32 as
         // rows store it.
         let m: Vec<Vec<f64>> = (0..3)
-            .map(|i| (0..3).map(|j| (i == j) as u8 as f64 - rho[i] * (f[i][j] as f32 as f64)).collect())
+            .map(|i| {
+                (0..3)
+                    .map(|j| (i == j) as u8 as f64 - rho[i] * (f[i][j] as f32 as f64))
+                    .collect()
+            })
             .collect();
         let det3 = |m: &Vec<Vec<f64>>| {
             m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
@@ -239,18 +243,36 @@ mod tests {
             .collect();
         let refl: Vec<Rgb> = rho.iter().map(|&r| Rgb::splat(r)).collect();
         let emis: Vec<Rgb> = e.iter().map(|&x| Rgb::splat(x)).collect();
-        let sys = System { area: &area, reflectance: &refl, emission: &emis };
+        let sys = System {
+            area: &area,
+            reflectance: &refl,
+            emission: &emis,
+        };
         sys.validate().unwrap();
         let mut src = Dense(
             f.iter()
-                .map(|r| r.iter().enumerate().filter(|(_, v)| **v > 0.0).map(|(j, v)| (j as u32, *v as f32)).collect())
+                .map(|r| {
+                    r.iter()
+                        .enumerate()
+                        .filter(|(_, v)| **v > 0.0)
+                        .map(|(j, v)| (j as u32, *v as f32))
+                        .collect()
+                })
                 .collect(),
         );
-        let params = ProgressiveParams { tolerance: 1e-12, ..Default::default() };
+        let params = ProgressiveParams {
+            tolerance: 1e-12,
+            ..Default::default()
+        };
         let (b, _, info) = solve(sys, &mut src, &params, &mut |_| {});
         assert!(info.converged);
         for i in 0..3 {
-            assert!((b[i].r - exact[i]).abs() < 1e-9 * exact[i].max(1.0), "{} vs {}", b[i].r, exact[i]);
+            assert!(
+                (b[i].r - exact[i]).abs() < 1e-9 * exact[i].max(1.0),
+                "{} vs {}",
+                b[i].r,
+                exact[i]
+            );
         }
         // Energy: emitted = absorbed + escaped + unshot.
         let balance = info.emitted - info.absorbed - info.escaped - info.unshot;
