@@ -21,6 +21,44 @@ pub enum Command {
     Solve(SolveCmdArgs),
     /// Measure ray-casting speed and the time to converge the Cornell box.
     Bench(BenchArgs),
+    /// Solve a given linear system: a form-factor matrix (Matrix Market) and a patches CSV.
+    SolveSystem(SolveSystemArgs),
+}
+
+/// `radiosity solve-system`.
+#[derive(Debug, Args)]
+pub struct SolveSystemArgs {
+    /// Form factors F_ij: Matrix Market, coordinate real general, 1-based indices.
+    #[arg(long, value_name = "F.mtx")]
+    pub form_factors: PathBuf,
+    /// Patches: CSV with a header; columns `area` and either `reflectance`,`emission` or
+    /// `reflectance_r`,`reflectance_g`,`reflectance_b`,`emission_r`,`emission_g`,`emission_b`.
+    #[arg(long, value_name = "patches.csv")]
+    pub patches: PathBuf,
+    /// Solution method (see `radiosity solve --help`).
+    #[arg(long, value_name = "M", default_value = "progressive")]
+    pub solver: String,
+    /// Output: one radiosity row per patch.
+    #[arg(long, short, value_name = "B.csv")]
+    pub out: PathBuf,
+    /// Write the convergence trace (iteration,seconds,error,unshot) to this CSV.
+    #[arg(long, value_name = "FILE")]
+    pub trace: Option<PathBuf>,
+    /// Stop after this many iterations at the latest.
+    #[arg(long, value_name = "K")]
+    pub max_iterations: Option<u64>,
+    /// Stop when the unshot energy is at most this fraction of the emitted energy.
+    #[arg(long, value_name = "T", default_value_t = 0.01)]
+    pub tolerance: f64,
+    /// Relaxation factor ω of `sor`.
+    #[arg(long, value_name = "W", default_value_t = 1.1)]
+    pub omega: f64,
+    /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
+    #[arg(long, value_name = "N", default_value_t = 1000)]
+    pub photons: u32,
+    /// Seed of `stochastic`.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
 }
 
 /// Options shared by every command that solves a scene.
@@ -48,9 +86,24 @@ pub struct SolveArgs {
     /// Stop when the unshot energy is at most this fraction of the emitted energy.
     #[arg(long, value_name = "F", default_value_t = 0.01)]
     pub tolerance: f64,
-    /// Stop after this many shots at the latest.
+    /// Stop after this many iterations (shots, rows, photons) at the latest.
     #[arg(long, value_name = "K")]
     pub max_iterations: Option<u64>,
+    /// Solution method: gauss, jacobi, gauss-seidel-0, gauss-seidel, gauss-seidel-jacobi, sor,
+    /// southwell, progressive, overshoot-ambient, overshoot, stochastic.
+    #[arg(long, value_name = "M", default_value = "progressive")]
+    pub solver: String,
+    /// Relaxation factor ω of `sor`.
+    #[arg(long, value_name = "W", default_value_t = 1.1)]
+    pub omega: f64,
+    /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
+    #[arg(long, value_name = "N", default_value_t = 1000)]
+    pub photons: u32,
+    /// Write the convergence trace (iteration,seconds,error,unshot) to this CSV. The form
+    /// factors are then estimated and stored in full first, and the error is measured against
+    /// their LU solution (N ≤ 5,000).
+    #[arg(long, value_name = "FILE")]
+    pub trace: Option<PathBuf>,
 }
 
 /// Camera overrides.

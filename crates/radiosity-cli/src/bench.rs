@@ -75,7 +75,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
     let s = last.expect("at least one run");
     println!(
         "converge to {:.0}% unshot: {:.3} s (median of {}; {} patches, {} shots, {} rays, form factors {:.3} s)",
-        100.0 * settings.progressive.tolerance,
+        100.0 * settings.params.tolerance,
         median(times),
         a.runs,
         s.mesh.len(),

@@ -6,12 +6,15 @@ mod report;
 mod settings;
 
 use anyhow::{Context, Result};
-use args::{Cli, Command, RenderArgs, SolveArgs, SolveCmdArgs};
+use args::{Cli, Command, RenderArgs, SolveArgs, SolveCmdArgs, SolveSystemArgs};
 use clap::Parser;
-use radiosity::export::{write_image, write_patches_csv, ImageFormat};
-use radiosity::pipeline::{self, Solution};
+use radiosity::export::{write_image, write_patches_csv, write_radiosity_csv, ImageFormat, Trace};
+use radiosity::pipeline::{self, Event, Solution};
 use radiosity::render::{auto_exposure, RenderParams};
 use radiosity::scene::{self, Scene};
+use radiosity::solve::gauss::{bytes_needed, dense_solve_matrix};
+use radiosity::solve::matrix::SparseMatrix;
+use radiosity::solve::System;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -22,6 +25,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render(a),
         Command::Solve(a) => solve(a),
         Command::Bench(a) => bench::run(a),
+        Command::SolveSystem(a) => solve_system(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -41,14 +45,143 @@ fn load_scene(name: &str) -> Result<Scene> {
     Ok(scene)
 }
 
-/// Load and solve, with a progress bar.
+/// Largest system whose trace measures the error against an LU solution.
+const TRACE_EXACT_MAX: usize = 5000;
+
+/// The exact solution for a trace's error column, when the system is small enough.
+fn trace_reference(system: &System, m: &SparseMatrix) -> Option<Vec<radiosity::Rgb>> {
+    let n = system.len();
+    let limit = pipeline::available_memory().unwrap_or(u64::MAX) / 2;
+    if n > TRACE_EXACT_MAX || bytes_needed(n) > limit {
+        eprintln!("radiosity: warning: {n} patches: the trace's error column is left empty (LU reference only up to {TRACE_EXACT_MAX} patches)");
+        return None;
+    }
+    match dense_solve_matrix(system, m, limit) {
+        Ok(b) => Some(b),
+        Err(e) => {
+            eprintln!("radiosity: warning: no reference solution for the trace: {e}");
+            None
+        }
+    }
+}
+
+/// Load and solve, with a progress bar (and the trace, if asked).
 fn solve_scene(a: &SolveArgs) -> Result<(Scene, Solution)> {
     let settings = settings::settings(a)?;
     let scene = load_scene(&a.scene)?;
-    let mut progress = report::Progress::new(settings.progressive.tolerance);
-    let solution = pipeline::solve(&scene, &settings, &mut |e| progress.event(e))?;
+    let mut progress = report::Progress::new(settings.params.tolerance);
+    let mut trace: Option<Trace> = None;
+    let tracing = a.trace.is_some();
+    let solution = pipeline::solve(&scene, &settings, &mut |e| {
+        match e {
+            Event::Matrix(m, system) if tracing => {
+                trace = Some(Trace::new(trace_reference(system, m), system.emission));
+            }
+            Event::Solve(status, solver) => {
+                if let Some(t) = trace.as_mut() {
+                    t.record(status, solver);
+                }
+            }
+            _ => {}
+        }
+        progress.event(e)
+    })?;
     progress.finish();
+    if let (Some(path), Some(t)) = (&a.trace, &trace) {
+        t.write(path).context("writing the trace")?;
+        println!("trace       {} ({} rows)", path.display(), t.len());
+    }
     Ok((scene, solution))
+}
+
+fn solve_system(a: SolveSystemArgs) -> Result<()> {
+    let method = settings::method(&a.solver)?;
+    let params =
+        settings::solver_params(a.tolerance, a.max_iterations, a.omega, a.photons, a.seed)?;
+    let ext = a
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    if ext.as_deref() != Some("csv") {
+        anyhow::bail!("{}: unsupported output format (use .csv)", a.out.display());
+    }
+    settings::check_output(&a.out)?;
+    if let Some(t) = &a.trace {
+        settings::check_output(t)?;
+    }
+    let patches = radiosity::io::patches_csv::read(&a.patches)?;
+    let mut matrix = radiosity::io::matrix_market::read(&a.form_factors)?;
+    if matrix.n() != patches.area.len() {
+        anyhow::bail!(
+            "{}: {} patches, but {} is {} × {}",
+            a.patches.display(),
+            patches.area.len(),
+            a.form_factors.display(),
+            matrix.n(),
+            matrix.n()
+        );
+    }
+    let system = System {
+        area: &patches.area,
+        reflectance: &patches.reflectance,
+        emission: &patches.emission,
+    };
+    let mut params = params;
+    params.memory_limit = pipeline::available_memory().unwrap_or(u64::MAX) / 2;
+    let mut trace = a
+        .trace
+        .as_ref()
+        .map(|_| Trace::new(trace_reference(&system, &matrix), system.emission));
+    let mut progress = report::Progress::new(params.tolerance);
+    let mut solver = radiosity::solve::start(method, system, &mut matrix, &params)?;
+    let info = radiosity::solve::run(
+        &mut *solver,
+        &mut matrix,
+        &params,
+        trace.is_some(),
+        &mut |status, sv| {
+            if let Some(t) = trace.as_mut() {
+                t.record(status, sv);
+            }
+            progress.event(Event::Solve(status, sv));
+        },
+    );
+    progress.finish();
+    let mut b = Vec::new();
+    solver.radiosity(&mut b);
+    write_radiosity_csv(&a.out, &b, patches.single_channel)?;
+    if let (Some(path), Some(t)) = (&a.trace, &trace) {
+        t.write(path).context("writing the trace")?;
+        println!("trace       {} ({} rows)", path.display(), t.len());
+    }
+    let e = info.emitted.sum();
+    println!(
+        "system      {} patches, {} form factors",
+        matrix.n(),
+        matrix.nnz()
+    );
+    println!(
+        "iterations  {} by {} ({}; unshot energy left {:.3e} of emitted) in {:.3} s",
+        info.iterations,
+        method,
+        if info.converged {
+            "converged"
+        } else {
+            "stopped at --max-iterations"
+        },
+        info.unshot_fraction,
+        info.seconds
+    );
+    println!(
+        "energy      emitted {:.6e}: absorbed {:.2}%, escaped {:.2}%, unshot {:.2}%",
+        e,
+        100.0 * info.absorbed.sum() / e,
+        100.0 * info.escaped.sum() / e,
+        100.0 * info.unshot.sum() / e
+    );
+    println!("wrote       {}", a.out.display());
+    Ok(())
 }
 
 fn render(a: RenderArgs) -> Result<()> {
@@ -58,6 +191,9 @@ fn render(a: RenderArgs) -> Result<()> {
         .unwrap_or_else(|| default_output(&a.solve.scene, "png"));
     ImageFormat::from_path(&out)?;
     settings::check_output(&out)?;
+    if let Some(t) = &a.solve.trace {
+        settings::check_output(t)?;
+    }
     settings::settings(&a.solve)?;
     if a.width == 0 || a.height == 0 {
         anyhow::bail!(
@@ -114,6 +250,9 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
         anyhow::bail!("{}: unsupported output format (use .csv)", a.out.display());
     }
     settings::check_output(&a.out)?;
+    if let Some(t) = &a.solve.trace {
+        settings::check_output(t)?;
+    }
     settings::settings(&a.solve)?;
     settings::threads(a.solve.threads)?;
     let (scene, solution) = solve_scene(&a.solve)?;

@@ -34,18 +34,19 @@ impl Progress {
             Event::Stage(s) => self.bar.set_message(match s {
                 Stage::Mesh => "meshing".to_string(),
                 Stage::Bvh => "building the hierarchy".to_string(),
-                Stage::Solve => "solving".to_string(),
+                Stage::Solve => "form factors".to_string(),
                 Stage::Render => "rendering".to_string(),
             }),
-            Event::Solve(s) => {
-                // Update about every 64 shots: cheap, and smooth enough.
+            Event::Matrix(..) => self.bar.set_message("solving".to_string()),
+            Event::Solve(s, _) => {
+                // Update about every 64 iterations: cheap, and smooth enough.
                 if s.iterations - self.last >= 64 || s.iterations == 0 {
                     self.last = s.iterations;
                     let f = s.unshot_fraction.max(1e-300);
                     let pos = (f.ln() / self.log_tol).clamp(0.0, 1.0);
                     self.bar.set_position((pos * 1000.0) as u64);
                     self.bar.set_message(format!(
-                        "solving: {} shots, unshot {:.2}%",
+                        "solving: {} iterations, unshot {:.2}%",
                         s.iterations,
                         100.0 * s.unshot_fraction
                     ));
@@ -73,7 +74,7 @@ pub fn rows_bar(rows: u32) -> ProgressBar {
     bar
 }
 
-/// Print what was done: patches, rays, shots, energy, time per stage.
+/// Print what was done: patches, rays, iterations, energy, time per stage.
 pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
     let i = &s.info;
     let ff = &s.form_factors;
@@ -90,8 +91,9 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
     );
     println!("rays        {} in {} form-factor rows", ff.rays, ff.rows);
     println!(
-        "shots       {} ({}; unshot energy left {:.3}% of emitted)",
+        "iterations  {} by {} ({}; unshot energy left {:.3}% of emitted)",
         i.iterations,
+        s.method,
         if i.converged {
             "converged"
         } else {

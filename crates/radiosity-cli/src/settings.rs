@@ -7,7 +7,7 @@ use radiosity::geom::Vec3;
 use radiosity::mesh::MeshParams;
 use radiosity::pipeline::Settings;
 use radiosity::scene::Camera;
-use radiosity::solve::progressive::ProgressiveParams;
+use radiosity::solve::{Method, SolverParams};
 use std::path::Path;
 
 /// Library settings from the shared solve options.
@@ -24,9 +24,6 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
     if a.rays == 0 {
         bail!("--rays 0: at least one ray per form-factor row is needed");
     }
-    if !(a.tolerance.is_finite() && a.tolerance > 0.0 && a.tolerance < 1.0) {
-        bail!("--tolerance {}: must be in (0, 1)", a.tolerance);
-    }
     if a.threads == Some(0) {
         bail!("--threads 0: at least one thread is needed");
     }
@@ -37,11 +34,48 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
             seed: a.seed,
             ..Default::default()
         },
-        progressive: ProgressiveParams {
-            tolerance: a.tolerance,
-            max_iterations: a.max_iterations.unwrap_or(u64::MAX),
-        },
+        solver: method(&a.solver)?,
+        params: solver_params(a.tolerance, a.max_iterations, a.omega, a.photons, a.seed)?,
+        store_matrix: a.trace.is_some(),
         memory_limit: 0,
+    })
+}
+
+/// The method named by `--solver`.
+pub fn method(name: &str) -> Result<Method> {
+    Method::from_name(name).with_context(|| {
+        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+        format!(
+            "--solver {name}: unknown method (known: {})",
+            names.join(", ")
+        )
+    })
+}
+
+/// Solver parameters from the flags, checked.
+pub fn solver_params(
+    tolerance: f64,
+    max_iterations: Option<u64>,
+    omega: f64,
+    photons: u32,
+    seed: u64,
+) -> Result<SolverParams> {
+    if !(tolerance.is_finite() && tolerance >= 0.0 && tolerance < 1.0) {
+        bail!("--tolerance {tolerance}: must be in [0, 1)");
+    }
+    if !(omega > 0.0 && omega < 2.0) {
+        bail!("--omega {omega}: must be in (0, 2)");
+    }
+    if photons == 0 {
+        bail!("--photons 0: at least one photon per shot is needed");
+    }
+    Ok(SolverParams {
+        tolerance,
+        max_iterations: max_iterations.unwrap_or(u64::MAX),
+        omega,
+        photons,
+        seed,
+        ..Default::default()
     })
 }
 

@@ -246,7 +246,7 @@ fn render_writes_png_exr_and_pfm() {
         String::from_utf8_lossy(&out.stderr)
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
-    for key in ["patches", "rays", "shots", "unshot", "time"] {
+    for key in ["patches", "rays", "iterations", "unshot", "time"] {
         assert!(stdout.contains(key), "summary lacks {key}: {stdout}");
     }
     let img = image::open(dir.join("c.png")).unwrap().to_rgb8();

@@ -22,6 +22,7 @@ pub mod color;
 pub mod export;
 pub mod formfactor;
 pub mod geom;
+pub mod io;
 pub mod mesh;
 pub mod pipeline;
 pub mod render;
@@ -43,6 +44,9 @@ pub enum Error {
     /// An output could not be written.
     #[error(transparent)]
     Export(#[from] export::ExportError),
+    /// An input file is malformed.
+    #[error(transparent)]
+    Input(#[from] io::InputError),
     /// The job would not fit in memory.
     #[error("{what} would need about {} MiB but only {} MiB are available; use {alternative}", needed >> 20, limit >> 20)]
     OutOfMemory {

@@ -1,31 +1,50 @@
 //! The one place that knows every stage, in order: validate the scene → mesh it into patches →
-//! build the ray-casting hierarchy → solve by progressive refinement with Monte Carlo form
-//! factors computed on demand → (optionally) render.
+//! build the ray-casting hierarchy → solve (shooting methods with Monte Carlo form factors
+//! computed on demand; the others, or any method when the whole matrix is asked for, with every
+//! row estimated first and stored sparse) → (optionally) render.
 
 use crate::accel::Bvh;
 use crate::color::Rgb;
-use crate::formfactor::monte_carlo::{MonteCarloParams, MonteCarloRows};
+use crate::formfactor::monte_carlo::{estimate_all_rows, MonteCarloParams, MonteCarloRows};
 use crate::formfactor::FormFactorStats;
 use crate::mesh::{Mesh, MeshParams};
 use crate::render::{render, vertex_radiosity, Image, RenderParams};
 use crate::scene::{Camera, Scene};
-use crate::solve::progressive::{Progressive, ProgressiveParams};
-use crate::solve::{ambient_term, Info, Status, System};
+use crate::solve::matrix::SparseMatrix;
+use crate::solve::{ambient_term, Info, Method, RowSource, Solver, SolverParams, Status, System};
 use crate::Error;
 use std::time::Instant;
 
 /// Everything that decides a solution.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
     /// How to cut surfaces into patches.
     pub mesh: MeshParams,
     /// Monte Carlo form factors.
     pub monte_carlo: MonteCarloParams,
-    /// Progressive refinement.
-    pub progressive: ProgressiveParams,
+    /// The solution method.
+    pub solver: Method,
+    /// Its parameters (tolerance, iterations, ω, photons, seed, memory).
+    pub params: SolverParams,
+    /// Estimate and store every row of F first, whatever the method (a trace's reference
+    /// solution needs the very matrix the method used).
+    pub store_matrix: bool,
     /// Refuse jobs whose estimated memory exceeds this many bytes (0: the machine's available
     /// memory).
     pub memory_limit: u64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            mesh: MeshParams::default(),
+            monte_carlo: MonteCarloParams::default(),
+            solver: Method::Progressive,
+            params: SolverParams::default(),
+            store_matrix: false,
+            memory_limit: 0,
+        }
+    }
 }
 
 /// The stages, as reported to observers.
@@ -42,12 +61,14 @@ pub enum Stage {
 }
 
 /// Progress reports.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Event {
+#[derive(Clone, Copy)]
+pub enum Event<'a> {
     /// A stage begins.
     Stage(Stage),
-    /// The solver's status before a shot.
-    Solve(Status),
+    /// Every row of F has been estimated and stored: the system to be solved.
+    Matrix(&'a SparseMatrix, &'a System<'a>),
+    /// The solver's status before each iteration, and the solver (whose current B can be read).
+    Solve(&'a Status, &'a dyn Solver),
 }
 
 /// Wall-clock seconds per stage.
@@ -76,10 +97,12 @@ pub struct Solution {
     pub reflectance: Vec<Rgb>,
     /// Patch emissions.
     pub emission: Vec<Rgb>,
-    /// Radiosity per patch (progressive refinement's output, without the ambient term).
+    /// Radiosity per patch (the method's output, without the ambient term).
     pub radiosity: Vec<Rgb>,
-    /// Unshot radiosity per patch when the solver stopped.
+    /// Unshot radiosity per patch when a shooting method stopped (zero for the others).
     pub unshot: Vec<Rgb>,
+    /// The method used.
+    pub method: Method,
     /// The solver's report.
     pub info: Info,
     /// Form-factor work.
@@ -149,17 +172,40 @@ pub fn solve(
         0 => available_memory().unwrap_or(u64::MAX),
         l => l,
     };
-    let needed = mesh.len() as u64 * BYTES_PER_PATCH;
+    let store = settings.store_matrix || settings.solver.needs_all_rows();
+    // A stored matrix holds at most min(N, rays) entries a row, 20 bytes each (rows, columns,
+    // sampling sums).
+    let per_patch = BYTES_PER_PATCH
+        + if store {
+            20 * (mesh.len() as u64).min(settings.monte_carlo.rays as u64)
+        } else {
+            0
+        };
+    let needed = mesh.len() as u64 * per_patch;
     if needed > limit {
         return Err(Error::OutOfMemory {
-            what: format!("{} patches", mesh.len()),
+            what: format!(
+                "{} patches{}",
+                mesh.len(),
+                if store {
+                    " with every form-factor row stored"
+                } else {
+                    ""
+                }
+            ),
             needed,
             limit,
-            alternative: "fewer patches (--patches N or a larger --max-edge)".into(),
+            alternative: if store {
+                "a shooting method (--solver progressive, which computes rows on demand), fewer patches or fewer --rays".into()
+            } else {
+                "fewer patches (--patches N or a larger --max-edge)".into()
+            },
         });
     }
     let mut monte_carlo = settings.monte_carlo;
     monte_carlo.cache_bytes = monte_carlo.cache_bytes.min(((limit - needed) / 2) as usize);
+    let mut params = settings.params;
+    params.memory_limit = params.memory_limit.min(limit - needed);
 
     observer(Event::Stage(Stage::Bvh));
     let t = Instant::now();
@@ -184,22 +230,41 @@ pub fn solve(
         emission: &emission,
     };
     system.validate()?;
-    let mut rows = MonteCarloRows::new(&mesh, &bvh, monte_carlo);
-    let mut pr = Progressive::new(system);
-    let info = pr.run(&mut rows, &settings.progressive, &mut |s| {
-        observer(Event::Solve(*s))
+
+    let mut stored;
+    let mut on_demand = MonteCarloRows::new(&mesh, &bvh, monte_carlo);
+    let mut form_factors = FormFactorStats::default();
+    let source: &mut dyn RowSource = if store {
+        let t = Instant::now();
+        stored = estimate_all_rows(&mesh, &bvh, monte_carlo.rays, monte_carlo.seed);
+        form_factors.rows = mesh.len() as u64;
+        form_factors.rays = mesh.len() as u64 * monte_carlo.rays as u64;
+        form_factors.seconds = t.elapsed().as_secs_f64();
+        observer(Event::Matrix(&stored, &system));
+        &mut stored
+    } else {
+        &mut on_demand
+    };
+    let mut solver = crate::solve::start(settings.solver, system, source, &params)?;
+    let info = crate::solve::run(&mut *solver, source, &params, false, &mut |s, sv| {
+        observer(Event::Solve(s, sv))
     });
-    let form_factors = rows.stats();
-    let radiosity = pr.radiosity().to_vec();
-    let unshot = pr.unshot().to_vec();
-    drop(pr);
-    drop(rows);
+    let mut radiosity = Vec::new();
+    solver.radiosity(&mut radiosity);
+    let unshot = solver
+        .unshot()
+        .map_or_else(|| vec![Rgb::BLACK; area.len()], <[Rgb]>::to_vec);
+    drop(solver);
+    if !store {
+        form_factors = on_demand.stats();
+    }
+    let solve_s = (info.seconds - if store { 0.0 } else { form_factors.seconds }).max(0.0);
     Ok(Solution {
         timings: Timings {
             mesh: mesh_s,
             bvh: bvh_s,
             form_factors: form_factors.seconds,
-            solve: (info.seconds - form_factors.seconds).max(0.0),
+            solve: solve_s,
         },
         mesh,
         bvh,
@@ -208,6 +273,7 @@ pub fn solve(
         emission,
         radiosity,
         unshot,
+        method: settings.solver,
         info,
         form_factors,
     })

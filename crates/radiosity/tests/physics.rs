@@ -10,7 +10,7 @@ use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::pipeline::{self, Settings};
 use radiosity::scene::{builtin, Material, Polygon, Scene};
-use radiosity::solve::progressive::ProgressiveParams;
+use radiosity::solve::SolverParams;
 
 fn quad(v: [[f32; 3]; 4]) -> Polygon {
     Polygon {
@@ -131,11 +131,11 @@ fn furnace_solution(rays: u32, patches: usize) -> pipeline::Solution {
             seed: 3,
             ..Default::default()
         },
-        progressive: ProgressiveParams {
+        params: SolverParams {
             tolerance: 1e-7,
             ..Default::default()
         },
-        memory_limit: 0,
+        ..Default::default()
     };
     pipeline::solve(&builtin::furnace(), &settings, &mut |_| {}).unwrap()
 }

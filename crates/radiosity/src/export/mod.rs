@@ -6,6 +6,7 @@ use crate::color::Rgb;
 use crate::mesh::Mesh;
 use crate::render::{to_srgb8, Image};
 use crate::scene::Scene;
+use crate::solve::{relative_error, Solver, Status};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -172,6 +173,87 @@ pub fn write_patches_csv(
                 b.g,
                 b.b
             )?;
+        }
+        Ok(())
+    })
+}
+
+/// The header of convergence traces.
+pub const TRACE_HEADER: &str = "iteration,seconds,error,unshot";
+
+/// A convergence trace, one row per iteration: iteration, seconds in the solver, the error of
+/// eq. 22 of 003_6556f2e3d50166bb.txt against an exact solution (empty without one), and the
+/// unshot energy as a fraction of the emitted energy.
+#[derive(Clone, Debug, Default)]
+pub struct Trace {
+    text: String,
+    exact: Option<Vec<Rgb>>,
+    emission: Vec<Rgb>,
+    buf: Vec<Rgb>,
+}
+
+impl Trace {
+    /// A trace measuring the error against `exact` (if given) of a system with `emission`.
+    pub fn new(exact: Option<Vec<Rgb>>, emission: &[Rgb]) -> Self {
+        Self {
+            text: format!("{TRACE_HEADER}\n"),
+            exact,
+            emission: emission.to_vec(),
+            buf: Vec::new(),
+        }
+    }
+
+    /// Record the solver's state.
+    pub fn record(&mut self, status: &Status, solver: &dyn Solver) {
+        use std::fmt::Write as _;
+        let error = match &self.exact {
+            Some(exact) => {
+                solver.radiosity(&mut self.buf);
+                relative_error(exact, &self.emission, &self.buf).to_string()
+            }
+            None => String::new(),
+        };
+        let _ = writeln!(
+            self.text,
+            "{},{},{},{}",
+            status.iterations, status.seconds, error, status.unshot_fraction
+        );
+    }
+
+    /// Rows recorded.
+    pub fn len(&self) -> usize {
+        self.text.lines().count() - 1
+    }
+
+    /// True when nothing was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Write the trace.
+    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
+        write_atomic(path, |out| out.write_all(self.text.as_bytes()))
+    }
+}
+
+/// One radiosity row per patch: header `radiosity` (one channel, the red one) or
+/// `radiosity_r,radiosity_g,radiosity_b`.
+pub fn write_radiosity_csv(
+    path: &Path,
+    b: &[Rgb],
+    single_channel: bool,
+) -> Result<(), ExportError> {
+    write_atomic(path, |out| {
+        if single_channel {
+            writeln!(out, "radiosity")?;
+            for v in b {
+                writeln!(out, "{}", v.r)?;
+            }
+        } else {
+            writeln!(out, "radiosity_r,radiosity_g,radiosity_b")?;
+            for v in b {
+                writeln!(out, "{},{},{}", v.r, v.g, v.b)?;
+            }
         }
         Ok(())
     })

@@ -176,6 +176,25 @@ pub fn trace_random_rays(mesh: &Mesh, bvh: &Bvh, count: usize, seed: u64) -> u64
         .sum()
 }
 
+/// Every row of F with `rays` rays each (eq. 7), rows in parallel, as a stored matrix: for the
+/// methods that need all rows before they start. Deterministic for a given seed.
+pub fn estimate_all_rows(
+    mesh: &Mesh,
+    bvh: &Bvh,
+    rays: u32,
+    seed: u64,
+) -> crate::solve::matrix::SparseMatrix {
+    let rows: Vec<Vec<Entry>> = (0..mesh.len())
+        .into_par_iter()
+        .map_init(RowScratch::default, |scratch, i| {
+            let mut row = Vec::new();
+            estimate_row(mesh, bvh, i, rays, seed, 0, scratch, &mut row);
+            row
+        })
+        .collect();
+    crate::solve::matrix::SparseMatrix::from_rows(rows)
+}
+
 #[derive(Debug)]
 struct Cached {
     entries: Box<[Entry]>,
@@ -192,6 +211,8 @@ pub struct MonteCarloRows<'a> {
     versions: Vec<u32>,
     scratch: RowScratch,
     current: Vec<Entry>,
+    column: Vec<Entry>,
+    offset: f32,
     stats: FormFactorStats,
 }
 
@@ -206,6 +227,8 @@ impl<'a> MonteCarloRows<'a> {
             versions: vec![0; mesh.len()],
             scratch: RowScratch::default(),
             current: Vec::new(),
+            column: Vec::new(),
+            offset: bvh.ray_offset(),
             stats: FormFactorStats::default(),
         }
     }
@@ -221,17 +244,13 @@ impl<'a> MonteCarloRows<'a> {
     }
 }
 
-impl crate::solve::RowSource for MonteCarloRows<'_> {
-    fn len(&self) -> usize {
-        self.mesh.len()
-    }
-
-    fn row(&mut self, i: usize, share: f64) -> &[Entry] {
+impl MonteCarloRows<'_> {
+    /// Make row i available; true if it is in the cache, false if only in `current`.
+    fn ensure_row(&mut self, i: usize, share: f64) -> bool {
         let need = self.params.rays_for(share, self.mesh.len());
         // A cached row is good enough unless the power now shot would want 4× more rays.
-        let reuse = matches!(&self.cache[i], Some(c) if (c.rays as u64) * 4 >= need as u64);
-        if reuse {
-            return &self.cache[i].as_ref().unwrap().entries;
+        if matches!(&self.cache[i], Some(c) if (c.rays as u64) * 4 >= need as u64) {
+            return true;
         }
         let start = Instant::now();
         let version = self.versions[i] as u64;
@@ -261,9 +280,59 @@ impl crate::solve::RowSource for MonteCarloRows<'_> {
                 entries: self.current.as_slice().into(),
                 rays: need,
             });
-            &self.cache[i].as_ref().unwrap().entries
+            true
+        } else {
+            false
+        }
+    }
+}
+
+impl crate::solve::RowSource for MonteCarloRows<'_> {
+    fn len(&self) -> usize {
+        self.mesh.len()
+    }
+
+    fn row(&mut self, i: usize, share: f64) -> &[Entry] {
+        if self.ensure_row(i, share) {
+            &self.cache[i].as_ref().expect("cached").entries
         } else {
             &self.current
+        }
+    }
+
+    /// By reciprocity from row i: `F_ji = F_ij A_i / A_j` (000_… eq. 24).
+    fn column(&mut self, i: usize, share: f64) -> &[Entry] {
+        let cached = self.ensure_row(i, share);
+        let row: &[Entry] = if cached {
+            &self.cache[i].as_ref().expect("cached").entries
+        } else {
+            &self.current
+        };
+        let patches = &self.mesh.patches;
+        let ai = patches[i].area;
+        self.column.clear();
+        self.column.extend(
+            row.iter()
+                .map(|&(j, f)| (j, f * ai / patches[j as usize].area)),
+        );
+        &self.column
+    }
+
+    /// One ray from a uniform point of patch i in a cosine-distributed direction.
+    fn sample(&mut self, i: usize, rng: &mut crate::sampling::Rng64) -> Option<u32> {
+        let p = self
+            .mesh
+            .sample_point(i, uniform(rng), uniform(rng), uniform(rng));
+        let n = self.mesh.patches[i].normal;
+        let (t, b) = orthonormal_basis(n);
+        let d = cosine_direction_in(n, t, b, uniform(rng), uniform(rng));
+        self.stats.rays += 1;
+        match self
+            .bvh
+            .closest_hit(&Ray::new(p + n * self.offset, d), f32::INFINITY)
+        {
+            Some(h) if h.front && h.patch as usize != i => Some(h.patch),
+            _ => None,
         }
     }
 }

@@ -2,213 +2,95 @@
 //! 003_6556f2e3d50166bb.txt section 2.1 and 000_59d10e371b5f300d.txt eq. 23–28.
 //!
 //! Each patch holds its radiosity `B_i` and unshot radiosity `ΔB_i`, both starting at `E_i`.
-//! An iteration picks the shooter `i` with the most unshot energy `ΔB_i·A_i` (the choice that
-//! makes it Southwell relaxation on the energy system, 003_… section 5.1), takes row `i` of F
-//! and uses reciprocity (000_… eq. 24), `F_ji = F_ij A_i / A_j`, to shoot:
+//! An iteration picks the shooter `i` with the most unshot energy `ΔB_i·A_i` and shoots with
+//! column i of F (from a row by reciprocity, 000_… eq. 24, `F_ji = F_ij A_i / A_j`, when the
+//! source estimates rows):
 //!
 //! ```text
-//! ΔB_j += ρ_j ΔB_i F_ij A_i / A_j,   B_j += same,   then ΔB_i = 0      (eq. 23)
+//! ΔB_j += ρ_j ΔB_i F_ji,   B_j += same,   then ΔB_i = 0      (eq. 23)
 //! ```
 //!
-//! All three channels in one pass. It stops when the unshot energy Σ ΔB_i A_i falls to
-//! `tolerance` times the emitted energy, or after `max_iterations` shots. The output
-//! `B = ∇B + ΔB` is Southwell's unknowns plus one free Jacobi sweep (003_… section 4).
-//!
-//! Energy bookkeeping: the power of each shot is split into what arrives at patches — of which
-//! `ρ_j` is re-emitted as unshot and `1 − ρ_j` absorbed — and what reaches no patch
-//! (escaped). So at every step `emitted = absorbed + escaped + unshot` up to rounding.
+//! All three channels in one pass. In the terms of [`super::relaxation`] this is Southwell
+//! relaxation on the energy system (003_… section 5.1: the unknowns are the shot radiosity
+//! ∇B, the residuals the unshot ΔB), and the output `B = ∇B + ΔB` adds one free Jacobi sweep
+//! (003_… section 4). The unshot energy never increases, and by eq. 25 it falls by at least the
+//! factor `1 − (1 − q)/N` per shot, where `q = max_i Σ_j ρ_j F_ij`.
 
-use super::{Info, RowSource, Status, System};
+use super::relaxation::Relaxation;
+use super::{Info, Method, RowSource, Solver, System};
 use crate::color::Rgb;
-use std::time::Instant;
 
-/// Parameters of progressive refinement.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ProgressiveParams {
-    /// Stop when the unshot energy is at most this fraction of the emitted energy.
-    pub tolerance: f64,
-    /// Stop after this many shots at the latest.
-    pub max_iterations: u64,
-}
-
-impl Default for ProgressiveParams {
-    fn default() -> Self {
-        Self {
-            tolerance: 0.01,
-            max_iterations: u64::MAX,
-        }
-    }
-}
-
-/// The state of a progressive-refinement solution, advanced one shot at a time.
+/// Progressive refinement in progress.
 #[derive(Clone, Debug)]
 pub struct Progressive<'s> {
-    system: System<'s>,
-    radiosity: Vec<Rgb>,
-    unshot: Vec<Rgb>,
-    /// Unshot energy per patch, channels summed: the shooter's ranking key.
-    energy: Vec<f64>,
-    emitted: Rgb,
-    emitted_total: f64,
-    absorbed: Rgb,
-    escaped: Rgb,
-    iterations: u64,
+    core: Relaxation<'s>,
 }
 
 impl<'s> Progressive<'s> {
-    /// Start: `B = ΔB = E`. The system should have passed [`System::validate`].
+    /// Start: B = ΔB = E.
     pub fn new(system: System<'s>) -> Self {
-        let emitted = system.emitted_power();
         Self {
-            radiosity: system.emission.to_vec(),
-            unshot: system.emission.to_vec(),
-            energy: (0..system.len())
-                .map(|i| system.emission[i].sum() * system.area[i])
-                .collect(),
-            emitted,
-            emitted_total: emitted.sum(),
-            absorbed: Rgb::BLACK,
-            escaped: Rgb::BLACK,
-            iterations: 0,
-            system,
+            core: Relaxation::from_zero(system),
         }
     }
 
-    /// Current radiosities `B` (the estimate after the free Jacobi sweep).
-    pub fn radiosity(&self) -> &[Rgb] {
-        &self.radiosity
+    /// The patch with the most unshot energy and that energy.
+    pub fn shooter(&self) -> (usize, f64) {
+        let energy = &self.core.energy;
+        self.core.argmax(|i| energy[i])
     }
 
-    /// Current unshot radiosities `ΔB` (the residuals).
-    pub fn unshot(&self) -> &[Rgb] {
-        &self.unshot
-    }
-
-    /// Shots done.
-    pub fn iterations(&self) -> u64 {
-        self.iterations
-    }
-
-    /// The shooter (most unshot energy) and the total unshot energy, by one scan.
-    fn scan(&self) -> (usize, f64, f64) {
-        let (mut best, mut best_e, mut total) = (0usize, f64::NEG_INFINITY, 0.0f64);
-        for (i, &e) in self.energy.iter().enumerate() {
-            total += e;
-            if e > best_e {
-                best_e = e;
-                best = i;
-            }
-        }
-        (best, best_e, total)
-    }
-
-    /// Unshot energy as a fraction of the emitted energy.
-    pub fn unshot_fraction(&self) -> f64 {
-        self.scan().2 / self.emitted_total
-    }
-
-    /// Shoot from patch `i` with row `i` of F from `source`.
+    /// Shoot from patch `i`.
     pub fn shoot(&mut self, i: usize, source: &mut dyn RowSource) {
-        let sys = self.system;
-        let u = self.unshot[i];
-        let share = self.energy[i] / self.emitted_total;
-        let ai = sys.area[i];
-        let mut reached = 0.0f64;
-        for &(j, f) in source.row(i, share) {
-            let j = j as usize;
-            if j == i {
-                continue;
-            }
-            let f = f as f64;
-            reached += f;
-            let power = u * (f * ai);
-            let rho = sys.reflectance[j];
-            let db = rho * power / sys.area[j];
-            self.radiosity[j] += db;
-            self.unshot[j] += db;
-            self.energy[j] = self.unshot[j].sum() * sys.area[j];
-            self.absorbed += (Rgb::splat(1.0) - rho) * power;
-        }
-        self.escaped += u * (ai * (1.0 - reached).max(0.0));
-        self.unshot[i] = Rgb::BLACK;
-        self.energy[i] = 0.0;
-        self.iterations += 1;
+        self.core.relax(i, 1.0, source);
     }
 
-    /// The bookkeeping so far.
-    pub fn info(&self, converged: bool, seconds: f64) -> Info {
-        let unshot: Rgb = self
-            .unshot
-            .iter()
-            .zip(self.system.area)
-            .map(|(u, a)| *u * *a)
-            .sum();
-        Info {
-            iterations: self.iterations,
-            converged,
-            unshot_fraction: unshot.sum() / self.emitted_total,
-            seconds,
-            emitted: self.emitted,
-            absorbed: self.absorbed,
-            escaped: self.escaped,
-            unshot,
-        }
-    }
-
-    /// Shoot until the tolerance or the iteration limit is reached; `observer` sees the status
-    /// before every shot and once at the end.
-    pub fn run(
-        &mut self,
-        source: &mut dyn RowSource,
-        params: &ProgressiveParams,
-        observer: &mut dyn FnMut(&Status),
-    ) -> Info {
-        let start = Instant::now();
-        loop {
-            let (i, best, total) = self.scan();
-            let status = Status {
-                iterations: self.iterations,
-                unshot_fraction: total / self.emitted_total,
-            };
-            observer(&status);
-            if status.unshot_fraction <= params.tolerance || best <= 0.0 {
-                return self.info(true, start.elapsed().as_secs_f64());
-            }
-            if self.iterations >= params.max_iterations {
-                return self.info(false, start.elapsed().as_secs_f64());
-            }
-            self.shoot(i, source);
-        }
+    /// Current unshot radiosities ΔB.
+    pub fn unshot(&self) -> &[Rgb] {
+        &self.core.r
     }
 }
 
-/// Solve by progressive refinement: returns `(B, ΔB, info)`.
-pub fn solve(
-    system: System,
-    source: &mut dyn RowSource,
-    params: &ProgressiveParams,
-    observer: &mut dyn FnMut(&Status),
-) -> (Vec<Rgb>, Vec<Rgb>, Info) {
-    let mut pr = Progressive::new(system);
-    let info = pr.run(source, params, observer);
-    (pr.radiosity, pr.unshot, info)
+impl Solver for Progressive<'_> {
+    fn method(&self) -> Method {
+        Method::Progressive
+    }
+
+    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+        let (i, best) = self.shooter();
+        if best <= 0.0 {
+            return false;
+        }
+        self.shoot(i, source);
+        true
+    }
+
+    fn radiosity(&self, out: &mut Vec<Rgb>) {
+        self.core.output(true, out);
+    }
+
+    fn unshot(&self) -> Option<&[Rgb]> {
+        Some(&self.core.r)
+    }
+
+    fn unshot_fraction(&mut self, _: &mut dyn RowSource, _: bool) -> f64 {
+        self.core.unshot_fraction()
+    }
+
+    fn iterations(&self) -> u64 {
+        self.core.iterations
+    }
+
+    fn info(&mut self, _: &mut dyn RowSource) -> Info {
+        self.core.info()
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::formfactor::Entry;
-
-    /// A dense matrix as a row source, for hand-written systems.
-    struct Dense(Vec<Vec<Entry>>);
-    impl RowSource for Dense {
-        fn len(&self) -> usize {
-            self.0.len()
-        }
-        fn row(&mut self, i: usize, _: f64) -> &[Entry] {
-            &self.0[i]
-        }
-    }
+    use crate::solve::matrix::SparseMatrix;
+    use crate::solve::{solve, SolverParams};
 
     #[test]
     fn three_patches_match_the_direct_solution() {
@@ -249,7 +131,7 @@ mod tests {
             emission: &emis,
         };
         sys.validate().unwrap();
-        let mut src = Dense(
+        let mut src = SparseMatrix::from_rows(
             f.iter()
                 .map(|r| {
                     r.iter()
@@ -260,11 +142,11 @@ mod tests {
                 })
                 .collect(),
         );
-        let params = ProgressiveParams {
+        let params = SolverParams {
             tolerance: 1e-12,
             ..Default::default()
         };
-        let (b, _, info) = solve(sys, &mut src, &params, &mut |_| {});
+        let (b, info) = solve(Method::Progressive, sys, &mut src, &params).unwrap();
         assert!(info.converged);
         for i in 0..3 {
             assert!(
@@ -279,11 +161,10 @@ mod tests {
         assert!(balance.max_abs_diff(Rgb::BLACK) < 1e-9);
         // Unshot energy never increases (Southwell on the energy system, 003_… appendix B).
         let mut pr = Progressive::new(sys);
-        let mut last = pr.unshot_fraction();
+        let mut last = pr.unshot_fraction(&mut src, true);
         for _ in 0..20 {
-            let (i, _, _) = pr.scan();
-            pr.shoot(i, &mut src);
-            let now = pr.unshot_fraction();
+            pr.step(&mut src);
+            let now = pr.unshot_fraction(&mut src, true);
             assert!(now <= last + 1e-15);
             last = now;
         }

@@ -1,0 +1,85 @@
+//! Gauss-Seidel iteration (000_59d10e371b5f300d.txt eq. 12–20; 003_6556f2e3d50166bb.txt
+//! section 3.1): relax the unknowns in order, each with the newest values of the others,
+//! `x_i ← (E_i + ρ_i Σ_{j≠i} F_ij x_j) / (1 − ρ_i F_ii)`, the same as `x_i += r_i / M_ii`.
+//! Three variants, the first three of section 6 of 003_…:
+//! - `gauss-seidel-0`: start at x = 0, output x;
+//! - `gauss-seidel`: start at x = E, output x (gathering, 003_… section 2.1);
+//! - `gauss-seidel-jacobi`: start at x = 0, output x + r (one free Jacobi sweep, equivalent to
+//!   shooting in order).
+//!
+//! Eq. 20 proves its per-sweep attenuation β/(1 − α) is below Jacobi's q.
+
+use super::relaxation::Relaxation;
+use super::{Info, Method, RowSource, Solver, System};
+use crate::color::Rgb;
+
+/// Which Gauss-Seidel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// From 0, output the unknowns.
+    Zero,
+    /// From E, output the unknowns (gathering).
+    Emission,
+    /// From 0, output unknowns plus residuals.
+    ZeroPlusResidual,
+}
+
+/// Gauss-Seidel in progress.
+#[derive(Clone, Debug)]
+pub struct GaussSeidel<'s> {
+    core: Relaxation<'s>,
+    variant: Variant,
+    next: usize,
+}
+
+impl<'s> GaussSeidel<'s> {
+    /// Start the given variant.
+    pub fn new(system: System<'s>, source: &mut dyn RowSource, variant: Variant) -> Self {
+        let core = match variant {
+            Variant::Emission => Relaxation::from_emission(system, source),
+            _ => Relaxation::from_zero(system),
+        };
+        Self {
+            core,
+            variant,
+            next: 0,
+        }
+    }
+}
+
+impl Solver for GaussSeidel<'_> {
+    fn method(&self) -> Method {
+        match self.variant {
+            Variant::Zero => Method::GaussSeidel0,
+            Variant::Emission => Method::GaussSeidel,
+            Variant::ZeroPlusResidual => Method::GaussSeidelJacobi,
+        }
+    }
+
+    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+        if self.core.unshot_fraction() == 0.0 {
+            return false;
+        }
+        let i = self.next;
+        self.core.relax(i, 1.0, source);
+        self.next = (i + 1) % self.core.system.len();
+        true
+    }
+
+    fn radiosity(&self, out: &mut Vec<Rgb>) {
+        self.core
+            .output(self.variant == Variant::ZeroPlusResidual, out);
+    }
+
+    fn unshot_fraction(&mut self, _: &mut dyn RowSource, _: bool) -> f64 {
+        self.core.unshot_fraction()
+    }
+
+    fn iterations(&self) -> u64 {
+        self.core.iterations
+    }
+
+    fn info(&mut self, _: &mut dyn RowSource) -> Info {
+        self.core.info()
+    }
+}

@@ -1,0 +1,194 @@
+//! What the relaxation methods share (003_6556f2e3d50166bb.txt section 3): the unknowns `x`,
+//! the exact residual `r = b − M x = E + ρ F x − x`, and the energy bookkeeping.
+//!
+//! Changing one unknown `x_i` by `δ` changes the residuals by column `i` of M (003_… eq. 14,
+//! 16): `r_i −= δ`, then `r_j += ρ_j F_ji δ` for every j. Relaxing `x_i` is the change
+//! `δ = ω r_i / M_ii` with `M_ii = 1 − ρ_i F_ii` (eq. 12, 18); ω = 1 zeroes `r_i`. Every step
+//! costs one column of F, so the residual stays exact and Σ |r_i| A_i, the unshot energy, is
+//! known after every step.
+//!
+//! Energy: a change δ of `x_i` is radiosity shot from i: power `δ A_i` leaves, `F_ji A_j δ`
+//! arrives at each j (reciprocity turns the column into power), of which `ρ_j` stays unshot
+//! and `1 − ρ_j` is absorbed; the rest escapes. Then emitted = absorbed + escaped + Σ r_i A_i
+//! holds exactly at every step (the terms cancel in pairs), also for negative δ.
+
+use super::{Info, RowSource, System};
+use crate::color::Rgb;
+use crate::formfactor::Entry;
+
+/// Unknowns, residuals and energy bookkeeping of a relaxation method.
+#[derive(Clone, Debug)]
+pub struct Relaxation<'s> {
+    /// The system.
+    pub system: System<'s>,
+    /// The unknowns x.
+    pub x: Vec<Rgb>,
+    /// The residuals r = E + ρ F x − x.
+    pub r: Vec<Rgb>,
+    /// |r_i| A_i summed over channels: each patch's unshot energy.
+    pub energy: Vec<f64>,
+    /// Σ r_i A_i (signed), per channel.
+    pub signed_unshot: Rgb,
+    abs_unshot: f64,
+    emitted: Rgb,
+    emitted_total: f64,
+    absorbed: Rgb,
+    escaped: Rgb,
+    /// Iterations done.
+    pub iterations: u64,
+    updates: u64,
+}
+
+fn abs_sum(c: Rgb) -> f64 {
+    c.r.abs() + c.g.abs() + c.b.abs()
+}
+
+impl<'s> Relaxation<'s> {
+    /// Start from x = 0 (so r = E).
+    pub fn from_zero(system: System<'s>) -> Self {
+        let n = system.len();
+        let emitted = system.emitted_power();
+        let r = system.emission.to_vec();
+        let energy: Vec<f64> = (0..n).map(|i| abs_sum(r[i]) * system.area[i]).collect();
+        Self {
+            x: vec![Rgb::BLACK; n],
+            signed_unshot: emitted,
+            abs_unshot: energy.iter().sum(),
+            energy,
+            r,
+            emitted,
+            emitted_total: emitted.sum(),
+            absorbed: Rgb::BLACK,
+            escaped: Rgb::BLACK,
+            iterations: 0,
+            updates: 0,
+            system,
+        }
+    }
+
+    /// Start from x = E: the residual and the energy of that start come from every row of F.
+    pub fn from_emission(system: System<'s>, source: &mut dyn RowSource) -> Self {
+        let mut s = Self::from_zero(system);
+        s.x = system.emission.to_vec();
+        let (absorbed, escaped, _, _) = super::matrix::balance(&system, source, &s.x);
+        s.r = super::matrix::residual(&system, source, &s.x);
+        s.absorbed = absorbed;
+        s.escaped = escaped;
+        s.resum();
+        s
+    }
+
+    /// Recompute the sums from the residuals (against rounding drift).
+    pub fn resum(&mut self) {
+        let a = self.system.area;
+        for i in 0..self.r.len() {
+            self.energy[i] = abs_sum(self.r[i]) * a[i];
+        }
+        self.abs_unshot = self.energy.iter().sum();
+        self.signed_unshot = self.r.iter().zip(a).map(|(r, a)| *r * *a).sum();
+        self.updates = 0;
+    }
+
+    fn set_r(&mut self, j: usize, v: Rgb) {
+        let a = self.system.area[j];
+        self.signed_unshot += (v - self.r[j]) * a;
+        self.r[j] = v;
+        let e = abs_sum(v) * a;
+        self.abs_unshot += e - self.energy[j];
+        self.energy[j] = e;
+    }
+
+    /// Change `x_i` by `delta`, with `column` = column i of F (`(j, F_ji)`).
+    pub fn add(&mut self, i: usize, delta: Rgb, column: &[Entry]) {
+        let sys = self.system;
+        self.x[i] += delta;
+        let ri = self.r[i] - delta;
+        self.set_r(i, ri);
+        let mut arrived = Rgb::BLACK;
+        for &(j, f) in column {
+            let j = j as usize;
+            let f = f as f64;
+            let power = delta * (f * sys.area[j]);
+            arrived += power;
+            let rho = sys.reflectance[j];
+            self.absorbed += (Rgb::splat(1.0) - rho) * power;
+            let rj = self.r[j] + rho * delta * f;
+            self.set_r(j, rj);
+        }
+        self.escaped += delta * sys.area[i] - arrived;
+        self.updates += column.len() as u64 + 1;
+        if self.updates > 8 * self.r.len() as u64 + 1024 {
+            self.resum();
+        }
+    }
+
+    /// `M_ii = 1 − ρ_i F_ii`, from column i of F.
+    pub fn diagonal(&self, i: usize, column: &[Entry]) -> Rgb {
+        let f_ii = column
+            .binary_search_by_key(&(i as u32), |e| e.0)
+            .map_or(0.0, |k| column[k].1 as f64);
+        Rgb::splat(1.0) - self.system.reflectance[i] * f_ii
+    }
+
+    /// Relax `x_i` with factor ω: `x_i += ω r_i / M_ii`. Returns false if `r_i` was zero.
+    pub fn relax(&mut self, i: usize, omega: f64, source: &mut dyn RowSource) -> bool {
+        let r = self.r[i];
+        if r == Rgb::BLACK {
+            self.iterations += 1;
+            return false;
+        }
+        let share = self.energy[i] / self.emitted_total;
+        let column = source.column(i, share);
+        let m = self.diagonal(i, column);
+        let delta = Rgb::new(r.r / m.r, r.g / m.g, r.b / m.b) * omega;
+        self.add(i, delta, column);
+        self.iterations += 1;
+        true
+    }
+
+    /// Σ |r_i| A_i over the emitted energy.
+    pub fn unshot_fraction(&self) -> f64 {
+        self.abs_unshot.max(0.0) / self.emitted_total
+    }
+
+    /// The emitted energy, channels summed.
+    pub fn emitted_total(&self) -> f64 {
+        self.emitted_total
+    }
+
+    /// Index of the largest of `key(i)` over all patches (first on ties), with its value.
+    pub fn argmax(&self, key: impl Fn(usize) -> f64) -> (usize, f64) {
+        let mut best = (0, f64::NEG_INFINITY);
+        for i in 0..self.r.len() {
+            let k = key(i);
+            if k > best.1 {
+                best = (i, k);
+            }
+        }
+        best
+    }
+
+    /// Write `x` (or `x + r` when `plus_residual`) into `out`.
+    pub fn output(&self, plus_residual: bool, out: &mut Vec<Rgb>) {
+        out.clear();
+        if plus_residual {
+            out.extend(self.x.iter().zip(&self.r).map(|(x, r)| *x + *r));
+        } else {
+            out.extend_from_slice(&self.x);
+        }
+    }
+
+    /// The bookkeeping as an [`Info`] (converged and seconds are the driver's).
+    pub fn info(&self) -> Info {
+        Info {
+            iterations: self.iterations,
+            converged: false,
+            unshot_fraction: self.unshot_fraction(),
+            seconds: 0.0,
+            emitted: self.emitted,
+            absorbed: self.absorbed,
+            escaped: self.escaped,
+            unshot: self.signed_unshot,
+        }
+    }
+}

@@ -1,0 +1,175 @@
+//! Probabilistic progressive refinement (000_59d10e371b5f300d.txt, "Probabilistic progressive
+//! refinement"): B and the unshot radiosity U start at E. Each iteration takes the patch j with
+//! the most unshot energy `U_j A_j` and sends one photon carrying `1/n` of that power: it leaves
+//! from a uniform point of j in a cosine-distributed direction, i.e. it lands on patch k with
+//! probability `F_jk` ([`RowSource::sample`]: a ray on a scene, a draw from row j of a stored
+//! matrix). Patch k keeps `ρ_k` of the power as new unshot and total radiosity; `U_j` loses
+//! `U_j/n`. No form factor is stored. The result is unbiased; its variance falls as n grows.
+//! Shooters are found in O(log N) with a max-tree over the unshot energies.
+
+use super::{Info, Method, RowSource, SolveError, Solver, SolverParams, System};
+use crate::color::Rgb;
+use crate::sampling::{stream, Rng64};
+
+/// A binary max-tree over N keys: update and arg-max in O(log N).
+#[derive(Clone, Debug)]
+struct MaxTree {
+    size: usize,
+    node: Vec<(f64, u32)>,
+}
+
+impl MaxTree {
+    fn new(keys: &[f64]) -> Self {
+        let size = keys.len().next_power_of_two().max(1);
+        let mut node = vec![(f64::NEG_INFINITY, 0u32); 2 * size];
+        for (i, &k) in keys.iter().enumerate() {
+            node[size + i] = (k, i as u32);
+        }
+        for p in (1..size).rev() {
+            node[p] = Self::better(node[2 * p], node[2 * p + 1]);
+        }
+        Self { size, node }
+    }
+
+    fn better(a: (f64, u32), b: (f64, u32)) -> (f64, u32) {
+        if b.0 > a.0 {
+            b
+        } else {
+            a
+        }
+    }
+
+    fn set(&mut self, i: usize, key: f64) {
+        let mut p = self.size + i;
+        self.node[p].0 = key;
+        p /= 2;
+        while p >= 1 {
+            self.node[p] = Self::better(self.node[2 * p], self.node[2 * p + 1]);
+            p /= 2;
+        }
+    }
+
+    fn max(&self) -> (f64, usize) {
+        let (k, i) = self.node[1];
+        (k, i as usize)
+    }
+}
+
+/// Photon shooting in progress.
+#[derive(Clone, Debug)]
+pub struct Stochastic<'s> {
+    system: System<'s>,
+    b: Vec<Rgb>,
+    u: Vec<Rgb>,
+    tree: MaxTree,
+    rng: Rng64,
+    photons: f64,
+    emitted: Rgb,
+    emitted_total: f64,
+    absorbed: Rgb,
+    escaped: Rgb,
+    iterations: u64,
+}
+
+fn energy(u: Rgb, a: f64) -> f64 {
+    (u.r + u.g + u.b) * a
+}
+
+impl<'s> Stochastic<'s> {
+    /// Start: B = U = E; photons carry `1/params.photons` of the shooter's unshot power.
+    pub fn new(system: System<'s>, params: &SolverParams) -> Result<Self, SolveError> {
+        if params.photons == 0 {
+            return Err(SolveError::Invalid(
+                "photons per shot must be at least 1".into(),
+            ));
+        }
+        let keys: Vec<f64> = (0..system.len())
+            .map(|i| energy(system.emission[i], system.area[i]))
+            .collect();
+        let emitted = system.emitted_power();
+        Ok(Self {
+            b: system.emission.to_vec(),
+            u: system.emission.to_vec(),
+            tree: MaxTree::new(&keys),
+            rng: stream(params.seed, 0x5354_4f43, 0, 0),
+            photons: params.photons as f64,
+            emitted,
+            emitted_total: emitted.sum(),
+            absorbed: Rgb::BLACK,
+            escaped: Rgb::BLACK,
+            iterations: 0,
+            system,
+        })
+    }
+
+    fn unshot_power(&self) -> Rgb {
+        self.u
+            .iter()
+            .zip(self.system.area)
+            .map(|(u, a)| *u * *a)
+            .sum()
+    }
+}
+
+impl Solver for Stochastic<'_> {
+    fn method(&self) -> Method {
+        Method::Stochastic
+    }
+
+    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+        let (key, j) = self.tree.max();
+        if key <= 0.0 {
+            return false;
+        }
+        let sys = self.system;
+        let power = self.u[j] * (sys.area[j] / self.photons);
+        let uj = self.u[j];
+        self.u[j] = uj - uj / self.photons;
+        self.tree.set(j, energy(self.u[j], sys.area[j]));
+        match source.sample(j, &mut self.rng) {
+            Some(k) => {
+                let k = k as usize;
+                let rho = sys.reflectance[k];
+                let db = rho * power / sys.area[k];
+                self.u[k] += db;
+                self.b[k] += db;
+                self.absorbed += (Rgb::splat(1.0) - rho) * power;
+                self.tree.set(k, energy(self.u[k], sys.area[k]));
+            }
+            None => self.escaped += power,
+        }
+        self.iterations += 1;
+        true
+    }
+
+    fn radiosity(&self, out: &mut Vec<Rgb>) {
+        out.clear();
+        out.extend_from_slice(&self.b);
+    }
+
+    fn unshot(&self) -> Option<&[Rgb]> {
+        Some(&self.u)
+    }
+
+    fn unshot_fraction(&mut self, _: &mut dyn RowSource, _: bool) -> f64 {
+        self.unshot_power().sum() / self.emitted_total
+    }
+
+    fn iterations(&self) -> u64 {
+        self.iterations
+    }
+
+    fn info(&mut self, _: &mut dyn RowSource) -> Info {
+        let unshot = self.unshot_power();
+        Info {
+            iterations: self.iterations,
+            converged: false,
+            unshot_fraction: unshot.sum() / self.emitted_total,
+            seconds: 0.0,
+            emitted: self.emitted,
+            absorbed: self.absorbed,
+            escaped: self.escaped,
+            unshot,
+        }
+    }
+}
