@@ -177,4 +177,8 @@ pub struct BenchArgs {
     /// Worker threads (default: one per core).
     #[arg(long, value_name = "T")]
     pub threads: Option<usize>,
+    /// Instead: time per iteration of every solver on the Cornell box's stored form factors
+    /// at these patch counts.
+    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1..)]
+    pub solvers: Option<Vec<usize>>,
 }

@@ -5,7 +5,8 @@
 use crate::args::BenchArgs;
 use anyhow::{bail, Result};
 use radiosity::accel::Bvh;
-use radiosity::formfactor::monte_carlo::trace_random_rays;
+use radiosity::formfactor::monte_carlo::{estimate_all_rows, trace_random_rays};
+use radiosity::solve::{Method, SolverParams, System};
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::pipeline::{self, Settings};
 use radiosity::scene::builtin;
@@ -21,12 +22,71 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
+/// Time per iteration of every solver on stored Monte Carlo form factors of the Cornell box.
+fn solvers(sizes: &[usize], runs: usize) -> Result<()> {
+    let scene = builtin::cornell();
+    println!("solver time per iteration, Cornell box, stored sparse F (256 rays per row), median of {runs}:");
+    println!("{:>7} {:>9} {:<20} {:>10} {:>12} {:>14}", "patches", "nnz", "method", "iterations", "seconds", "µs/iteration");
+    for &n in sizes {
+        let mesh = Mesh::build(&scene, MeshParams::Patches(n))?;
+        let bvh = Bvh::build(&mesh);
+        let mut f = estimate_all_rows(&mesh, &bvh, 256, 1);
+        let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
+        let refl: Vec<_> = mesh.patches.iter().map(|p| scene.materials[p.material as usize].reflectance).collect();
+        let emis: Vec<_> = mesh.patches.iter().map(|p| scene.materials[p.material as usize].emission).collect();
+        let system = System {
+            area: &area,
+            reflectance: &refl,
+            emission: &emis,
+        };
+        for method in Method::ALL {
+            let iterations = match method {
+                Method::Gauss => 1,
+                Method::Stochastic => 200_000,
+                _ => mesh.len() as u64,
+            };
+            let params = SolverParams {
+                tolerance: 0.0,
+                max_iterations: iterations,
+                memory_limit: 8 << 30,
+                ..Default::default()
+            };
+            let mut times = Vec::new();
+            let mut done = 0;
+            for _ in 0..runs {
+                let t = Instant::now();
+                let mut s = radiosity::solve::start(method, system, &mut f, &params)?;
+                let info = radiosity::solve::run(&mut *s, &mut f, &params, false, &mut |_, _| {});
+                times.push(t.elapsed().as_secs_f64());
+                done = info.iterations;
+            }
+            let t = median(times);
+            println!(
+                "{:>7} {:>9} {:<20} {:>10} {:>12.4} {:>14.2}",
+                mesh.len(),
+                f.nnz(),
+                method.name(),
+                done,
+                t,
+                1e6 * t / done.max(1) as f64
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Run the benchmark and print its table.
 pub fn run(a: BenchArgs) -> Result<()> {
     if a.runs == 0 || a.rays == 0 || a.patches == 0 {
         bail!("--runs, --rays and --patches must be positive");
     }
     crate::settings::threads(a.threads)?;
+    if let Some(sizes) = &a.solvers {
+        if sizes.iter().any(|&n| n == 0) {
+            bail!("--solvers: patch counts must be positive");
+        }
+        return solvers(sizes, a.runs);
+    }
     let scene = builtin::cornell();
     let mesh = Mesh::build(&scene, MeshParams::Patches(a.patches))?;
     let t = Instant::now();
