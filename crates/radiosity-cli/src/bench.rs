@@ -6,10 +6,10 @@ use crate::args::BenchArgs;
 use anyhow::{bail, Result};
 use radiosity::accel::Bvh;
 use radiosity::formfactor::monte_carlo::{estimate_all_rows, trace_random_rays};
-use radiosity::solve::{Method, SolverParams, System};
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::pipeline::{self, Settings};
 use radiosity::scene::builtin;
+use radiosity::solve::{Method, SolverParams, System};
 use std::time::Instant;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -26,14 +26,25 @@ fn median(mut v: Vec<f64>) -> f64 {
 fn solvers(sizes: &[usize], runs: usize) -> Result<()> {
     let scene = builtin::cornell();
     println!("solver time per iteration, Cornell box, stored sparse F (256 rays per row), median of {runs}:");
-    println!("{:>7} {:>9} {:<20} {:>10} {:>12} {:>14}", "patches", "nnz", "method", "iterations", "seconds", "µs/iteration");
+    println!(
+        "{:>7} {:>9} {:<20} {:>10} {:>12} {:>14}",
+        "patches", "nnz", "method", "iterations", "seconds", "µs/iteration"
+    );
     for &n in sizes {
         let mesh = Mesh::build(&scene, MeshParams::Patches(n))?;
         let bvh = Bvh::build(&mesh);
         let mut f = estimate_all_rows(&mesh, &bvh, 256, 1);
         let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
-        let refl: Vec<_> = mesh.patches.iter().map(|p| scene.materials[p.material as usize].reflectance).collect();
-        let emis: Vec<_> = mesh.patches.iter().map(|p| scene.materials[p.material as usize].emission).collect();
+        let refl: Vec<_> = mesh
+            .patches
+            .iter()
+            .map(|p| scene.materials[p.material as usize].reflectance)
+            .collect();
+        let emis: Vec<_> = mesh
+            .patches
+            .iter()
+            .map(|p| scene.materials[p.material as usize].emission)
+            .collect();
         let system = System {
             area: &area,
             reflectance: &refl,
@@ -82,7 +93,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
     }
     crate::settings::threads(a.threads)?;
     if let Some(sizes) = &a.solvers {
-        if sizes.iter().any(|&n| n == 0) {
+        if sizes.contains(&0) {
             bail!("--solvers: patch counts must be positive");
         }
         return solvers(sizes, a.runs);

@@ -60,7 +60,7 @@ pub fn solver_params(
     photons: u32,
     seed: u64,
 ) -> Result<SolverParams> {
-    if !(tolerance.is_finite() && tolerance >= 0.0 && tolerance < 1.0) {
+    if !(0.0..1.0).contains(&tolerance) {
         bail!("--tolerance {tolerance}: must be in [0, 1)");
     }
     if !(omega > 0.0 && omega < 2.0) {

@@ -169,3 +169,43 @@ impl Solver for Gauss<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solve::{start, Method};
+
+    #[test]
+    fn refuses_a_dense_matrix_beyond_the_limit_and_names_the_alternative() {
+        let n = 1000;
+        let area = vec![1.0; n];
+        let refl = vec![Rgb::splat(0.5); n];
+        let mut emis = vec![Rgb::BLACK; n];
+        emis[0] = Rgb::splat(1.0);
+        let sys = System {
+            area: &area,
+            reflectance: &refl,
+            emission: &emis,
+        };
+        let mut f = SparseMatrix::from_rows(vec![Vec::new(); n]);
+        let params = SolverParams {
+            memory_limit: bytes_needed(n) - 1,
+            ..Default::default()
+        };
+        let err = start(Method::Gauss, sys, &mut f, &params)
+            .err()
+            .expect("refused");
+        let msg = err.to_string();
+        assert!(
+            msg.contains("gauss") && msg.contains("progressive"),
+            "{msg}"
+        );
+        // At the limit it runs, and with F = 0 the answer is B = E.
+        let params = SolverParams {
+            memory_limit: bytes_needed(n),
+            ..Default::default()
+        };
+        let (b, _) = crate::solve::solve(Method::Gauss, sys, &mut f, &params).unwrap();
+        assert_eq!(b, emis);
+    }
+}
