@@ -22,6 +22,8 @@ const BINS: usize = 16;
 const EMPTY_LANE: u32 = u32::MAX;
 /// Barycentric slack that keeps shared edges watertight under rounding.
 const EDGE_EPS: f32 = 1e-6;
+/// Relative distance within which two hits count as one (a ray through a shared edge).
+const TIE: f32 = 1e-6;
 
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
@@ -294,12 +296,13 @@ impl Bvh {
                 let qz = sx * b.e1[1] - sy * b.e1[0];
                 let v = (dx * qx + dy * qy + dz * qz) * inv_det;
                 let t = (b.e2[0] * qx + b.e2[1] * qy + b.e2[2] * qz) * inv_det;
-                // NaN lanes (det = 0) fail every comparison.
+                // NaN lanes (det = 0) fail every comparison. Hits up to TIE beyond the best are
+                // kept for the tie rule below.
                 let ok = u.cmpge(Vec4::splat(-EDGE_EPS))
                     & v.cmpge(Vec4::splat(-EDGE_EPS))
                     & (u + v).cmple(Vec4::splat(1.0 + EDGE_EPS))
                     & t.cmpgt(Vec4::ZERO)
-                    & t.cmplt(Vec4::splat(best_t));
+                    & t.cmplt(Vec4::splat(best_t * (1.0 + TIE)));
                 let mut mask = ok.bitmask();
                 if mask != 0 {
                     let (ta, ua, va, da) =
@@ -307,7 +310,14 @@ impl Bvh {
                     while mask != 0 {
                         let l = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        if ta[l] < best_t {
+                        // Closer, or a tie (a ray through the edge where two faces meet) won by the
+                        // front side: at a convex edge the front-facing surface is the visible one.
+                        let closer = ta[l] < best_t * (1.0 - TIE);
+                        let tie = !closer && ta[l] <= best_t * (1.0 + TIE);
+                        if closer
+                            || (tie && da[l] > 0.0 && (best == u32::MAX || bdet <= 0.0))
+                            || (tie && ta[l] < best_t && (da[l] > 0.0) == (bdet > 0.0))
+                        {
                             best_t = ta[l];
                             best = b.id[l];
                             bu = ua[l];
@@ -369,7 +379,7 @@ impl Bvh {
             while sp > 0 {
                 sp -= 1;
                 let (c, dist) = stack[sp];
-                if dist < best_t {
+                if dist <= best_t * (1.0 + TIE) {
                     cur = c;
                     continue 'outer;
                 }

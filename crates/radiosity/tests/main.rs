@@ -1,4 +1,5 @@
 //! Integration tests of the library: physics against closed forms and invariants.
 
+mod formfactors;
 mod physics;
 mod solvers;

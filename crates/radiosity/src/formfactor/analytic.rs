@@ -47,36 +47,63 @@ const WG: [f64; 4] = [
     0.417_959_183_673_469_4,
 ];
 
-fn gk15(f: &impl Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
+/// Kronrod estimate, error estimate |K15 − G7|, and ∫|f| (for the round-off floor).
+fn gk15(f: &impl Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64, f64) {
     let c = 0.5 * (a + b);
     let h = 0.5 * (b - a);
     let fc = f(c);
     let mut k = WGK[7] * fc;
     let mut g = WG[3] * fc;
+    let mut abs = WGK[7] * fc.abs();
     for j in 0..7 {
         let x = h * XGK[j];
-        let s = f(c - x) + f(c + x);
-        k += WGK[j] * s;
+        let (f1, f2) = (f(c - x), f(c + x));
+        k += WGK[j] * (f1 + f2);
+        abs += WGK[j] * (f1.abs() + f2.abs());
         if j % 2 == 1 {
-            g += WG[j / 2] * s;
+            g += WG[j / 2] * (f1 + f2);
         }
     }
-    (k * h, (k - g).abs() * h)
+    (k * h, (k - g).abs() * h, abs * h)
 }
 
 fn adaptive(f: &impl Fn(f64) -> f64, a: f64, b: f64, tol: f64, depth: u32) -> f64 {
-    let (k, err) = gk15(f, a, b);
-    if err <= tol || depth == 0 {
+    let (k, err, abs) = gk15(f, a, b);
+    // Stop at the tolerance, at the round-off floor of the integrand's magnitude (QUADPACK's
+    // test: further bisection cannot gain accuracy), at the depth limit, or on a non-number.
+    let floor = 50.0 * f64::EPSILON * abs;
+    if err <= tol.max(floor) || depth == 0 || !err.is_finite() {
         return k;
     }
     let m = 0.5 * (a + b);
     adaptive(f, a, m, 0.5 * tol, depth - 1) + adaptive(f, m, b, 0.5 * tol, depth - 1)
 }
 
-/// ∫₀¹ ln |x − (c + t v)| dt in closed form.
+/// 8-point Gauss–Legendre on [0, 1]: nodes and weights.
+const GL8: [(f64, f64); 8] = [
+    (0.019_855_071_751_231_88, 0.050_614_268_145_188_13),
+    (0.101_666_761_293_186_6, 0.111_190_517_226_687_2),
+    (0.237_233_795_041_835_5, 0.156_853_322_938_943_6),
+    (0.408_282_678_752_175_1, 0.181_341_891_689_181_0),
+    (0.591_717_321_247_824_9, 0.181_341_891_689_181_0),
+    (0.762_766_204_958_164_5, 0.156_853_322_938_943_6),
+    (0.898_333_238_706_813_4, 0.111_190_517_226_687_2),
+    (0.980_144_928_248_768_1, 0.050_614_268_145_188_13),
+];
+
+/// ∫₀¹ ln |x − (c + t v)| dt. Near the edge, in closed form; far from it (distance from the
+/// edge's middle above four edge lengths) the closed form loses digits to cancellation between
+/// two large terms, while the integrand is smooth there: 8-point Gauss–Legendre is exact to
+/// rounding.
 fn log_distance_integral(x: DVec3, c: DVec3, v: DVec3) -> f64 {
     let w = x - c;
     let alpha = v.length_squared();
+    if (w - 0.5 * v).length_squared() > 16.0 * alpha {
+        return GL8
+            .iter()
+            .map(|&(t, wt)| wt * (w - t * v).length().ln())
+            .sum();
+    }
     let t0 = v.dot(w) / alpha;
     let h2 = (w.length_squared() / alpha - t0 * t0).max(0.0);
     let h = h2.sqrt();
@@ -149,6 +176,19 @@ pub fn polygon_factor(
     nj: DVec3,
     scratch: &mut Scratch,
 ) -> f64 {
+    // A polygon lying in the other's plane sees it at cos θ = 0 everywhere: F = 0 exactly (the
+    // contour integral would reach 0 only through the cancellation of singular terms).
+    let size = pi
+        .iter()
+        .chain(pj.iter())
+        .map(|p| (*p - pi[0]).length())
+        .fold(0.0, f64::max);
+    let in_plane = |poly: &[DVec3], o: DVec3, n: DVec3| {
+        poly.iter().all(|p| ((*p - o).dot(n)).abs() <= 1e-9 * size)
+    };
+    if in_plane(pj, pi[0], ni) || in_plane(pi, pj[0], nj) {
+        return 0.0;
+    }
     clip(pi, pj[0], nj, &mut scratch.a);
     clip(pj, pi[0], ni, &mut scratch.b);
     let (a, b) = (&scratch.a, &scratch.b);
@@ -177,7 +217,9 @@ pub fn polygon_factor(
                 continue;
             }
             let f = |s: f64| log_distance_integral(pa + ep * s, qa, eq);
-            sum += dot * adaptive(&f, 0.0, 1.0, 1e-13, 40);
+            let (first, _, abs) = gk15(&f, 0.0, 1.0);
+            let tol = 1e-13 * abs.max(first.abs()).max(1e-300);
+            sum += dot * adaptive(&f, 0.0, 1.0, tol, 24);
         }
     }
     // Both contours run counter-clockwise about their own normals, for which the double contour

@@ -26,6 +26,8 @@
 
 use crate::geom::Vec3;
 
+const EDGE_SLACK: f32 = 1e-3;
+
 /// Item-buffer value of an empty pixel.
 pub const EMPTY: u32 = u32::MAX;
 /// Flag on an item-buffer value: the nearest surface shows its back.
@@ -186,6 +188,7 @@ pub struct Buffers {
     pub inv_depth: Vec<Vec<f32>>,
     clipped: Vec<(Vec3, f32)>,
     scratch: Vec<(Vec3, f32)>,
+    projected: Vec<(Vec3, f32)>,
 }
 
 impl Buffers {
@@ -214,20 +217,47 @@ pub fn rasterise(solid: &Solid, buffers: &mut Buffers, tri: &[Vec3; 3], id: u32,
         if depth.iter().all(|&d| d <= near) {
             continue;
         }
-        // Clip against depth ≥ near (Sutherland–Hodgman on one plane).
+        // Clip against depth ≥ near and against the face's frustum, widened by a pixel (a guard
+        // band), so that projected coordinates stay near the face and keep f32 precision.
+        let (du, dv) = (
+            (face.u_range.1 - face.u_range.0) / face.nu as f32,
+            (face.v_range.1 - face.v_range.0) / face.nv as f32,
+        );
+        let (u0, u1) = (face.u_range.0 - du, face.u_range.1 + du);
+        let (v0, v1) = (face.v_range.0 - dv, face.v_range.1 + dv);
         let clipped = &mut buffers.clipped;
         clipped.clear();
-        for e in 0..3 {
-            let (a, b) = (tri[e], tri[(e + 1) % 3]);
-            let (da, db) = (depth[e], depth[(e + 1) % 3]);
-            if da >= near {
-                clipped.push((a, da));
+        clipped.extend(tri.iter().zip(depth).map(|(q, d)| (*q, d)));
+        let planes: [&dyn Fn(Vec3, f32) -> f32; 5] = [
+            &|_, d| d - near,
+            &|q, d| q.dot(face.u) - u0 * d,
+            &|q, d| u1 * d - q.dot(face.u),
+            &|q, d| q.dot(face.v) - v0 * d,
+            &|q, d| v1 * d - q.dot(face.v),
+        ];
+        for plane in planes {
+            let input = std::mem::take(clipped);
+            let scratch = &mut buffers.scratch;
+            scratch.clear();
+            let n = input.len();
+            for e in 0..n {
+                let (a, b) = (input[e], input[(e + 1) % n]);
+                let (sa, sb) = (plane(a.0, a.1), plane(b.0, b.1));
+                if sa >= 0.0 {
+                    scratch.push(a);
+                }
+                if (sa >= 0.0) != (sb >= 0.0) {
+                    let t = sa / (sa - sb);
+                    scratch.push((a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t));
+                }
             }
-            if (da >= near) != (db >= near) {
-                let t = (near - da) / (db - da);
-                clipped.push((a + (b - a) * t, near));
+            *clipped = input;
+            std::mem::swap(clipped, scratch);
+            if clipped.len() < 3 {
+                break;
             }
         }
+        let clipped = &buffers.clipped;
         if clipped.len() < 3 {
             continue;
         }
@@ -236,7 +266,7 @@ pub fn rasterise(solid: &Solid, buffers: &mut Buffers, tri: &[Vec3; 3], id: u32,
             face.nu as f32 / (face.u_range.1 - face.u_range.0),
             face.nv as f32 / (face.v_range.1 - face.v_range.0),
         );
-        let proj = &mut buffers.scratch;
+        let proj = &mut buffers.projected;
         proj.clear();
         let (mut x0, mut x1, mut y0, mut y1) = (
             f32::INFINITY,
@@ -281,24 +311,42 @@ fn raster_triangle(
         return;
     }
     let inv_area = 1.0 / area;
+    // Slack per edge, as edge-function values: EDGE_SLACK pixels times the edge's length, with
+    // the sign of the area so that the test reads "inside or within the slack".
+    let slack = |p: Vec3, q: Vec3| -EDGE_SLACK * (q - p).length() * area.signum();
     let xs = (pa.x.min(pb.x).min(pc.x).floor().max(0.0)) as usize;
     let xe = (pa.x.max(pb.x).max(pc.x).ceil().min(face.nu as f32)) as usize;
     let ys = (pa.y.min(pb.y).min(pc.y).floor().max(0.0)) as usize;
     let ye = (pa.y.max(pb.y).max(pc.y).ceil().min(face.nv as f32)) as usize;
+    let (s0, s1, s2) = (slack(pb, pc), slack(pc, pa), slack(pa, pb));
     for y in ys..ye {
         let py = y as f32 + 0.5;
         for x in xs..xe {
             let px = x as f32 + 0.5;
-            // Barycentric weights by edge functions, normalised by the signed area.
-            let w0 = ((pb.x - px) * (pc.y - py) - (pb.y - py) * (pc.x - px)) * inv_area;
-            let w1 = ((pc.x - px) * (pa.y - py) - (pc.y - py) * (pa.x - px)) * inv_area;
-            let w2 = 1.0 - w0 - w1;
-            if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+            // Edge functions (twice the signed areas of the sub-triangles), then barycentric weights.
+            let e0 = (pb.x - px) * (pc.y - py) - (pb.y - py) * (pc.x - px);
+            let e1 = (pc.x - px) * (pa.y - py) - (pc.y - py) * (pa.x - px);
+            let e2 = (pa.x - px) * (pb.y - py) - (pa.y - py) * (pb.x - px);
+            // A pixel centre within EDGE_SLACK pixels of an edge counts as inside, so that centres
+            // on a shared edge are not lost to rounding by both triangles (a pixel covered twice
+            // is settled by the depth test).
+            if (e0 - s0) * area.signum() < 0.0
+                || (e1 - s1) * area.signum() < 0.0
+                || (e2 - s2) * area.signum() < 0.0
+            {
                 continue;
             }
+            let (w0, w1) = (e0 * inv_area, e1 * inv_area);
+            let w2 = 1.0 - w0 - w1;
             let w = w0 * a.1 + w1 * b.1 + w2 * c.1;
             let k = y * face.nu + x;
-            if w > depths[k] {
+            // Nearer wins; on a tie (a pixel on the edge where two faces meet) the front side
+            // wins, as at a convex edge the front-facing surface is the visible one.
+            let tie = (w - depths[k]).abs() <= 1e-5 * w;
+            if (w > depths[k] && !tie)
+                || (tie && id & BACK == 0 && items[k] & BACK != 0)
+                || depths[k] == 0.0
+            {
                 depths[k] = w;
                 items[k] = id;
             }
