@@ -23,6 +23,60 @@ pub enum Command {
     Bench(BenchArgs),
     /// Solve a given linear system: a form-factor matrix (Matrix Market) and a patches CSV.
     SolveSystem(SolveSystemArgs),
+    /// Compute a view-factor (form-factor) matrix and write it as Matrix Market.
+    FormFactors(FormFactorsArgs),
+}
+
+/// `radiosity form-factors`.
+#[derive(Debug, Args)]
+pub struct FormFactorsArgs {
+    /// A built-in scene or an .obj file.
+    pub scene: String,
+    /// Method: hemicube, hemisphere, tetrahedron, monte-carlo, analytic (unoccluded).
+    #[arg(long, value_name = "M", default_value = "monte-carlo")]
+    pub method: String,
+    /// P: pixels along a hemicube/tetrahedron face, cells across the hemisphere's disc.
+    #[arg(long, value_name = "P", default_value_t = 128)]
+    pub resolution: u32,
+    /// Points over each patch for the projection methods (rounded up to a square).
+    #[arg(long, value_name = "K", default_value_t = 16)]
+    pub samples: u32,
+    /// Monte Carlo rays per row (standard deviation of each entry ≤ 1/(2√N)).
+    #[arg(long, value_name = "N", default_value_t = 1_000_000)]
+    pub rays: u32,
+    /// Seed of Monte Carlo.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// One row per input face (no subdivision): face-to-face view factors.
+    #[arg(long, conflicts_with_all = ["patches", "max_edge"])]
+    pub faces: bool,
+    /// Approximate number of patches.
+    #[arg(long, value_name = "N", conflicts_with = "max_edge")]
+    pub patches: Option<usize>,
+    /// Largest patch edge, scene units.
+    #[arg(long, value_name = "L")]
+    pub max_edge: Option<f32>,
+    /// Storage while computing: auto (dense up to 4,096 patches), dense or sparse.
+    #[arg(long, value_name = "S", default_value = "auto")]
+    pub storage: String,
+    /// Drop negative entries (F ≥ 0).
+    #[arg(long)]
+    pub clamp: bool,
+    /// Rescale every row to sum to 1 (closed enclosures only).
+    #[arg(long)]
+    pub normalize_rows: bool,
+    /// Make A_i F_ij = A_j F_ji keeping row sums (symmetric matrix scaling, Knight 2008).
+    #[arg(long)]
+    pub symmetrize: bool,
+    /// Output matrix (Matrix Market, coordinate real general, 1-based).
+    #[arg(long, short, value_name = "F.mtx")]
+    pub out: PathBuf,
+    /// Also write the rows' patches (or faces) as CSV.
+    #[arg(long, value_name = "patches.csv")]
+    pub patches_out: Option<PathBuf>,
+    /// Worker threads (default: one per core). Results do not depend on it.
+    #[arg(long, value_name = "T")]
+    pub threads: Option<usize>,
 }
 
 /// `radiosity solve-system`.
@@ -99,6 +153,16 @@ pub struct SolveArgs {
     /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
     #[arg(long, value_name = "N", default_value_t = 1000)]
     pub photons: u32,
+    /// Form-factor method: monte-carlo (rows on demand for shooting solvers), or hemicube,
+    /// hemisphere, tetrahedron, analytic (unoccluded), whose full matrix is computed first.
+    #[arg(long, value_name = "M", default_value = "monte-carlo")]
+    pub form_factors: String,
+    /// P for the hemicube, tetrahedron and hemisphere.
+    #[arg(long, value_name = "P", default_value_t = 128)]
+    pub resolution: u32,
+    /// Points per patch for the hemicube, tetrahedron and hemisphere.
+    #[arg(long, value_name = "K", default_value_t = 16)]
+    pub samples: u32,
     /// Write the convergence trace (iteration,seconds,error,unshot) to this CSV. The form
     /// factors are then estimated and stored in full first, and the error is measured against
     /// their LU solution (N ≤ 5,000).

@@ -4,6 +4,7 @@ mod args;
 mod bench;
 mod report;
 mod settings;
+mod view_factors;
 
 use anyhow::{Context, Result};
 use args::{Cli, Command, RenderArgs, SolveArgs, SolveCmdArgs, SolveSystemArgs};
@@ -26,6 +27,7 @@ fn main() -> ExitCode {
         Command::Solve(a) => solve(a),
         Command::Bench(a) => bench::run(a),
         Command::SolveSystem(a) => solve_system(a),
+        Command::FormFactors(a) => view_factors::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -37,7 +39,7 @@ fn main() -> ExitCode {
 }
 
 /// Load the scene named on the command line and print its warnings.
-fn load_scene(name: &str) -> Result<Scene> {
+pub(crate) fn load_scene(name: &str) -> Result<Scene> {
     let scene = scene::load(name)?;
     for w in &scene.warnings {
         eprintln!("radiosity: warning: {w}");

@@ -27,8 +27,38 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
     if a.threads == Some(0) {
         bail!("--threads 0: at least one thread is needed");
     }
+    let ff = radiosity::formfactor::Method::from_name(&a.form_factors).with_context(|| {
+        let names: Vec<&str> = radiosity::formfactor::Method::ALL
+            .iter()
+            .map(|m| m.name())
+            .collect();
+        format!(
+            "--form-factors {}: unknown method (known: {})",
+            a.form_factors,
+            names.join(", ")
+        )
+    })?;
+    if a.resolution < 2 {
+        bail!(
+            "--resolution {}: at least 2 pixels along a face are needed",
+            a.resolution
+        );
+    }
+    if a.samples == 0 {
+        bail!("--samples 0: at least one point per patch is needed");
+    }
+    let geometric = (ff != radiosity::formfactor::Method::MonteCarlo).then_some(
+        radiosity::formfactor::Params {
+            method: ff,
+            resolution: a.resolution,
+            samples: a.samples,
+            rays: a.rays,
+            seed: a.seed,
+        },
+    );
     Ok(Settings {
         mesh,
+        geometric,
         monte_carlo: MonteCarloParams {
             rays: a.rays,
             seed: a.seed,

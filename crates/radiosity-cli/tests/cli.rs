@@ -620,3 +620,288 @@ fn solve_traces_a_scene() {
     assert!(first[2] > 0.5, "error at start {}", first[2]);
     assert!(last[2].abs() < 1e-5 && last[3] <= 1e-6, "last row {last:?}");
 }
+
+const SQUARES: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 0 1 1\nv 1 1 1\nv 1 0 1\nf 1 2 3 4\nf 5 6 7 8\n";
+
+fn read_mtx(path: &Path) -> (usize, Vec<(usize, usize, f64)>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('%'));
+    let n: usize = lines
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let entries = lines
+        .map(|l| {
+            let t: Vec<&str> = l.split_whitespace().collect();
+            (
+                t[0].parse().unwrap(),
+                t[1].parse().unwrap(),
+                t[2].parse().unwrap(),
+            )
+        })
+        .collect();
+    (n, entries)
+}
+
+#[test]
+fn form_factors_face_to_face() {
+    let dir = scratch("ff");
+    write(&dir, "squares.obj", SQUARES);
+    // Howell C-11 for two unit squares at distance 1.
+    let exact = 0.199_824_9;
+    for (method, tol) in [
+        ("analytic", 1e-6),
+        ("hemicube", 0.01 * exact),
+        ("hemisphere", 0.01 * exact),
+        ("tetrahedron", 0.01 * exact),
+        ("monte-carlo", 0.01 * exact),
+    ] {
+        let out = run(
+            &[
+                "form-factors",
+                "squares.obj",
+                "--faces",
+                "--method",
+                method,
+                "--out",
+                "F.mtx",
+                "--patches-out",
+                "p.csv",
+            ],
+            &dir,
+        );
+        assert!(
+            out.status.success(),
+            "{method}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let (n, e) = read_mtx(&dir.join("F.mtx"));
+        assert_eq!(n, 2);
+        for &(i, j, f) in &e {
+            assert!(
+                i != j && (f - exact).abs() < tol,
+                "{method}: F[{i},{j}] = {f}"
+            );
+        }
+        assert_eq!(e.len(), 2);
+        let csv = std::fs::read_to_string(dir.join("p.csv")).unwrap();
+        assert!(csv.starts_with("patch,surface,area,cx,cy,cz,nx,ny,nz,reflectance_r,reflectance_g,reflectance_b,emission_r,emission_g,emission_b\n"));
+        assert_eq!(csv.lines().count(), 3);
+    }
+}
+
+#[test]
+fn form_factors_aggregates_a_triangulated_face() {
+    // An L-shaped (non-convex) floor under a unit square: one row per face.
+    let dir = scratch("ffl");
+    write(
+        &dir,
+        "l.obj",
+        "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\nv 0 0 1\nv 0 1 1\nv 1 1 1\nv 1 0 1\nf 1 2 3 4 5 6\nf 7 8 9 10\n",
+    );
+    let out = run(
+        &[
+            "form-factors",
+            "l.obj",
+            "--faces",
+            "--method",
+            "analytic",
+            "--out",
+            "F.mtx",
+            "--patches-out",
+            "p.csv",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (n, e) = read_mtx(&dir.join("F.mtx"));
+    assert_eq!(n, 2);
+    let f = |i, j| e.iter().find(|x| x.0 == i && x.1 == j).map_or(0.0, |x| x.2);
+    // Reciprocity between the L (area 3) and the square (area 1), exact for the analytic method.
+    assert!(
+        (3.0 * f(1, 2) - f(2, 1)).abs() < 1e-6,
+        "{} vs {}",
+        3.0 * f(1, 2),
+        f(2, 1)
+    );
+    // The square sees more than a unit square would: the L extends beyond it.
+    assert!(f(2, 1) > 0.199_824_9 && f(2, 1) < 1.0);
+}
+
+#[test]
+fn form_factors_symmetrize_keeps_row_sums() {
+    let dir = scratch("ffsym");
+    let base = [
+        "form-factors",
+        "cornell",
+        "--patches",
+        "150",
+        "--method",
+        "monte-carlo",
+        "--rays",
+        "4000",
+    ];
+    let mut plain = base.to_vec();
+    plain.extend(["--out", "a.mtx", "--patches-out", "p.csv"]);
+    let mut sym = base.to_vec();
+    sym.extend(["--symmetrize", "--out", "b.mtx"]);
+    for args in [&plain, &sym] {
+        let out = run(args, &dir);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let areas: Vec<f64> = std::fs::read_to_string(dir.join("p.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+        .collect();
+    let (n, a) = read_mtx(&dir.join("a.mtx"));
+    let (_, b) = read_mtx(&dir.join("b.mtx"));
+    let row_sums = |e: &[(usize, usize, f64)]| {
+        let mut s = vec![0.0; n];
+        for &(i, _, f) in e {
+            s[i - 1] += f;
+        }
+        s
+    };
+    let (sa, sb) = (row_sums(&a), row_sums(&b));
+    for i in 0..n {
+        assert!(
+            (sa[i] - sb[i]).abs() < 1e-5,
+            "row {i}: {} → {}",
+            sa[i],
+            sb[i]
+        );
+    }
+    let g = |e: &[(usize, usize, f64)], i: usize, j: usize| {
+        e.iter().find(|x| x.0 == i && x.1 == j).map_or(0.0, |x| x.2)
+    };
+    let mut worst: f64 = 0.0;
+    for &(i, j, f) in &b {
+        worst = worst.max((areas[i - 1] * f - areas[j - 1] * g(&b, j, i)).abs() / areas[i - 1]);
+    }
+    assert!(worst < 1e-5, "reciprocity after --symmetrize: {worst}");
+}
+
+#[test]
+fn form_factors_rejects_bad_input() {
+    let dir = scratch("ffbad");
+    write(&dir, "squares.obj", SQUARES);
+    write(
+        &dir,
+        "np.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0.3\nv 0 1 0\nf 1 2 3 4\n",
+    );
+    let keep = ["squares.obj", "np.obj"];
+    for (args, needles) in [
+        (
+            vec![
+                "form-factors",
+                "squares.obj",
+                "--resolution",
+                "0",
+                "--out",
+                "F.mtx",
+            ],
+            vec!["--resolution 0"],
+        ),
+        (
+            vec![
+                "form-factors",
+                "squares.obj",
+                "--rays",
+                "0",
+                "--out",
+                "F.mtx",
+            ],
+            vec!["--rays 0"],
+        ),
+        (
+            vec![
+                "form-factors",
+                "squares.obj",
+                "--method",
+                "radar",
+                "--out",
+                "F.mtx",
+            ],
+            vec!["--method radar", "hemicube"],
+        ),
+        (
+            vec!["form-factors", "np.obj", "--faces", "--out", "F.mtx"],
+            vec!["np.obj:5", "not planar"],
+        ),
+        (
+            vec!["form-factors", "squares.obj", "--out", "F.txt"],
+            vec!["F.txt", ".mtx"],
+        ),
+        (
+            vec![
+                "solve",
+                "furnace",
+                "--form-factors",
+                "radar",
+                "--out",
+                "x.csv",
+            ],
+            vec!["--form-factors radar"],
+        ),
+    ] {
+        let out = run(&args, &dir);
+        assert_fails(&out, &needles, &dir, &keep);
+    }
+}
+
+#[test]
+fn solve_with_hemicube_form_factors_keeps_the_furnace_exact_on_average() {
+    let dir = scratch("ffsolve");
+    let out = run(
+        &[
+            "solve",
+            "furnace",
+            "--patches",
+            "120",
+            "--form-factors",
+            "hemicube",
+            "--resolution",
+            "64",
+            "--samples",
+            "4",
+            "--tolerance",
+            "1e-7",
+            "--out",
+            "f.csv",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join("f.csv")).unwrap();
+    let (mut area, mut weighted) = (0.0, 0.0);
+    for l in text.lines().skip(1) {
+        let r: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+        area += r[2];
+        weighted += r[2] * r[16];
+    }
+    // Rows sum to 1 within a pixel (delta ≤ 3.1e-4 at P = 64), so the mean is exact to that.
+    assert!(
+        (weighted / area - 2.0).abs() < 2.0 * 2.0 * 3.2e-4,
+        "{}",
+        weighted / area
+    );
+}

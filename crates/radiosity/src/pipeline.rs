@@ -22,6 +22,9 @@ pub struct Settings {
     pub mesh: MeshParams,
     /// Monte Carlo form factors.
     pub monte_carlo: MonteCarloParams,
+    /// Another form-factor method (hemicube, hemisphere, tetrahedron, analytic) whose full
+    /// matrix is computed first; `None` for Monte Carlo.
+    pub geometric: Option<crate::formfactor::Params>,
     /// The solution method.
     pub solver: Method,
     /// Its parameters (tolerance, iterations, ω, photons, seed, memory).
@@ -39,6 +42,7 @@ impl Default for Settings {
         Self {
             mesh: MeshParams::default(),
             monte_carlo: MonteCarloParams::default(),
+            geometric: None,
             solver: Method::Progressive,
             params: SolverParams::default(),
             store_matrix: false,
@@ -172,7 +176,8 @@ pub fn solve(
         0 => available_memory().unwrap_or(u64::MAX),
         l => l,
     };
-    let store = settings.store_matrix || settings.solver.needs_all_rows();
+    let store =
+        settings.store_matrix || settings.solver.needs_all_rows() || settings.geometric.is_some();
     // A stored matrix holds at most min(N, rays) entries a row, 20 bytes each (rows, columns,
     // sampling sums).
     let per_patch = BYTES_PER_PATCH
@@ -236,9 +241,17 @@ pub fn solve(
     let mut form_factors = FormFactorStats::default();
     let source: &mut dyn RowSource = if store {
         let t = Instant::now();
-        stored = estimate_all_rows(&mesh, &bvh, monte_carlo.rays, monte_carlo.seed);
+        stored = match settings.geometric {
+            Some(p) => crate::formfactor::Estimator::new(&mesh, &bvh, p)
+                .map_err(|e| Error::Solve(crate::solve::SolveError::Invalid(e.to_string())))?
+                .matrix(crate::formfactor::Storage::Sparse, &|_| {})
+                .into_sparse(),
+            None => {
+                form_factors.rays = mesh.len() as u64 * monte_carlo.rays as u64;
+                estimate_all_rows(&mesh, &bvh, monte_carlo.rays, monte_carlo.seed)
+            }
+        };
         form_factors.rows = mesh.len() as u64;
-        form_factors.rays = mesh.len() as u64 * monte_carlo.rays as u64;
         form_factors.seconds = t.elapsed().as_secs_f64();
         observer(Event::Matrix(&stored, &system));
         &mut stored

@@ -178,6 +178,43 @@ pub fn write_patches_csv(
     })
 }
 
+/// The header of [`write_patch_table`]: [`PATCHES_CSV_HEADER`] without the radiosity columns.
+pub const PATCH_TABLE_HEADER: &str = "patch,surface,area,cx,cy,cz,nx,ny,nz,reflectance_r,reflectance_g,reflectance_b,emission_r,emission_g,emission_b";
+
+/// One row of a patch table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatchRow {
+    /// Surface (input polygon) index.
+    pub surface: u32,
+    /// Area.
+    pub area: f64,
+    /// Centroid.
+    pub centre: crate::geom::Vec3,
+    /// Unit normal.
+    pub normal: crate::geom::Vec3,
+    /// Reflectance.
+    pub reflectance: Rgb,
+    /// Emission.
+    pub emission: Rgb,
+}
+
+/// The rows of a form-factor matrix's patches (or faces), with [`PATCH_TABLE_HEADER`]; the
+/// `patch` column is the 0-based row (row k of a Matrix Market file is patch k − 1).
+pub fn write_patch_table(path: &Path, rows: &[PatchRow]) -> Result<(), ExportError> {
+    write_atomic(path, |out| {
+        writeln!(out, "{PATCH_TABLE_HEADER}")?;
+        for (k, r) in rows.iter().enumerate() {
+            let (c, n, rho, e) = (r.centre, r.normal, r.reflectance, r.emission);
+            writeln!(
+                out,
+                "{k},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                r.surface, r.area, c.x, c.y, c.z, n.x, n.y, n.z, rho.r, rho.g, rho.b, e.r, e.g, e.b
+            )?;
+        }
+        Ok(())
+    })
+}
+
 /// The header of convergence traces.
 pub const TRACE_HEADER: &str = "iteration,seconds,error,unshot";
 

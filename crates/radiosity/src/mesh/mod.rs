@@ -199,6 +199,25 @@ fn pieces(scene: &Scene, i: usize) -> Result<Vec<Piece>, SceneError> {
     Ok(tris.into_iter().map(Piece::Tri).collect())
 }
 
+/// Refuse polygons that are not planar (for one patch per face: a view factor needs a plane).
+pub fn check_planar(scene: &Scene) -> Result<(), SceneError> {
+    for (i, p) in scene.polygons.iter().enumerate() {
+        if p.vertices.len() > 3 {
+            let (dev, diam) = plane_deviation(&p.vertices);
+            if dev > PLANARITY_TOLERANCE * diam {
+                return Err(SceneError::Invalid {
+                    place: scene.place_of(i),
+                    message: format!(
+                        "face is not planar (a vertex lies {:.3}% of its size off its plane); one patch per face needs planar faces: split it into triangles",
+                        100.0 * dev / diam
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 fn divisions(len: f32, max_edge: f32) -> u32 {
     if max_edge <= 0.0 {
         return 1;

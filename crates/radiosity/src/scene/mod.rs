@@ -199,10 +199,11 @@ impl Scene {
             .unwrap_or_else(|| Camera::framing(&self.bounds()))
     }
 
-    /// Check everything the engine relies on: materials physical (ρ in `[0, 1)`, E ≥ 0, all
+    /// Check what every stage relies on: materials physical (ρ in `[0, 1)`, E ≥ 0, all
     /// finite), polygons with at least three finite vertices and non-zero area, valid material
-    /// indices, a valid camera, and at least one light.
-    pub fn validate(&self) -> Result<(), SceneError> {
+    /// indices, a valid camera. Enough for view factors; solving also needs a light
+    /// ([`Scene::validate`]).
+    pub fn validate_geometry(&self) -> Result<(), SceneError> {
         let bad = |place: String, message: String| SceneError::Invalid { place, message };
         for m in &self.materials {
             let place = || format!("{} (material '{}')", self.place(), m.name);
@@ -258,11 +259,19 @@ impl Scene {
         if let Some(c) = &self.camera {
             c.validate().map_err(|m| bad(self.place(), m))?;
         }
+        Ok(())
+    }
+
+    /// [`Scene::validate_geometry`] plus: at least one light.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        self.validate_geometry()?;
         if self.emitted_power().max_channel() <= 0.0 {
-            return Err(bad(
-                self.place(),
-                "the scene has no light source: no polygon has a material with emission > 0".into(),
-            ));
+            return Err(SceneError::Invalid {
+                place: self.place(),
+                message:
+                    "the scene has no light source: no polygon has a material with emission > 0"
+                        .into(),
+            });
         }
         Ok(())
     }

@@ -1,0 +1,201 @@
+//! `radiosity form-factors`: a view-factor matrix for a scene, for radiative heat transfer.
+
+use crate::args::FormFactorsArgs;
+use anyhow::{bail, Context, Result};
+use radiosity::accel::Bvh;
+use radiosity::export::{write_patch_table, PatchRow};
+use radiosity::formfactor::{
+    aggregate, enforce, summary, Enforce, Estimator, Method, Params, Storage,
+};
+use radiosity::geom::Vec3;
+use radiosity::io::matrix_market;
+use radiosity::mesh::{check_planar, Mesh, MeshParams};
+use radiosity::scene::vector_area;
+use std::time::Instant;
+
+fn ext_is(path: &std::path::Path, ext: &str) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.eq_ignore_ascii_case(ext))
+        == Some(true)
+}
+
+/// Run the command.
+pub fn run(a: FormFactorsArgs) -> Result<()> {
+    let method = Method::from_name(&a.method).with_context(|| {
+        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+        format!(
+            "--method {}: unknown method (known: {})",
+            a.method,
+            names.join(", ")
+        )
+    })?;
+    if a.resolution < 2 {
+        bail!(
+            "--resolution {}: at least 2 pixels along a face are needed",
+            a.resolution
+        );
+    }
+    if a.samples == 0 {
+        bail!("--samples 0: at least one point per patch is needed");
+    }
+    if a.rays == 0 {
+        bail!("--rays 0: at least one ray per row is needed");
+    }
+    let storage = match a.storage.as_str() {
+        "auto" => Storage::Auto,
+        "dense" => Storage::Dense,
+        "sparse" => Storage::Sparse,
+        s => bail!("--storage {s}: use auto, dense or sparse"),
+    };
+    if !ext_is(&a.out, "mtx") {
+        bail!(
+            "{}: unsupported output format (use .mtx, Matrix Market)",
+            a.out.display()
+        );
+    }
+    crate::settings::check_output(&a.out)?;
+    if let Some(p) = &a.patches_out {
+        if !ext_is(p, "csv") {
+            bail!("{}: unsupported output format (use .csv)", p.display());
+        }
+        crate::settings::check_output(p)?;
+    }
+    let mesh_params = match (a.faces, a.patches, a.max_edge) {
+        (true, _, _) => MeshParams::Faces,
+        (_, _, Some(l)) if !(l.is_finite() && l > 0.0) => {
+            bail!("--max-edge {l}: must be a positive length")
+        }
+        (_, _, Some(l)) => MeshParams::MaxEdge(l),
+        (_, Some(0), _) => bail!("--patches 0: at least one patch is needed"),
+        (_, Some(n), _) => MeshParams::Patches(n),
+        (false, None, None) => MeshParams::default(),
+    };
+    crate::settings::threads(a.threads)?;
+    let scene = crate::load_scene(&a.scene)?;
+    // View factors need geometry, not light.
+    scene.validate_geometry()?;
+    if a.faces {
+        check_planar(&scene)?;
+    }
+    let t = Instant::now();
+    let mesh = Mesh::build(&scene, mesh_params)?;
+    let bvh = Bvh::build(&mesh);
+    let params = Params {
+        method,
+        resolution: a.resolution,
+        samples: a.samples,
+        rays: a.rays,
+        seed: a.seed,
+    };
+    let estimator = Estimator::new(&mesh, &bvh, params)?;
+    let bar = indicatif::ProgressBar::new(mesh.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} form factors {pos}/{len} rows [{bar:30}] {elapsed_precise} (eta {eta})",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    let matrix = estimator
+        .matrix(storage, &|done| bar.set_position(done as u64))
+        .into_sparse();
+    bar.finish_and_clear();
+    let compute_s = t.elapsed().as_secs_f64();
+    let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
+
+    // One row per face, or per patch.
+    let (matrix, area, rows) = if a.faces {
+        let group: Vec<u32> = mesh.patches.iter().map(|p| p.surface).collect();
+        let (m, face_area) = aggregate(&matrix, &area, &group, scene.polygons.len());
+        let rows = scene
+            .polygons
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let mat = &scene.materials[p.material];
+                PatchRow {
+                    surface: k as u32,
+                    area: face_area[k],
+                    centre: p.vertices.iter().copied().sum::<Vec3>() / p.vertices.len() as f32,
+                    normal: vector_area(&p.vertices).normalize_or_zero(),
+                    reflectance: mat.reflectance,
+                    emission: mat.emission,
+                }
+            })
+            .collect::<Vec<_>>();
+        (m, face_area, rows)
+    } else {
+        let rows = mesh
+            .patches
+            .iter()
+            .map(|p| {
+                let mat = &scene.materials[p.material as usize];
+                PatchRow {
+                    surface: p.surface,
+                    area: p.area as f64,
+                    centre: p.centre,
+                    normal: p.normal,
+                    reflectance: mat.reflectance,
+                    emission: mat.emission,
+                }
+            })
+            .collect::<Vec<_>>();
+        (matrix, area, rows)
+    };
+    let fix = Enforce {
+        clamp: a.clamp,
+        normalize_rows: a.normalize_rows,
+        symmetrize: a.symmetrize,
+    };
+    let matrix = if fix != Enforce::default() {
+        enforce(matrix, &area, fix)
+    } else {
+        matrix
+    };
+    let s = summary(&matrix, &area);
+    let comment = vec![
+        format!(
+            "view factors of {} by radiosity form-factors",
+            scene.place()
+        ),
+        format!(
+            "method {method}, resolution {}, samples {}, rays {}, seed {}, {}",
+            a.resolution,
+            a.samples,
+            a.rays,
+            a.seed,
+            if a.faces {
+                "one row per face".to_string()
+            } else {
+                format!("{} patches", mesh.len())
+            }
+        ),
+        format!(
+            "clamp {}, normalize-rows {}, symmetrize {}",
+            a.clamp, a.normalize_rows, a.symmetrize
+        ),
+    ];
+    matrix_market::write(&a.out, &matrix, &comment)?;
+    if let Some(p) = &a.patches_out {
+        write_patch_table(p, &rows)?;
+    }
+    println!(
+        "rows        {} ({}), {} entries, fill {:.4}%",
+        matrix.n(),
+        if a.faces { "faces" } else { "patches" },
+        matrix.nnz(),
+        100.0 * s.fill
+    );
+    println!("method      {method} in {compute_s:.3} s");
+    println!("row sums    {:.6} … {:.6}", s.min_row_sum, s.max_row_sum);
+    println!(
+        "reciprocity worst |A_i F_ij − A_j F_ji| / mean area = {:.3e}",
+        s.worst_reciprocity
+    );
+    println!("wrote       {}", a.out.display());
+    if let Some(p) = &a.patches_out {
+        println!("wrote       {}", p.display());
+    }
+    Ok(())
+}
