@@ -6,6 +6,10 @@ use crate::args::BenchArgs;
 use anyhow::{bail, Result};
 use radiosity::accel::Bvh;
 use radiosity::formfactor::monte_carlo::{estimate_all_rows, trace_random_rays};
+use radiosity::formfactor::{
+    closed_form, Estimator, Method as FfMethod, Params as FfParams, Storage,
+};
+use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::pipeline::{self, Settings};
 use radiosity::scene::builtin;
@@ -92,6 +96,12 @@ pub fn run(a: BenchArgs) -> Result<()> {
         bail!("--runs, --rays and --patches must be positive");
     }
     crate::settings::threads(a.threads)?;
+    if a.form_factors {
+        return form_factor_table(a.runs);
+    }
+    if a.city {
+        return city();
+    }
     if let Some(sizes) = &a.solvers {
         if sizes.contains(&0) {
             bail!("--solvers: patch counts must be positive");
@@ -154,5 +164,212 @@ pub fn run(a: BenchArgs) -> Result<()> {
         s.form_factors.rays,
         s.timings.form_factors
     );
+    Ok(())
+}
+
+fn ff_estimate(scene: &radiosity::scene::Scene, params: FfParams) -> Result<f64> {
+    let mesh = Mesh::build(scene, MeshParams::Faces)?;
+    let bvh = Bvh::build(&mesh);
+    let m = Estimator::new(&mesh, &bvh, params)?
+        .matrix(Storage::Sparse, &|_| {})
+        .into_sparse();
+    Ok(m.row_entries(0)
+        .iter()
+        .find(|e| e.0 == 1)
+        .map_or(0.0, |e| e.1 as f64))
+}
+
+fn unit_squares() -> Vec<(&'static str, radiosity::scene::Scene, f64)> {
+    use radiosity::scene::{Material, Polygon, Scene};
+    let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let scene = |polys: Vec<Vec<Vec3>>| Scene {
+        name: "squares".into(),
+        materials: vec![Material::diffuse("m", radiosity::Rgb::splat(0.5))],
+        polygons: polys
+            .into_iter()
+            .map(|vertices| Polygon {
+                vertices,
+                material: 0,
+                line: 0,
+            })
+            .collect(),
+        ..Default::default()
+    };
+    vec![
+        (
+            "parallel",
+            scene(vec![
+                vec![v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)],
+                vec![v(0., 0., 1.), v(0., 1., 1.), v(1., 1., 1.), v(1., 0., 1.)],
+            ]),
+            closed_form::parallel_rectangles(1.0, 1.0, 1.0),
+        ),
+        (
+            "perpendicular",
+            scene(vec![
+                vec![v(0., 0., 0.), v(0., 0., 1.), v(1., 0., 1.), v(1., 0., 0.)],
+                vec![v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)],
+            ]),
+            closed_form::perpendicular_rectangles(1.0, 1.0, 1.0),
+        ),
+    ]
+}
+
+/// Errors against closed forms, and time per row as N grows.
+fn form_factor_table(runs: usize) -> Result<()> {
+    println!("relative error against Howell's closed forms (unit squares, one patch per face; K = 16 points):");
+    println!("| method | setting | parallel (F = 0.19982) | perpendicular (F = 0.20004) |");
+    println!("|---|---|---|---|");
+    let cases = unit_squares();
+    let row = |method: FfMethod, label: String, params: FfParams| -> Result<()> {
+        let mut cells = Vec::new();
+        for (_, scene, exact) in &cases {
+            let f = ff_estimate(scene, params)?;
+            cells.push(format!("{:+.2e}", (f - exact) / exact));
+        }
+        println!("| {method} | {label} | {} | {} |", cells[0], cells[1]);
+        Ok(())
+    };
+    for method in [
+        FfMethod::Hemicube,
+        FfMethod::Hemisphere,
+        FfMethod::Tetrahedron,
+    ] {
+        for p in [32u32, 128, 512] {
+            row(
+                method,
+                format!("P = {p}"),
+                FfParams {
+                    method,
+                    resolution: p,
+                    ..Default::default()
+                },
+            )?;
+        }
+    }
+    for n in [10_000u32, 100_000, 1_000_000] {
+        row(
+            FfMethod::MonteCarlo,
+            format!("n = {n}"),
+            FfParams {
+                method: FfMethod::MonteCarlo,
+                rays: n,
+                ..Default::default()
+            },
+        )?;
+    }
+    row(
+        FfMethod::Analytic,
+        "exact quadrature".into(),
+        FfParams {
+            method: FfMethod::Analytic,
+            ..Default::default()
+        },
+    )?;
+
+    println!();
+    println!("time per row on the Cornell box (default settings: P = 128, K = 16, n = 1,000,000 rays; median over rows spread through the mesh, {} threads):", rayon::current_num_threads());
+    println!("| method | N = 1,000 | N = 4,000 | N = 16,000 | fitted exponent |");
+    println!("|---|---|---|---|---|");
+    let scene = builtin::cornell();
+    let sizes = [1000usize, 4000, 16_000];
+    let meshes: Vec<Mesh> = sizes
+        .iter()
+        .map(|&n| Mesh::build(&scene, MeshParams::Patches(n)))
+        .collect::<Result<_, _>>()?;
+    let bvhs: Vec<Bvh> = meshes.iter().map(Bvh::build).collect();
+    for method in FfMethod::ALL {
+        let mut times = Vec::new();
+        for (mesh, bvh) in meshes.iter().zip(&bvhs) {
+            let est = Estimator::new(
+                mesh,
+                bvh,
+                FfParams {
+                    method,
+                    ..Default::default()
+                },
+            )?;
+            let mut scratch = radiosity::formfactor::Scratch::default();
+            let mut out = Vec::new();
+            let rows = (4 * runs).clamp(4, 24);
+            let mut t_rows = Vec::new();
+            for k in 0..rows {
+                let i = (k * mesh.len()) / rows;
+                let t = Instant::now();
+                est.row(i, &mut scratch, &mut out);
+                t_rows.push(t.elapsed().as_secs_f64());
+            }
+            times.push(median(t_rows));
+        }
+        let slope = (times[2] / times[0]).ln() / (sizes[2] as f64 / sizes[0] as f64).ln();
+        println!(
+            "| {method} | {:.2} ms | {:.2} ms | {:.2} ms | {slope:.2} |",
+            1e3 * times[0],
+            1e3 * times[1],
+            1e3 * times[2]
+        );
+    }
+    Ok(())
+}
+
+/// Peak resident memory (VmHWM) in bytes, from /proc/self/status.
+fn peak_memory() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let l = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    Some(l.split_whitespace().nth(1)?.parse::<u64>().ok()? * 1024)
+}
+
+/// Reset the peak-memory counter (Linux: writing 5 to /proc/self/clear_refs).
+fn reset_peak() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// The full face-to-face matrix of the city by Monte Carlo and by hemicube.
+fn city() -> Result<()> {
+    let scene = builtin::city(63);
+    let mesh = Mesh::build(&scene, MeshParams::Faces)?;
+    let bvh = Bvh::build(&mesh);
+    println!(
+        "city: {} facets, {} patches, {} threads",
+        scene.polygons.len(),
+        mesh.len(),
+        rayon::current_num_threads()
+    );
+    for (label, params) in [
+        (
+            "monte-carlo, 10,000 rays per row",
+            FfParams {
+                method: FfMethod::MonteCarlo,
+                rays: 10_000,
+                ..Default::default()
+            },
+        ),
+        (
+            "hemicube, P = 64, K = 1",
+            FfParams {
+                method: FfMethod::Hemicube,
+                resolution: 64,
+                samples: 1,
+                ..Default::default()
+            },
+        ),
+    ] {
+        reset_peak();
+        let t = Instant::now();
+        let m = Estimator::new(&mesh, &bvh, params)?
+            .matrix(Storage::Sparse, &|_| {})
+            .into_sparse();
+        let s = t.elapsed().as_secs_f64();
+        let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
+        let sum = radiosity::formfactor::summary(&m, &area);
+        println!(
+            "{label}: {s:.1} s, peak memory {} MiB, {} entries (fill {:.3}%), row sums {:.4} … {:.4}",
+            peak_memory().map_or("?".to_string(), |b| (b >> 20).to_string()),
+            m.nnz(),
+            100.0 * sum.fill,
+            sum.min_row_sum,
+            sum.max_row_sum
+        );
+    }
     Ok(())
 }

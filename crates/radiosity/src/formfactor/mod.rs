@@ -12,6 +12,7 @@
 //! [`enforce`] optionally makes a matrix physical.
 
 pub mod analytic;
+pub mod closed_form;
 pub mod hemicube;
 pub mod hemisphere;
 pub mod monte_carlo;

@@ -7,7 +7,14 @@ use crate::color::Rgb;
 use crate::geom::Vec3;
 
 /// Names accepted by [`by_name`].
-pub const NAMES: &[&str] = &["cornell", "cube-dim", "cube-bright", "cube", "furnace"];
+pub const NAMES: &[&str] = &[
+    "cornell",
+    "cube-dim",
+    "cube-bright",
+    "cube",
+    "furnace",
+    "city",
+];
 
 /// The built-in scene called `name`, if there is one.
 pub fn by_name(name: &str) -> Option<Scene> {
@@ -16,6 +23,7 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "cube" | "cube-dim" => Some(cube(CubeVariant::Dim)),
         "cube-bright" => Some(cube(CubeVariant::Bright)),
         "furnace" => Some(furnace()),
+        "city" => Some(city(63)),
         _ => None,
     }
 }
@@ -375,6 +383,69 @@ pub fn furnace() -> Scene {
             target: v(0.5, 0.45, 0.0),
             up: Vec3::Y,
             fov_y_deg: 80.0,
+        }),
+        warnings: vec![],
+    }
+}
+
+/// A city for view-factor benchmarks: a k × k grid of box buildings (four walls and a roof each,
+/// 12 m square on a 20 m grid, heights 10–60 m from a fixed hash) on one ground polygon, under
+/// an emitting sky quad 200 m up. Geometry in metres; 5k² + 2 polygons (19,847 for k = 63, the
+/// built-in `city`), with plenty of occlusion.
+pub fn city(k: usize) -> Scene {
+    let materials = vec![
+        Material::diffuse("ground", Rgb::splat(0.2)),
+        Material::diffuse("facade", Rgb::new(0.6, 0.55, 0.5)),
+        Material::emitter("sky", Rgb::BLACK, Rgb::new(0.8, 0.9, 1.0)),
+    ];
+    let size = 20.0 * k as f32;
+    let mut polygons = vec![
+        oriented_quad(
+            vec![
+                v(-10.0, 0.0, -10.0),
+                v(size, 0.0, -10.0),
+                v(size, 0.0, size),
+                v(-10.0, 0.0, size),
+            ],
+            Vec3::Y,
+            0,
+        ),
+        oriented_quad(
+            vec![
+                v(-10.0, 200.0, -10.0),
+                v(size, 200.0, -10.0),
+                v(size, 200.0, size),
+                v(-10.0, 200.0, size),
+            ],
+            -Vec3::Y,
+            2,
+        ),
+    ];
+    for i in 0..k {
+        for j in 0..k {
+            let h = 10.0 + (crate::sampling::mix64((i * 1000 + j) as u64) % 5001) as f32 / 100.0;
+            let lo = v(20.0 * i as f32 - 6.0, 0.0, 20.0 * j as f32 - 6.0);
+            let hi = v(20.0 * i as f32 + 6.0, h, 20.0 * j as f32 + 6.0);
+            // Outward faces without the bottom (box_faces order: x−, x+, y− (bottom), y+, z−, z+).
+            polygons.extend(
+                box_faces(lo, hi, [1; 6], false)
+                    .into_iter()
+                    .enumerate()
+                    .filter(|(f, _)| *f != 2)
+                    .map(|(_, p)| p),
+            );
+        }
+    }
+    Scene {
+        name: format!("city{k}"),
+        source: None,
+        materials,
+        polygons,
+        camera: Some(Camera {
+            eye: v(-150.0, 300.0, -150.0),
+            target: v(size * 0.5, 0.0, size * 0.5),
+            up: Vec3::Y,
+            fov_y_deg: 50.0,
         }),
         warnings: vec![],
     }
