@@ -11,9 +11,9 @@ use radiosity::formfactor::{
 };
 use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
-use radiosity::pipeline::{self, Settings};
+use radiosity::pipeline::{self, PatchData, Settings};
 use radiosity::scene::builtin;
-use radiosity::solve::{Method, SolverParams, System};
+use radiosity::solve::{Method, SolverParams};
 use std::time::Instant;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -38,22 +38,8 @@ fn solvers(sizes: &[usize], runs: usize) -> Result<()> {
         let mesh = Mesh::build(&scene, MeshParams::Patches(n))?;
         let bvh = Bvh::build(&mesh);
         let mut f = estimate_all_rows(&mesh, &bvh, 256, 1);
-        let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
-        let refl: Vec<_> = mesh
-            .patches
-            .iter()
-            .map(|p| scene.materials[p.material as usize].reflectance)
-            .collect();
-        let emis: Vec<_> = mesh
-            .patches
-            .iter()
-            .map(|p| scene.materials[p.material as usize].emission)
-            .collect();
-        let system = System {
-            area: &area,
-            reflectance: &refl,
-            emission: &emis,
-        };
+        let data = PatchData::new(&scene, &mesh);
+        let system = data.system();
         for method in Method::ALL {
             let iterations = match method {
                 Method::Gauss => 1,

@@ -148,6 +148,42 @@ impl Solution {
     }
 }
 
+/// The per-patch data of the radiosity system of a meshed scene, owned.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PatchData {
+    /// Patch areas.
+    pub area: Vec<f64>,
+    /// Patch reflectances (from their materials).
+    pub reflectance: Vec<Rgb>,
+    /// Patch emissions (from their materials).
+    pub emission: Vec<Rgb>,
+}
+
+impl PatchData {
+    /// The areas, reflectances and emissions of `mesh`'s patches in `scene`.
+    pub fn new(scene: &Scene, mesh: &Mesh) -> Self {
+        let material = |p: &crate::mesh::Patch| &scene.materials[p.material as usize];
+        Self {
+            area: mesh.patches.iter().map(|p| p.area as f64).collect(),
+            reflectance: mesh
+                .patches
+                .iter()
+                .map(|p| material(p).reflectance)
+                .collect(),
+            emission: mesh.patches.iter().map(|p| material(p).emission).collect(),
+        }
+    }
+
+    /// The system view the solvers take.
+    pub fn system(&self) -> System<'_> {
+        System {
+            area: &self.area,
+            reflectance: &self.reflectance,
+            emission: &self.emission,
+        }
+    }
+}
+
 /// Bytes of memory per patch the pipeline needs besides the form-factor cache (patch record,
 /// vertices, two triangles and their hierarchy nodes, the system and solver vectors).
 pub const BYTES_PER_PATCH: u64 = 420;
@@ -218,17 +254,11 @@ pub fn solve(
     let bvh_s = t.elapsed().as_secs_f64();
 
     observer(Event::Stage(Stage::Solve));
-    let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
-    let reflectance: Vec<Rgb> = mesh
-        .patches
-        .iter()
-        .map(|p| scene.materials[p.material as usize].reflectance)
-        .collect();
-    let emission: Vec<Rgb> = mesh
-        .patches
-        .iter()
-        .map(|p| scene.materials[p.material as usize].emission)
-        .collect();
+    let PatchData {
+        area,
+        reflectance,
+        emission,
+    } = PatchData::new(scene, &mesh);
     let system = System {
         area: &area,
         reflectance: &reflectance,

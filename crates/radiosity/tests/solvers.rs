@@ -7,6 +7,7 @@ use radiosity::color::Rgb;
 use radiosity::formfactor::monte_carlo::estimate_all_rows;
 use radiosity::formfactor::Entry;
 use radiosity::mesh::{Mesh, MeshParams};
+use radiosity::pipeline::PatchData;
 use radiosity::sampling::{stream, uniform, Rng64};
 use radiosity::scene::builtin;
 use radiosity::solve::gauss::dense_solve;
@@ -207,22 +208,8 @@ fn every_method_matches_lu_on_builtin_scenes() {
         let mesh = Mesh::build(&scene, MeshParams::Patches(patches)).unwrap();
         let bvh = radiosity::accel::Bvh::build(&mesh);
         let mut f = estimate_all_rows(&mesh, &bvh, 2000, 7);
-        let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
-        let refl: Vec<Rgb> = mesh
-            .patches
-            .iter()
-            .map(|p| scene.materials[p.material as usize].reflectance)
-            .collect();
-        let emis: Vec<Rgb> = mesh
-            .patches
-            .iter()
-            .map(|p| scene.materials[p.material as usize].emission)
-            .collect();
-        let sys = System {
-            area: &area,
-            reflectance: &refl,
-            emission: &emis,
-        };
+        let data = PatchData::new(&scene, &mesh);
+        let sys = data.system();
         check_all_methods(sys, &mut f, name);
     }
 }
