@@ -105,7 +105,16 @@ fn log_distance_integral(x: DVec3, c: DVec3, v: DVec3) -> f64 {
             .sum();
     }
     let t0 = v.dot(w) / alpha;
-    let h2 = (w.length_squared() / alpha - t0 * t0).max(0.0);
+    // h² = |w|²/α − t₀² cancels when x lies on the edge's line (edges shared by adjacent
+    // patches): below the rounding level of its terms it is exactly 0, else the noise makes the
+    // integrand rough and the adaptive rule bisects without end.
+    let ww = w.length_squared() / alpha;
+    let h2 = ww - t0 * t0;
+    let h2 = if h2 <= 64.0 * f64::EPSILON * (ww + t0 * t0) {
+        0.0
+    } else {
+        h2
+    };
     let h = h2.sqrt();
     let g = |tau: f64| {
         let s = tau * tau + h2;
