@@ -10,8 +10,7 @@
 //! Eq. 20 proves its per-sweep attenuation β/(1 − α) is below Jacobi's q.
 
 use super::relaxation::Relaxation;
-use super::{Info, Method, RowSource, Solver, System};
-use crate::color::Rgb;
+use super::{Method, RowSource, Solver, System};
 
 /// Which Gauss-Seidel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -47,6 +46,13 @@ impl<'s> GaussSeidel<'s> {
     }
 }
 
+impl GaussSeidel<'_> {
+    /// Whether the output adds the residuals to the unknowns.
+    fn plus_residual(&self) -> bool {
+        self.variant == Variant::ZeroPlusResidual
+    }
+}
+
 impl Solver for GaussSeidel<'_> {
     fn method(&self) -> Method {
         match self.variant {
@@ -66,20 +72,5 @@ impl Solver for GaussSeidel<'_> {
         true
     }
 
-    fn radiosity(&self, out: &mut Vec<Rgb>) {
-        self.core
-            .output(self.variant == Variant::ZeroPlusResidual, out);
-    }
-
-    fn unshot_fraction(&mut self, _: &mut dyn RowSource, _: bool) -> f64 {
-        self.core.unshot_fraction()
-    }
-
-    fn iterations(&self) -> u64 {
-        self.core.iterations
-    }
-
-    fn info(&mut self, _: &mut dyn RowSource) -> Info {
-        self.core.info()
-    }
+    super::relaxation::relaxation_accessors!();
 }

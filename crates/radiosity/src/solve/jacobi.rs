@@ -5,7 +5,7 @@
 //! physical system, since ‖R‖∞ = max_i ρ_i Σ_j F_ij < 1 (eq. 10–11).
 
 use super::relaxation::Relaxation;
-use super::{Info, Method, RowSource, Solver, System};
+use super::{Method, RowSource, Solver, System};
 use crate::color::Rgb;
 
 /// Jacobi iteration in progress.
@@ -25,6 +25,13 @@ impl<'s> Jacobi<'s> {
             core,
             next: 0,
         }
+    }
+}
+
+impl Jacobi<'_> {
+    /// Whether the output adds the residuals to the unknowns.
+    fn plus_residual(&self) -> bool {
+        false
     }
 }
 
@@ -64,19 +71,5 @@ impl Solver for Jacobi<'_> {
         true
     }
 
-    fn radiosity(&self, out: &mut Vec<Rgb>) {
-        self.core.output(false, out);
-    }
-
-    fn unshot_fraction(&mut self, _: &mut dyn RowSource, _: bool) -> f64 {
-        self.core.unshot_fraction()
-    }
-
-    fn iterations(&self) -> u64 {
-        self.core.iterations
-    }
-
-    fn info(&mut self, _: &mut dyn RowSource) -> Info {
-        self.core.info()
-    }
+    super::relaxation::relaxation_accessors!();
 }

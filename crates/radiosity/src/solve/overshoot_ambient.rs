@@ -7,7 +7,7 @@
 //! `|ΔB_i + ΔB̂_i|·A_i`. Output: B = x + r, as progressive refinement.
 
 use super::relaxation::Relaxation;
-use super::{Info, Method, RowSource, Solver, System};
+use super::{Method, RowSource, Solver, System};
 use crate::color::Rgb;
 
 /// Overshooting with the ambient term in progress.
@@ -48,6 +48,13 @@ impl<'s> OvershootAmbient<'s> {
     }
 }
 
+impl OvershootAmbient<'_> {
+    /// Whether the output adds the residuals to the unknowns.
+    fn plus_residual(&self) -> bool {
+        true
+    }
+}
+
 impl Solver for OvershootAmbient<'_> {
     fn method(&self) -> Method {
         Method::OvershootAmbient
@@ -75,19 +82,5 @@ impl Solver for OvershootAmbient<'_> {
         true
     }
 
-    fn radiosity(&self, out: &mut Vec<Rgb>) {
-        self.core.output(true, out);
-    }
-
-    fn unshot_fraction(&mut self, _: &mut dyn RowSource, _: bool) -> f64 {
-        self.core.unshot_fraction()
-    }
-
-    fn iterations(&self) -> u64 {
-        self.core.iterations
-    }
-
-    fn info(&mut self, _: &mut dyn RowSource) -> Info {
-        self.core.info()
-    }
+    super::relaxation::relaxation_accessors!();
 }

@@ -17,7 +17,7 @@
 //! factor `1 − (1 − q)/N` per shot, where `q = max_i Σ_j ρ_j F_ij`.
 
 use super::relaxation::Relaxation;
-use super::{Info, Method, RowSource, Solver, System};
+use super::{Method, RowSource, Solver, System};
 use crate::color::Rgb;
 
 /// Progressive refinement in progress.
@@ -51,6 +51,13 @@ impl<'s> Progressive<'s> {
     }
 }
 
+impl Progressive<'_> {
+    /// Whether the output adds the residuals to the unknowns.
+    fn plus_residual(&self) -> bool {
+        true
+    }
+}
+
 impl Solver for Progressive<'_> {
     fn method(&self) -> Method {
         Method::Progressive
@@ -65,25 +72,11 @@ impl Solver for Progressive<'_> {
         true
     }
 
-    fn radiosity(&self, out: &mut Vec<Rgb>) {
-        self.core.output(true, out);
-    }
-
     fn unshot(&self) -> Option<&[Rgb]> {
         Some(&self.core.r)
     }
 
-    fn unshot_fraction(&mut self, _: &mut dyn RowSource, _: bool) -> f64 {
-        self.core.unshot_fraction()
-    }
-
-    fn iterations(&self) -> u64 {
-        self.core.iterations
-    }
-
-    fn info(&mut self, _: &mut dyn RowSource) -> Info {
-        self.core.info()
-    }
+    super::relaxation::relaxation_accessors!();
 }
 
 #[cfg(test)]

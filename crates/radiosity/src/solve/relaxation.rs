@@ -16,6 +16,30 @@ use super::{Info, RowSource, System};
 use crate::color::Rgb;
 use crate::formfactor::Entry;
 
+/// The [`super::Solver`] methods that every relaxation method implements the same way from its
+/// `core: Relaxation` field: the output (x, or x + r when the type's `plus_residual()` says so),
+/// the unshot fraction, the iteration count and the bookkeeping.
+macro_rules! relaxation_accessors {
+    () => {
+        fn radiosity(&self, out: &mut Vec<crate::color::Rgb>) {
+            self.core.output(self.plus_residual(), out);
+        }
+
+        fn unshot_fraction(&mut self, _: &mut dyn crate::solve::RowSource, _: bool) -> f64 {
+            self.core.unshot_fraction()
+        }
+
+        fn iterations(&self) -> u64 {
+            self.core.iterations
+        }
+
+        fn info(&mut self, _: &mut dyn crate::solve::RowSource) -> crate::solve::Info {
+            self.core.info()
+        }
+    };
+}
+pub(crate) use relaxation_accessors;
+
 /// Unknowns, residuals and energy bookkeeping of a relaxation method.
 #[derive(Clone, Debug)]
 pub struct Relaxation<'s> {

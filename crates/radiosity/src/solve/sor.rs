@@ -4,8 +4,7 @@
 //! ω ≈ 1.1 for radiosity; it converges for 0 < ω < 2 on these diagonally dominant systems.
 
 use super::relaxation::Relaxation;
-use super::{Info, Method, RowSource, SolveError, Solver, System};
-use crate::color::Rgb;
+use super::{Method, RowSource, SolveError, Solver, System};
 
 /// Over-relaxation in progress.
 #[derive(Clone, Debug)]
@@ -35,6 +34,13 @@ impl<'s> Sor<'s> {
     }
 }
 
+impl Sor<'_> {
+    /// Whether the output adds the residuals to the unknowns.
+    fn plus_residual(&self) -> bool {
+        false
+    }
+}
+
 impl Solver for Sor<'_> {
     fn method(&self) -> Method {
         Method::Sor
@@ -50,19 +56,5 @@ impl Solver for Sor<'_> {
         true
     }
 
-    fn radiosity(&self, out: &mut Vec<Rgb>) {
-        self.core.output(false, out);
-    }
-
-    fn unshot_fraction(&mut self, _: &mut dyn RowSource, _: bool) -> f64 {
-        self.core.unshot_fraction()
-    }
-
-    fn iterations(&self) -> u64 {
-        self.core.iterations
-    }
-
-    fn info(&mut self, _: &mut dyn RowSource) -> Info {
-        self.core.info()
-    }
+    super::relaxation::relaxation_accessors!();
 }

@@ -4,8 +4,7 @@
 //! radiosity matrices, which are row diagonally dominant (appendix A).
 
 use super::relaxation::Relaxation;
-use super::{Info, Method, RowSource, Solver, System};
-use crate::color::Rgb;
+use super::{Method, RowSource, Solver, System};
 
 /// Southwell relaxation in progress.
 #[derive(Clone, Debug)]
@@ -19,6 +18,13 @@ impl<'s> Southwell<'s> {
         Self {
             core: Relaxation::from_zero(system),
         }
+    }
+}
+
+impl Southwell<'_> {
+    /// Whether the output adds the residuals to the unknowns.
+    fn plus_residual(&self) -> bool {
+        false
     }
 }
 
@@ -38,19 +44,5 @@ impl Solver for Southwell<'_> {
         true
     }
 
-    fn radiosity(&self, out: &mut Vec<Rgb>) {
-        self.core.output(false, out);
-    }
-
-    fn unshot_fraction(&mut self, _: &mut dyn RowSource, _: bool) -> f64 {
-        self.core.unshot_fraction()
-    }
-
-    fn iterations(&self) -> u64 {
-        self.core.iterations
-    }
-
-    fn info(&mut self, _: &mut dyn RowSource) -> Info {
-        self.core.info()
-    }
+    super::relaxation::relaxation_accessors!();
 }
