@@ -1,5 +1,5 @@
-//! Built-in scenes, selected by name: `cornell` (the default), `cube-dim`, `cube-bright`
-//! (alias `cube` = `cube-dim`) and `furnace`.
+//! Built-in scenes, selected by name: `cornell` (the default), `office`, `cube-dim`,
+//! `cube-bright` (alias `cube` = `cube-dim`), `furnace` and `city`.
 
 use super::spectrum::{cornell_wavelengths, interpolate, spectrum_to_rgb};
 use super::{vector_area, Camera, Material, Polygon, Scene};
@@ -9,6 +9,7 @@ use crate::geom::Vec3;
 /// Names accepted by [`by_name`].
 pub const NAMES: &[&str] = &[
     "cornell",
+    "office",
     "cube-dim",
     "cube-bright",
     "cube",
@@ -20,6 +21,7 @@ pub const NAMES: &[&str] = &[
 pub fn by_name(name: &str) -> Option<Scene> {
     match name {
         "cornell" => Some(cornell()),
+        "office" => Some(office()),
         "cube" | "cube-dim" => Some(cube(CubeVariant::Dim)),
         "cube-bright" => Some(cube(CubeVariant::Bright)),
         "furnace" => Some(furnace()),
@@ -351,6 +353,88 @@ pub fn cube(variant: CubeVariant) -> Scene {
     }
 }
 
+/// Size of the `office` room (x, y = height, z), metres.
+pub const OFFICE_SIZE: [f32; 3] = [4.0, 2.7, 3.5];
+
+/// A small office in the spirit of figure 2 of 003_6556f2e3d50166bb.txt (whose model is not
+/// published): a 4 × 2.7 × 3.5 m room with a desk, a bookcase with books, a chair and a ceiling
+/// light fixture whose underside emits 12 W/m². Furniture is made of closed boxes; faces that lie
+/// on the room's walls, floor or ceiling are left out (they would be hidden). Meshed with
+/// `--patches 270` it has about 270 patches, the size of the paper's office system.
+pub fn office() -> Scene {
+    let [w, h, d] = OFFICE_SIZE;
+    let materials = vec![
+        Material::diffuse("wall", Rgb::new(0.72, 0.70, 0.64)),
+        Material::diffuse("floor", Rgb::new(0.26, 0.28, 0.33)),
+        Material::diffuse("ceiling", Rgb::splat(0.8)),
+        Material::diffuse("wood", Rgb::new(0.48, 0.34, 0.22)),
+        Material::diffuse("shelf", Rgb::new(0.60, 0.52, 0.42)),
+        Material::diffuse("fabric", Rgb::new(0.55, 0.16, 0.12)),
+        Material::diffuse("book-blue", Rgb::new(0.12, 0.20, 0.50)),
+        Material::diffuse("book-green", Rgb::new(0.15, 0.42, 0.20)),
+        Material::diffuse("book-yellow", Rgb::new(0.70, 0.60, 0.18)),
+        Material::diffuse("fixture", Rgb::splat(0.7)),
+        Material::emitter("light", Rgb::splat(0.8), Rgb::splat(12.0)),
+    ];
+    const WALL: usize = 0;
+    let mut polygons = box_faces(Vec3::ZERO, v(w, h, d), [WALL, WALL, 1, 2, WALL, WALL], true);
+    // A closed box, outward normals, without the faces on the room's boundary planes;
+    // `materials` in box_faces' order (−x, +x, −y, +y, −z, +z).
+    let mut solid = |lo: Vec3, hi: Vec3, m: [usize; 6]| {
+        for p in box_faces(lo, hi, m, false) {
+            let on_boundary = (0..3).any(|axis| {
+                let room = [0.0, OFFICE_SIZE[axis]];
+                room.iter()
+                    .any(|&at| p.vertices.iter().all(|q| q[axis] == at))
+            });
+            if !on_boundary {
+                polygons.push(p);
+            }
+        }
+    };
+    let (wood, shelf, fabric, fixture, light) = (3, 4, 5, 9, 10);
+    // Desk against the back wall (z = 0): a top on two side panels.
+    solid(v(1.2, 0.72, 0.05), v(2.8, 0.76, 0.85), [wood; 6]);
+    solid(v(1.25, 0.0, 0.1), v(1.3, 0.72, 0.8), [wood; 6]);
+    solid(v(2.7, 0.0, 0.1), v(2.75, 0.72, 0.8), [wood; 6]);
+    // Bookcase against the left wall (x = 0): two sides, four boards, three rows of books.
+    solid(v(0.0, 0.0, 1.9), v(0.35, 1.9, 1.93), [shelf; 6]);
+    solid(v(0.0, 0.0, 2.97), v(0.35, 1.9, 3.0), [shelf; 6]);
+    for y in [0.05f32, 0.65, 1.25, 1.85] {
+        solid(v(0.0, y, 1.935), v(0.35, y + 0.03, 2.965), [shelf; 6]);
+    }
+    for (y, z0, z1, m) in [
+        (0.08f32, 1.95f32, 2.45f32, 6usize),
+        (0.68, 2.2, 2.9, 7),
+        (1.28, 1.96, 2.3, 8),
+    ] {
+        solid(v(0.02, y, z0), v(0.28, y + 0.3, z1), [m; 6]);
+    }
+    // Chair in front of the desk: seat, back and a central post.
+    solid(v(1.75, 0.45, 1.2), v(2.25, 0.5, 1.7), [fabric; 6]);
+    solid(v(1.75, 0.5, 1.65), v(2.25, 1.0, 1.7), [fabric; 6]);
+    solid(v(1.97, 0.0, 1.42), v(2.03, 0.45, 1.48), [fabric; 6]);
+    // Ceiling fixture: a shallow box whose underside is the lamp.
+    solid(
+        v(1.4, 2.62, 1.45),
+        v(2.6, h, 2.05),
+        [fixture, fixture, light, fixture, fixture, fixture],
+    );
+    Scene {
+        name: "office".into(),
+        source: None,
+        materials,
+        polygons,
+        camera: Some(Camera {
+            eye: v(3.8, 1.7, 3.4),
+            target: v(1.2, 0.7, 0.8),
+            up: Vec3::Y,
+            fov_y_deg: 62.0,
+        }),
+        warnings: vec![],
+    }
+}
+
 /// Reflectance of every surface of the furnace scene.
 pub const FURNACE_REFLECTANCE: Rgb = Rgb::new(0.3, 0.5, 0.7);
 /// Emission of every surface of the furnace scene (W/m²).
@@ -461,6 +545,39 @@ mod tests {
             let s = by_name(name).unwrap();
             s.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
         }
+    }
+
+    /// The office is a closed room of closed furniture: every ray from every patch lands on the
+    /// front of some patch (rows of F sum to 1), and `--patches 270` gives the paper's size.
+    #[test]
+    fn office_is_closed_and_the_papers_size() {
+        use crate::accel::Bvh;
+        use crate::formfactor::monte_carlo::estimate_all_rows;
+        use crate::mesh::{Mesh, MeshParams};
+        let s = office();
+        let mesh = Mesh::build(&s, MeshParams::Patches(270)).unwrap();
+        assert!((250..=300).contains(&mesh.len()), "{} patches", mesh.len());
+        let bvh = Bvh::build(&mesh);
+        let f = estimate_all_rows(&mesh, &bvh, 4000, 7);
+        let (mut lost, mut whole) = (0.0, 0);
+        for i in 0..mesh.len() {
+            let sum: f64 = f.row_entries(i).iter().map(|e| e.1 as f64).sum();
+            lost += (1.0 - sum) * mesh.patches[i].area as f64;
+            whole += usize::from((sum - 1.0).abs() < 1e-4);
+        }
+        // Rays are lost only from where two faces touch: 1.05 m² of footprints on the room
+        // (fixture 0.72, bookcase 0.26, desk and chair legs 0.07 + 0.004) and 0.50 m² of
+        // furniture resting on furniture (books 0.40, desk top 0.07, chair 0.03), counted on
+        // both faces: 2.05 m² in all. An open seam or a flipped face would lose far more.
+        assert!(
+            (1.85..2.2).contains(&lost),
+            "{lost} m² of patch area sees nothing"
+        );
+        assert!(
+            whole * 10 >= mesh.len() * 8,
+            "{whole} of {} rows sum to 1",
+            mesh.len()
+        );
     }
 
     #[test]
