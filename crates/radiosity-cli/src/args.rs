@@ -25,6 +25,47 @@ pub enum Command {
     SolveSystem(SolveSystemArgs),
     /// Compute a view-factor (form-factor) matrix and write it as Matrix Market.
     FormFactors(FormFactorsArgs),
+    /// Reproduce the papers' experiments: `convergence` (003_… section 6, figures 3–8) or
+    /// `complexity` (000_…'s claims as N grows). Writes CSVs, plots (SVG and PNG) and a
+    /// Markdown summary.
+    Experiment(ExperimentArgs),
+}
+
+/// Which experiment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExperimentKind {
+    /// Eq. 22 error per iteration and per CPU second of every solver on the office, the dim
+    /// and bright cube and random sparse systems.
+    Convergence,
+    /// Time, iterations and peak memory of the form-factor methods and solvers as N grows,
+    /// with fitted exponents beside the paper's.
+    Complexity,
+}
+
+/// `radiosity experiment`.
+#[derive(Debug, Args)]
+pub struct ExperimentArgs {
+    /// The experiment.
+    #[arg(value_enum)]
+    pub kind: ExperimentKind,
+    /// Folder for the results (created if missing).
+    #[arg(long, value_name = "DIR", default_value = "experiments")]
+    pub out: PathBuf,
+    /// Small sizes that run in seconds.
+    #[arg(long)]
+    pub quick: bool,
+    /// Worker threads (default: one per core).
+    #[arg(long, value_name = "T")]
+    pub threads: Option<usize>,
+    /// Seed of the random systems, Monte Carlo and photons.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// convergence: iterations per method, in sweeps (multiples of N).
+    #[arg(long, value_name = "K", default_value_t = 3.0)]
+    pub sweeps: f64,
+    /// complexity: patch counts (default 250,500,1000,2000,4000; with --quick 40,…,640).
+    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1..)]
+    pub sizes: Option<Vec<usize>>,
 }
 
 /// `radiosity form-factors`.

@@ -1,7 +1,9 @@
 //! `radiosity`: the command-line front end. Parses arguments, runs the library, reports.
 
+mod alloc;
 mod args;
 mod bench;
+mod experiment;
 mod report;
 mod settings;
 mod view_factors;
@@ -28,6 +30,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => bench::run(a),
         Command::SolveSystem(a) => solve_system(a),
         Command::FormFactors(a) => view_factors::run(a),
+        Command::Experiment(a) => experiment::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

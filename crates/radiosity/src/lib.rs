@@ -17,8 +17,11 @@
 //! assert!((mean - 2.0).abs() < 0.1);
 //! ```
 
+#![forbid(unsafe_code)]
+
 pub mod accel;
 pub mod color;
+pub mod experiment;
 pub mod export;
 pub mod formfactor;
 pub mod geom;

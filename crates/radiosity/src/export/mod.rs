@@ -2,6 +2,8 @@
 //! temporary file next to its destination and renamed into place when complete, so a failure
 //! never leaves a half-written output.
 
+pub mod plot;
+
 use crate::color::Rgb;
 use crate::mesh::Mesh;
 use crate::render::{to_srgb8, Image};

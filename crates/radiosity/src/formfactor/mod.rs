@@ -16,6 +16,7 @@ pub mod closed_form;
 pub mod hemicube;
 pub mod hemisphere;
 pub mod monte_carlo;
+pub mod on_demand;
 pub mod projection;
 pub mod tetrahedron;
 
