@@ -55,17 +55,22 @@ fn write_text(path: &Path, text: &str) -> Result<()> {
 /// Run the experiment `a.kind`.
 pub fn run(a: ExperimentArgs) -> Result<()> {
     crate::settings::threads(a.threads)?;
+    if !(a.sweeps > 0.0 && a.sweeps.is_finite()) {
+        bail!("--sweeps {}: must be a positive number", a.sweeps);
+    }
+    if a.kind == ExperimentKind::Convergence && a.sizes.is_some() {
+        bail!("--sizes applies to the complexity experiment only");
+    }
+    if let Some(s) = &a.sizes {
+        if s.len() < 2 || s.contains(&0) {
+            bail!("--sizes: at least two positive patch counts are needed");
+        }
+    }
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("{}: cannot create the folder", a.out.display()))?;
     let mut bars = Bars { bar: None };
     match a.kind {
         ExperimentKind::Convergence => {
-            if !(a.sweeps > 0.0 && a.sweeps.is_finite()) {
-                bail!("--sweeps {}: must be a positive number", a.sweeps);
-            }
-            if a.sizes.is_some() {
-                bail!("--sizes applies to the complexity experiment only");
-            }
             let params = convergence::Params {
                 quick: a.quick,
                 sweeps: a.sweeps,
@@ -81,9 +86,6 @@ pub fn run(a: ExperimentArgs) -> Result<()> {
                 complexity::Params::full()
             };
             if let Some(s) = &a.sizes {
-                if s.len() < 2 || s.contains(&0) {
-                    bail!("--sizes: at least two positive patch counts are needed");
-                }
                 params.sizes = s.clone();
             }
             params.seed = a.seed;

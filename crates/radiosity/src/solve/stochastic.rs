@@ -69,6 +69,9 @@ pub struct Stochastic<'s> {
     absorbed: Rgb,
     escaped: Rgb,
     iterations: u64,
+    /// Σ U_i A_i kept up to date by each photon (O(1)), so that the stopping test does not
+    /// cost O(N) per photon; recomputed exactly on request.
+    unshot_running: Rgb,
 }
 
 fn energy(u: Rgb, a: f64) -> f64 {
@@ -98,6 +101,7 @@ impl<'s> Stochastic<'s> {
             absorbed: Rgb::BLACK,
             escaped: Rgb::BLACK,
             iterations: 0,
+            unshot_running: emitted,
             system,
         })
     }
@@ -126,6 +130,7 @@ impl Solver for Stochastic<'_> {
         let uj = self.u[j];
         self.u[j] = uj - uj / self.photons;
         self.tree.set(j, energy(self.u[j], sys.area[j]));
+        self.unshot_running -= power;
         match source.sample(j, &mut self.rng) {
             Some(k) => {
                 let k = k as usize;
@@ -134,6 +139,7 @@ impl Solver for Stochastic<'_> {
                 self.u[k] += db;
                 self.b[k] += db;
                 self.absorbed += (Rgb::splat(1.0) - rho) * power;
+                self.unshot_running += rho * power;
                 self.tree.set(k, energy(self.u[k], sys.area[k]));
             }
             None => self.escaped += power,
@@ -151,8 +157,11 @@ impl Solver for Stochastic<'_> {
         Some(&self.u)
     }
 
-    fn unshot_fraction(&mut self, _: &mut dyn RowSource, _: bool) -> f64 {
-        self.unshot_power().sum() / self.emitted_total
+    fn unshot_fraction(&mut self, _: &mut dyn RowSource, exact: bool) -> f64 {
+        if exact {
+            self.unshot_running = self.unshot_power();
+        }
+        self.unshot_running.map(|v| v.max(0.0)).sum() / self.emitted_total
     }
 
     fn iterations(&self) -> u64 {
