@@ -6,7 +6,6 @@
 use radiosity::color::Rgb;
 use radiosity::experiment::random::{reciprocal, section6, Random};
 use radiosity::formfactor::monte_carlo::estimate_all_rows;
-use radiosity::formfactor::Entry;
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::pipeline::PatchData;
 use radiosity::scene::builtin;

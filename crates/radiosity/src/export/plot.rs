@@ -144,20 +144,19 @@ where
 {
     root.fill(&WHITE)?;
     let (root, legend) = root.split_horizontally(SIZE.0 - LEGEND_WIDTH);
-    let series: Vec<(usize, &Series, Vec<(f64, f64)>)> = plot
+    let series: Vec<(&Series, Vec<(f64, f64)>)> = plot
         .series
         .iter()
-        .enumerate()
-        .map(|(k, s)| {
+        .map(|s| {
             let pts = s
                 .points
                 .iter()
                 .filter_map(|&(x, y)| Some((to_axis(x, plot.log_x)?, to_axis(y, plot.log_y)?)))
                 .collect();
-            (k, s, pts)
+            (s, pts)
         })
         .collect();
-    let all = || series.iter().flat_map(|s| s.2.iter().copied());
+    let all = || series.iter().flat_map(|s| s.1.iter().copied());
     let (x0, x1) = range(all().map(|p| p.0), plot.log_x);
     let (y0, y1) = range(all().map(|p| p.1), plot.log_y);
     let mut chart = ChartBuilder::on(&root)
@@ -183,7 +182,7 @@ where
         mesh.y_labels(((y1 - y0) as usize + 1).max(2));
     }
     mesh.draw()?;
-    for (k, s, pts) in series {
+    for (k, (s, pts)) in series.into_iter().enumerate() {
         let colour = COLOURS[k % COLOURS.len()];
         let style = ShapeStyle::from(&colour).stroke_width(1);
         match s.mark {
