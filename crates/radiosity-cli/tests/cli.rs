@@ -924,22 +924,24 @@ fn column(header: &[String], name: &str) -> usize {
         .unwrap_or_else(|| panic!("no column {name} in {header:?}"))
 }
 
-/// `experiment convergence --quick`: every case's CSV and plots; eq. 22 is exactly 1 at B = E
-/// and above 1 at B = 0; the paper's section-6 ordering on the random systems with few
-/// emitters; every deterministic method's error falls.
-#[test]
-fn experiment_convergence_quick() {
-    let dir = scratch("convergence");
-    let out = run(
-        &["experiment", "convergence", "--quick", "--out", "res"],
-        &dir,
-    );
+/// Run `radiosity experiment KIND --quick` in a fresh folder; the results' folder.
+fn quick_experiment(kind: &str) -> PathBuf {
+    let dir = scratch(kind);
+    let out = run(&["experiment", kind, "--quick", "--out", "res"], &dir);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let res = dir.join("res");
+    dir.join("res")
+}
+
+/// `experiment convergence --quick`: every case's CSV and plots; eq. 22 is exactly 1 at B = E
+/// and above 1 at B = 0; the paper's section-6 ordering on the random systems with few
+/// emitters; every deterministic method's error falls.
+#[test]
+fn experiment_convergence_quick() {
+    let res = quick_experiment("convergence");
     let cases = [
         "office",
         "cube-dim",
@@ -1018,17 +1020,7 @@ fn experiment_convergence_quick() {
 /// photons ∝ N, the Monte Carlo matrix's memory ∝ N; plots and tables written.
 #[test]
 fn experiment_complexity_quick() {
-    let dir = scratch("complexity");
-    let out = run(
-        &["experiment", "complexity", "--quick", "--out", "res"],
-        &dir,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let res = dir.join("res");
+    let res = quick_experiment("complexity");
     for stem in [
         "complexity-time",
         "complexity-memory",
