@@ -231,7 +231,7 @@ pub struct Measurement {
     pub iterations: Option<f64>,
     /// Peak heap bytes above the case's start, when a probe is given.
     pub peak_bytes: Option<u64>,
-    /// Non-zeros of the matrix (matrix cases) or rows computed (progressive).
+    /// Non-zeros of the matrix (the two matrix cases only).
     pub nnz: Option<u64>,
     /// Whether an iterative solver reached its tolerance.
     pub converged: Option<bool>,
