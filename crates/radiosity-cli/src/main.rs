@@ -218,7 +218,7 @@ fn render(a: RenderArgs) -> Result<()> {
     }
     settings::threads(a.solve.threads)?;
     let (scene, solution) = solve_scene(&a.solve)?;
-    let camera = settings::camera(scene.camera_or_default(), &a.camera)?;
+    let camera = settings::camera(solution.default_camera(&scene), &a.camera)?;
     let params = RenderParams {
         width: a.width,
         height: a.height,

@@ -136,6 +136,16 @@ impl Solution {
             .collect()
     }
 
+    /// The view for `scene`: its own camera, else one inside it when its vertical is known and it
+    /// is an interior ([`crate::render::camera::default_camera`]), else one framing it.
+    pub fn default_camera(&self, scene: &Scene) -> Camera {
+        match (scene.camera, scene.up) {
+            (Some(c), _) => c,
+            (None, Some(up)) => crate::render::camera::default_camera(&self.bvh, up),
+            (None, None) => scene.camera_or_default(),
+        }
+    }
+
     /// Render the display radiosity, Gouraud-interpolated within surfaces.
     pub fn render(
         &self,

@@ -131,9 +131,19 @@ fn ear_clip(v: &[Vec3], n: Vec3) -> Option<Vec<[Vec3; 3]>> {
             if (b - a).cross(c - b).dot(n) <= 0.0 {
                 continue; // reflex or degenerate corner
             }
-            let blocked = idx
-                .iter()
-                .any(|&j| j != ia && j != ib && j != ic && inside(v[j], a, b, c));
+            // Only a reflex (or flat) corner inside the ear can make it invalid: a convex one
+            // cannot lie inside without a reflex one there too (the test of Mapbox's earcut,
+            // which also lets keyhole polygons, whose seams repeat vertices, be cut). Copies of
+            // the ear's own corners do not block it.
+            let blocked = (0..k).any(|m| {
+                let j = idx[m];
+                let p = v[j];
+                if j == ia || j == ib || j == ic || p == a || p == b || p == c {
+                    return false;
+                }
+                let (prev, next) = (v[idx[(m + k - 1) % k]], v[idx[(m + 1) % k]]);
+                (p - prev).cross(next - p).dot(n) <= 0.0 && inside(p, a, b, c)
+            });
             if !blocked {
                 out.push([a, b, c]);
                 idx.remove(i);

@@ -14,6 +14,8 @@ use crate::sampling::{stream, uniform};
 use crate::scene::Camera;
 use rayon::prelude::*;
 
+pub mod camera;
+
 /// Image size and sampling.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderParams {

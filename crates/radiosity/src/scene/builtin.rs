@@ -246,6 +246,8 @@ pub fn cornell() -> Scene {
             fov_y_deg: fov,
         }),
         warnings: vec![],
+        origins: vec![],
+        up: None,
     }
 }
 
@@ -350,6 +352,8 @@ pub fn cube(variant: CubeVariant) -> Scene {
             fov_y_deg: 80.0,
         }),
         warnings: vec![],
+        origins: vec![],
+        up: None,
     }
 }
 
@@ -432,6 +436,8 @@ pub fn office() -> Scene {
             fov_y_deg: 62.0,
         }),
         warnings: vec![],
+        origins: vec![],
+        up: None,
     }
 }
 
@@ -469,6 +475,8 @@ pub fn furnace() -> Scene {
             fov_y_deg: 80.0,
         }),
         warnings: vec![],
+        origins: vec![],
+        up: None,
     }
 }
 
@@ -532,6 +540,8 @@ pub fn city(k: usize) -> Scene {
             fov_y_deg: 50.0,
         }),
         warnings: vec![],
+        origins: vec![],
+        up: None,
     }
 }
 

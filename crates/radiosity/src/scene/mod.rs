@@ -9,6 +9,7 @@
 //! radiance of a Lambertian surface is `B/π`. Reflectance `ρ` is the diffuse albedo, in `[0, 1)`.
 
 pub mod builtin;
+pub mod mgf;
 pub mod obj;
 pub mod spectrum;
 
@@ -128,6 +129,14 @@ pub struct Scene {
     pub camera: Option<Camera>,
     /// Non-fatal remarks from loading (ignored statements, defaults applied).
     pub warnings: Vec<String>,
+    /// For scenes read from several files (MGF includes): `(first polygon, file)` runs, in
+    /// polygon order; polygon `i` came from the file of the last run starting at or before `i`.
+    /// Empty when every polygon came from [`Scene::source`].
+    pub origins: Vec<(usize, PathBuf)>,
+    /// The scene's vertical direction when its format defines one (MGF: +z); a scene without a
+    /// camera is then viewed from inside when it is an interior
+    /// ([`crate::render::camera::default_camera`]).
+    pub up: Option<Vec3>,
 }
 
 /// Why a scene could not be loaded or is not fit to solve.
@@ -157,7 +166,12 @@ pub enum SceneError {
 impl Scene {
     /// Where polygon `i` came from, for messages: `file:line` or `scene 'name' polygon i`.
     pub fn place_of(&self, i: usize) -> String {
-        match (&self.source, self.polygons.get(i)) {
+        let run = self.origins.partition_point(|(start, _)| *start <= i);
+        let source = match run {
+            0 => self.source.as_ref(),
+            r => Some(&self.origins[r - 1].1),
+        };
+        match (source, self.polygons.get(i)) {
             (Some(path), Some(p)) if p.line > 0 => format!("{}:{}", path.display(), p.line),
             (Some(path), _) => format!("{} (polygon {})", path.display(), i),
             (None, _) => format!("scene '{}' polygon {}", self.name, i),
@@ -297,7 +311,7 @@ pub fn vector_area(v: &[Vec3]) -> Vec3 {
     s * 0.5
 }
 
-/// Load a scene by built-in name or from a file (`.obj`).
+/// Load a scene by built-in name or from a file (`.obj`, `.mgf`).
 pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
     if let Some(s) = builtin::by_name(name_or_path) {
         return Ok(s);
@@ -309,10 +323,11 @@ pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
         .map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
         Some("obj") => obj::load(path),
+        Some("mgf") => mgf::load(path),
         _ if !path.exists() => Err(SceneError::Unknown(name_or_path.to_string())),
         _ => Err(SceneError::Invalid {
             place: path.display().to_string(),
-            message: "unsupported scene format (supported: .obj with .mtl)".into(),
+            message: "unsupported scene format (supported: .obj with .mtl, .mgf)".into(),
         }),
     }
 }

@@ -272,5 +272,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         polygons,
         camera: None,
         warnings,
+        origins: vec![],
+        up: None,
     })
 }

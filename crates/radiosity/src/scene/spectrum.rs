@@ -40,9 +40,19 @@ fn xyz_to_linear_srgb([x, y, z]: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-/// Unnormalised linear sRGB of a spectrum given at wavelengths `nm` (ascending) by `values`,
-/// integrated with the trapezoid rule.
-fn raw_rgb(nm: &[f64], values: &[f64]) -> [f64; 3] {
+/// White-balanced linear RGB of a CIE XYZ triple: linear sRGB (IEC 61966-2-1 matrix) with each
+/// channel divided by its value for the equal-energy white X = Y = Z = 1, so that a colour of
+/// chromaticity (⅓, ⅓) maps to grey `(Y, Y, Y)`. Channels are not clamped: saturated colours
+/// outside the gamut give negative values, which callers clamp.
+pub fn xyz_to_rgb(xyz: [f64; 3]) -> Rgb {
+    let c = xyz_to_linear_srgb(xyz);
+    let w = xyz_to_linear_srgb([1.0; 3]);
+    Rgb::new(c[0] / w[0], c[1] / w[1], c[2] / w[2])
+}
+
+/// CIE XYZ of a spectrum given at wavelengths `nm` (ascending) by `values`, integrated with the
+/// trapezoid rule.
+pub fn spectrum_xyz(nm: &[f64], values: &[f64]) -> [f64; 3] {
     let mut xyz = [0.0; 3];
     for k in 0..nm.len() - 1 {
         let h = nm[k + 1] - nm[k];
@@ -53,7 +63,20 @@ fn raw_rgb(nm: &[f64], values: &[f64]) -> [f64; 3] {
             }
         }
     }
-    xyz_to_linear_srgb(xyz)
+    xyz
+}
+
+/// Unnormalised linear sRGB of a sampled spectrum.
+fn raw_rgb(nm: &[f64], values: &[f64]) -> [f64; 3] {
+    xyz_to_linear_srgb(spectrum_xyz(nm, values))
+}
+
+/// Spectral radiance of a black body at `kelvin`, wavelength `nm`, up to a constant factor
+/// (Planck's law).
+pub fn planck(nm: f64, kelvin: f64) -> f64 {
+    // c₂ = hc/k = 1.4388e7 nm·K.
+    let l = nm * 1e-9;
+    1.0 / (l.powi(5) * ((1.4388e7 / (nm * kelvin)).exp() - 1.0))
 }
 
 /// White-balanced linear RGB of a spectrum sampled at `nm` (see the module docs).
