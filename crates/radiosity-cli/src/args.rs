@@ -71,7 +71,7 @@ pub struct ExperimentArgs {
 /// `radiosity form-factors`.
 #[derive(Debug, Args)]
 pub struct FormFactorsArgs {
-    /// A built-in scene or an .obj file.
+    /// A built-in scene or an .obj or .mgf file.
     pub scene: String,
     /// Method: hemicube, hemisphere, tetrahedron, monte-carlo, analytic (unoccluded).
     #[arg(long, value_name = "M", default_value = "monte-carlo")]
@@ -159,9 +159,14 @@ pub struct SolveSystemArgs {
 /// Options shared by every command that solves a scene.
 #[derive(Debug, Args)]
 pub struct SolveArgs {
-    /// A built-in scene (cornell, cube-dim, cube-bright, furnace) or a path to an .obj file.
+    /// A built-in scene (cornell, cube-dim, cube-bright, furnace, office, …) or a path to an .obj
+    /// or .mgf file.
     #[arg(default_value = "cornell")]
     pub scene: String,
+    /// MGF scenes: keep every surface one-sided, ignoring `sides 2` (RenderPark's
+    /// -force-onesided). By default a two-sided MGF surface is two polygons back to back.
+    #[arg(long)]
+    pub one_sided: bool,
     /// Approximate total number of patches.
     #[arg(long, value_name = "N", conflicts_with = "max_edge")]
     pub patches: Option<usize>,

@@ -42,8 +42,8 @@ fn main() -> ExitCode {
 }
 
 /// Load the scene named on the command line and print its warnings.
-pub(crate) fn load_scene(name: &str) -> Result<Scene> {
-    let scene = scene::load(name)?;
+pub(crate) fn load_scene(name: &str, one_sided: bool) -> Result<Scene> {
+    let scene = scene::load_with(name, &scene::LoadOptions { one_sided })?;
     for w in &scene.warnings {
         eprintln!("radiosity: warning: {w}");
     }
@@ -73,7 +73,7 @@ fn trace_reference(system: &System, m: &SparseMatrix) -> Option<Vec<radiosity::R
 /// Load and solve, with a progress bar (and the trace, if asked).
 fn solve_scene(a: &SolveArgs) -> Result<(Scene, Solution)> {
     let settings = settings::settings(a)?;
-    let scene = load_scene(&a.scene)?;
+    let scene = load_scene(&a.scene, a.one_sided)?;
     let mut progress = report::Progress::new(settings.params.tolerance);
     let mut trace: Option<Trace> = None;
     let tracing = a.trace.is_some();

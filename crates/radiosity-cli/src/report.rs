@@ -117,4 +117,11 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
         line += &format!(", render {r:.3} s, write {w:.3} s");
     }
     println!("{line}");
+    {
+        use radiosity::experiment::MemoryProbe;
+        println!(
+            "memory      peak heap {:.1} MiB (every allocation since start, counted)",
+            crate::alloc::Probe.peak() as f64 / (1024.0 * 1024.0)
+        );
+    }
 }

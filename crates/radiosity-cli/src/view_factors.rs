@@ -72,7 +72,7 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         (false, None, None) => MeshParams::default(),
     };
     crate::settings::threads(a.threads)?;
-    let scene = crate::load_scene(&a.scene)?;
+    let scene = crate::load_scene(&a.scene, false)?;
     // View factors need geometry, not light.
     scene.validate_geometry()?;
     if a.faces {

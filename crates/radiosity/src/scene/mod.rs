@@ -311,8 +311,21 @@ pub fn vector_area(v: &[Vec3]) -> Vec3 {
     s * 0.5
 }
 
+/// Choices made while reading a scene file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// MGF: treat every surface as one-sided, ignoring `sides 2` (RenderPark's
+    /// `-force-onesided`). By default a two-sided MGF surface becomes two polygons back to back.
+    pub one_sided: bool,
+}
+
 /// Load a scene by built-in name or from a file (`.obj`, `.mgf`).
 pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+    load_with(name_or_path, &LoadOptions::default())
+}
+
+/// [`load`] with options.
+pub fn load_with(name_or_path: &str, options: &LoadOptions) -> Result<Scene, SceneError> {
     if let Some(s) = builtin::by_name(name_or_path) {
         return Ok(s);
     }
@@ -323,7 +336,7 @@ pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
         .map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
         Some("obj") => obj::load(path),
-        Some("mgf") => mgf::load(path),
+        Some("mgf") => mgf::load_with(path, options.one_sided),
         _ if !path.exists() => Err(SceneError::Unknown(name_or_path.to_string())),
         _ => Err(SceneError::Invalid {
             place: path.display().to_string(),
