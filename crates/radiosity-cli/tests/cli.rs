@@ -1098,3 +1098,68 @@ fn experiment_rejects_impossible_options() {
         assert_fails(&out, &[needle], &dir, &[]);
     }
 }
+
+/// Bad MGF through the CLI: one line with the file and line, a non-zero exit, no output.
+#[test]
+fn bad_mgf_is_refused_with_file_and_line() {
+    let square = "m w =\n rd 0.5\n ed 100\nv a =\n p 0 0 0\nv b =\n p 1 0 0\nv c =\n p 1 1 0\n";
+    let cases: &[(&str, &str, &[&str])] = &[
+        // (scene.mgf, part.mgf, expected fragments)
+        ("f a b c\n", "", &["scene.mgf:1", "undefined vertex 'a'"]),
+        ("v a =\n p 0 0.5.1 0\n", "", &["scene.mgf:2", "malformed number '0.5.1'"]),
+        ("i missing.mgf\n", "", &["scene.mgf:1", "missing.mgf", "not found"]),
+        ("i part.mgf\n", "i scene.mgf\n", &["part.mgf:1", "include loop"]),
+        ("", "", &["scene.mgf:10", "at least 3"]),
+    ];
+    for (k, (scene, part, needles)) in cases.iter().enumerate() {
+        let dir = scratch(&format!("badmgf{k}"));
+        let text = if scene.is_empty() {
+            format!("{square}f a b\n")
+        } else {
+            scene.to_string()
+        };
+        std::fs::write(dir.join("scene.mgf"), text).unwrap();
+        let mut keep = vec!["scene.mgf"];
+        if !part.is_empty() {
+            std::fs::write(dir.join("part.mgf"), part).unwrap();
+            keep.push("part.mgf");
+        }
+        for (cmd, out) in [("render", "out.png"), ("solve", "out.csv")] {
+            let out = run(&[cmd, "scene.mgf", "-o", out], &dir);
+            assert_fails(&out, needles, &dir, &keep);
+        }
+    }
+}
+
+/// A small MGF scene of our own, with an include, an array and primitives, solves and renders
+/// from its default (inside) camera; the picture is not black.
+#[test]
+fn mgf_scene_solves_and_renders() {
+    let dir = scratch("mgf-room");
+    // A 4 × 4 × 3 m room seen from inside: a prism turned inside out, a ceiling light, and an
+    // array of three spheres from an included file.
+    let room = "m wall =\n c\n cxy 0.4 0.35\n rd 0.6\n\
+                v f0 =\n p 0 0 0\nv f1 =\n p 4 0 0\nv f2 =\n p 4 4 0\nv f3 =\n p 0 4 0\n\
+                prism f0 f1 f2 f3 -3\n\
+                m lamp =\n c\n ed 2000\n rd 0.1\n sides 1\n\
+                v l0 =\n p 1.5 1.5 2.99\nv l1 =\n p 2.5 1.5 2.99\nv l2 =\n p 2.5 2.5 2.99\nv l3 =\n p 1.5 2.5 2.99\n\
+                f l3 l2 l1 l0\n\
+                i balls.mgf -t 1 2 0.5 -a 3 -t 1 0 0\n";
+    let balls = "m red =\n c\n cxy 0.55 0.32\n rd 0.4\nv c =\n p 0 0 0\nsph c 0.3\n";
+    std::fs::write(dir.join("room.mgf"), room).unwrap();
+    std::fs::write(dir.join("balls.mgf"), balls).unwrap();
+    let out = run(
+        &[
+            "render", "room.mgf", "--patches", "2000", "--width", "64", "--height", "48", "-o",
+            "room.png",
+        ],
+        &dir,
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // 6 room faces + 1 light + 3 spheres × 128 facets, the room and spheres doubled (two-sided).
+    assert!(text.contains(&format!("({} polygons)", 2 * (6 + 3 * 128) + 1)), "{text}");
+    let img = image::open(dir.join("room.png")).unwrap().to_rgb8();
+    let lit = img.pixels().filter(|p| p.0.iter().any(|c| *c > 20)).count();
+    assert!(lit * 10 > 9 * img.pixels().count() as usize, "mostly black: {lit}");
+}
