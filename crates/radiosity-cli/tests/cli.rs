@@ -1106,9 +1106,21 @@ fn bad_mgf_is_refused_with_file_and_line() {
     let cases: &[(&str, &str, &[&str])] = &[
         // (scene.mgf, part.mgf, expected fragments)
         ("f a b c\n", "", &["scene.mgf:1", "undefined vertex 'a'"]),
-        ("v a =\n p 0 0.5.1 0\n", "", &["scene.mgf:2", "malformed number '0.5.1'"]),
-        ("i missing.mgf\n", "", &["scene.mgf:1", "missing.mgf", "not found"]),
-        ("i part.mgf\n", "i scene.mgf\n", &["part.mgf:1", "include loop"]),
+        (
+            "v a =\n p 0 0.5.1 0\n",
+            "",
+            &["scene.mgf:2", "malformed number '0.5.1'"],
+        ),
+        (
+            "i missing.mgf\n",
+            "",
+            &["scene.mgf:1", "missing.mgf", "not found"],
+        ),
+        (
+            "i part.mgf\n",
+            "i scene.mgf\n",
+            &["part.mgf:1", "include loop"],
+        ),
         ("", "", &["scene.mgf:10", "at least 3"]),
     ];
     for (k, (scene, part, needles)) in cases.iter().enumerate() {
@@ -1150,16 +1162,34 @@ fn mgf_scene_solves_and_renders() {
     std::fs::write(dir.join("balls.mgf"), balls).unwrap();
     let out = run(
         &[
-            "render", "room.mgf", "--patches", "2000", "--width", "64", "--height", "48", "-o",
+            "render",
+            "room.mgf",
+            "--patches",
+            "2000",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "-o",
             "room.png",
         ],
         &dir,
     );
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     // 6 room faces + 1 light + 3 spheres × 128 facets, the room and spheres doubled (two-sided).
-    assert!(text.contains(&format!("({} polygons)", 2 * (6 + 3 * 128) + 1)), "{text}");
+    assert!(
+        text.contains(&format!("({} polygons)", 2 * (6 + 3 * 128) + 1)),
+        "{text}"
+    );
     let img = image::open(dir.join("room.png")).unwrap().to_rgb8();
     let lit = img.pixels().filter(|p| p.0.iter().any(|c| *c > 20)).count();
-    assert!(lit * 10 > 9 * img.pixels().count() as usize, "mostly black: {lit}");
+    assert!(
+        lit * 10 > 9 * img.pixels().count() as usize,
+        "mostly black: {lit}"
+    );
 }

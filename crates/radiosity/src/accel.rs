@@ -99,6 +99,12 @@ pub struct Bvh {
     /// Triangles in leaf order (kept for validation and statistics).
     tris: Vec<Tri>,
     bounds: Aabb,
+    /// Absolute distance within which two hits also count as one: [`Bvh::ray_offset`]. Two
+    /// coplanar triangles (a two-sided surface's back-to-back copies, meshed differently) give
+    /// distances that differ by the rounding of the coordinates, amplified at grazing angles, far
+    /// beyond the relative [`TIE`]; surfaces closer than the ray offset are not told apart
+    /// anyway.
+    tie: f32,
 }
 
 /// Statistics of a built hierarchy.
@@ -204,12 +210,15 @@ impl Bvh {
                 child: [EMPTY_LANE; 4],
             });
         }
-        Bvh {
+        let mut bvh = Bvh {
             nodes: wide,
             blocks,
             tris,
             bounds,
-        }
+            tie: 0.0,
+        };
+        bvh.tie = bvh.ray_offset();
+        bvh
     }
 
     /// Bounds of the whole scene.
@@ -272,6 +281,7 @@ impl Bvh {
         let (ox, oy, oz) = (Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z));
         let (ix, iy, iz) = (Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z));
         let mut best_t = t_max;
+        let tie_abs = self.tie;
         let mut best = u32::MAX; // triangle id of the closest hit
         let (mut bu, mut bv, mut bdet) = (0.0f32, 0.0f32, 0.0f32);
         let mut stack: [(u32, f32); 128] = [(0, 0.0); 128];
@@ -302,7 +312,7 @@ impl Bvh {
                     & v.cmpge(Vec4::splat(-EDGE_EPS))
                     & (u + v).cmple(Vec4::splat(1.0 + EDGE_EPS))
                     & t.cmpgt(Vec4::ZERO)
-                    & t.cmplt(Vec4::splat(best_t * (1.0 + TIE)));
+                    & t.cmplt(Vec4::splat(best_t * (1.0 + TIE) + tie_abs));
                 let mut mask = ok.bitmask();
                 if mask != 0 {
                     let (ta, ua, va, da) =
@@ -312,8 +322,8 @@ impl Bvh {
                         mask &= mask - 1;
                         // Closer, or a tie (a ray through the edge where two faces meet) won by the
                         // front side: at a convex edge the front-facing surface is the visible one.
-                        let closer = ta[l] < best_t * (1.0 - TIE);
-                        let tie = !closer && ta[l] <= best_t * (1.0 + TIE);
+                        let closer = ta[l] < best_t * (1.0 - TIE) - tie_abs;
+                        let tie = !closer && ta[l] <= best_t * (1.0 + TIE) + tie_abs;
                         if closer
                             || (tie && da[l] > 0.0 && (best == u32::MAX || bdet <= 0.0))
                             || (tie && ta[l] < best_t && (da[l] > 0.0) == (bdet > 0.0))
@@ -379,12 +389,12 @@ impl Bvh {
             while sp > 0 {
                 sp -= 1;
                 let (c, dist) = stack[sp];
-                if dist <= best_t * (1.0 + TIE) {
+                if dist <= best_t * (1.0 + TIE) + tie_abs {
                     cur = c;
                     continue 'outer;
                 }
             }
-            return (best != u32::MAX).then(|| {
+            return (best != u32::MAX && best_t < t_max).then(|| {
                 let id = best;
                 Hit {
                     t: best_t,

@@ -47,10 +47,17 @@ fn every_renderpark_scene_loads_with_its_counts_and_power() {
         let s1 = load(&dir, name, true);
         let s2 = load(&dir, name, false);
         let p = s1.emitted_power().sum();
-        println!("(\"{name}\", {}, {}, {p:.6e}),", s1.polygons.len(), s2.polygons.len());
+        println!(
+            "(\"{name}\", {}, {}, {p:.6e}),",
+            s1.polygons.len(),
+            s2.polygons.len()
+        );
         assert_eq!(s1.polygons.len(), *one, "{name}: one-sided polygons");
         assert_eq!(s2.polygons.len(), *two, "{name}: two-sided polygons");
-        assert!((p / power - 1.0).abs() < 1e-5, "{name}: power {p} vs {power}");
+        assert!(
+            (p / power - 1.0).abs() < 1e-5,
+            "{name}: power {p} vs {power}"
+        );
         s1.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
         Mesh::build(&s2, MeshParams::Faces).unwrap_or_else(|e| panic!("{name}: {e}"));
         seen.push(*name);
@@ -83,9 +90,15 @@ fn every_renderpark_scene_loads_with_its_counts_and_power() {
 #[test]
 fn counts_and_power_match_the_files_by_hand() {
     let Some(dir) = folder() else { return };
-    assert_eq!(load(&dir, "office1/graz.mgf", true).polygons.len(), 13_780 + 16);
+    assert_eq!(
+        load(&dir, "office1/graz.mgf", true).polygons.len(),
+        13_780 + 16
+    );
     let cube = load(&dir, "cube.mgf", true);
     let p = cube.emitted_power();
-    assert!((p.sum() / (3.0 * 200_000.0 / 179.0) - 1.0).abs() < 0.01, "{p}");
+    assert!(
+        (p.sum() / (3.0 * 200_000.0 / 179.0) - 1.0).abs() < 0.01,
+        "{p}"
+    );
     assert!((p.g / (200_000.0 / 179.0) - 1.0).abs() < 0.01, "{p}");
 }

@@ -297,16 +297,23 @@ fn number(path: &Path, line: usize, tok: &str, what: &str) -> Result<f64, SceneE
         .parse()
         .map_err(|_| invalid(path, line, format!("malformed number '{tok}' in {what}")))?;
     if !v.is_finite() {
-        return Err(invalid(path, line, format!("{what}: '{tok}' is not finite")));
+        return Err(invalid(
+            path,
+            line,
+            format!("{what}: '{tok}' is not finite"),
+        ));
     }
     Ok(v)
 }
 
 fn count(path: &Path, line: usize, tok: &str, what: &str) -> Result<u32, SceneError> {
-    tok.parse::<u32>()
-        .ok()
-        .filter(|n| *n >= 1)
-        .ok_or_else(|| invalid(path, line, format!("{what} needs a positive count, not '{tok}'")))
+    tok.parse::<u32>().ok().filter(|n| *n >= 1).ok_or_else(|| {
+        invalid(
+            path,
+            line,
+            format!("{what} needs a positive count, not '{tok}'"),
+        )
+    })
 }
 
 /// Parse transform arguments (`args` excludes the keyword).
@@ -637,7 +644,8 @@ impl Reader {
                         return Err(invalid(path, line, "cxy needs 2 numbers"));
                     };
                     let (x, y) = (number(path, line, x, "cxy")?, number(path, line, y, "cxy")?);
-                    if !(0.0..=1.0).contains(&x) || !(0.0..=1.0).contains(&y) || x + y > 1.0 + 1e-9 {
+                    if !(0.0..=1.0).contains(&x) || !(0.0..=1.0).contains(&y) || x + y > 1.0 + 1e-9
+                    {
                         return Err(invalid(
                             path,
                             line,
@@ -646,18 +654,29 @@ impl Reader {
                     }
                     if y == 0.0 {
                         // No luminance at any intensity: black, as RenderPark reads it.
-                        *self.skipped.entry("cxy with y = 0 (black)".into()).or_default() += 1;
+                        *self
+                            .skipped
+                            .entry("cxy with y = 0 (black)".into())
+                            .or_default() += 1;
                     }
                     self.set_colour(Chroma { x, y });
                 }
                 "cspec" => {
                     if args.len() < 4 {
-                        return Err(invalid(path, line, "cspec needs λmin λmax and at least 2 values"));
+                        return Err(invalid(
+                            path,
+                            line,
+                            "cspec needs λmin λmax and at least 2 values",
+                        ));
                     }
                     let lo = number(path, line, args[0], "cspec")?;
                     let hi = number(path, line, args[1], "cspec")?;
                     if !(lo > 0.0 && hi > lo) {
-                        return Err(invalid(path, line, format!("cspec range {lo}–{hi} nm is empty")));
+                        return Err(invalid(
+                            path,
+                            line,
+                            format!("cspec range {lo}–{hi} nm is empty"),
+                        ));
                     }
                     let values: Vec<f64> = args[2..]
                         .iter()
@@ -676,7 +695,7 @@ impl Reader {
                         return Err(invalid(path, line, "cct needs a temperature"));
                     };
                     let t = number(path, line, t, "cct")?;
-                    if !(t >= 100.0) {
+                    if t < 100.0 {
                         return Err(invalid(path, line, format!("cct {t} K is below 100 K")));
                     }
                     let nm: Vec<f64> = (0..=80).map(|k| 380.0 + 5.0 * k as f64).collect();
@@ -714,7 +733,10 @@ impl Reader {
                         return Err(invalid(
                             path,
                             line,
-                            format!("{key} {v} is out of range ({})", if key == "ed" { "≥ 0" } else { "0 to 1" }),
+                            format!(
+                                "{key} {v} is out of range ({})",
+                                if key == "ed" { "≥ 0" } else { "0 to 1" }
+                            ),
                         ));
                     }
                     match key {
@@ -736,7 +758,11 @@ impl Reader {
                     let v = number(path, line, v, key)?;
                     number(path, line, _rough, key)?;
                     if !(0.0..=1.0).contains(&v) {
-                        return Err(invalid(path, line, format!("{key} {v} is out of range (0 to 1)")));
+                        return Err(invalid(
+                            path,
+                            line,
+                            format!("{key} {v} is out of range (0 to 1)"),
+                        ));
                     }
                     if key == "rs" {
                         self.change_mat(|m, _| m.rs = v);
@@ -764,7 +790,11 @@ impl Reader {
                         number(path, line, z, key)?,
                     );
                     let Some(name) = &self.vertex_name else {
-                        return Err(invalid(path, line, format!("{key} outside a named vertex context (v name =)")));
+                        return Err(invalid(
+                            path,
+                            line,
+                            format!("{key} outside a named vertex context (v name =)"),
+                        ));
                     };
                     let vx = self.vertices.get_mut(name).expect("current vertex exists");
                     if key == "p" {
@@ -794,7 +824,12 @@ impl Reader {
                 "sph" | "cyl" | "cone" | "ring" | "torus" | "prism" => {
                     self.primitive(path, line, key, args, &xf)?
                 }
-                other => *self.skipped.entry(format!("unknown '{other}'")).or_default() += 1,
+                other => {
+                    *self
+                        .skipped
+                        .entry(format!("unknown '{other}'"))
+                        .or_default() += 1
+                }
             }
             i += 1;
         }
@@ -824,7 +859,12 @@ impl Reader {
         }
     }
 
-    fn colour_context(&mut self, path: &Path, line: usize, args: &[&str]) -> Result<(), SceneError> {
+    fn colour_context(
+        &mut self,
+        path: &Path,
+        line: usize,
+        args: &[&str],
+    ) -> Result<(), SceneError> {
         match args {
             [] => {
                 self.colour = Chroma::WHITE;
@@ -843,9 +883,10 @@ impl Reader {
                 self.colour_name = Some(name.to_string());
             }
             [name, "=", template] => {
-                let c = *self.colours.get(*template).ok_or_else(|| {
-                    invalid(path, line, format!("undefined colour '{template}'"))
-                })?;
+                let c = *self
+                    .colours
+                    .get(*template)
+                    .ok_or_else(|| invalid(path, line, format!("undefined colour '{template}'")))?;
                 self.colours.insert(name.to_string(), c);
                 self.colour = c;
                 self.colour_name = Some(name.to_string());
@@ -855,7 +896,12 @@ impl Reader {
         Ok(())
     }
 
-    fn material_context(&mut self, path: &Path, line: usize, args: &[&str]) -> Result<(), SceneError> {
+    fn material_context(
+        &mut self,
+        path: &Path,
+        line: usize,
+        args: &[&str],
+    ) -> Result<(), SceneError> {
         self.clock += 1;
         match args {
             [] => {
@@ -866,11 +912,10 @@ impl Reader {
                 self.mat_name = None;
             }
             [name] => {
-                self.mat = self
-                    .mats
-                    .get(*name)
-                    .cloned()
-                    .ok_or_else(|| invalid(path, line, format!("undefined material '{name}'")))?;
+                self.mat =
+                    self.mats.get(*name).cloned().ok_or_else(|| {
+                        invalid(path, line, format!("undefined material '{name}'"))
+                    })?;
                 self.mat_name = Some(name.to_string());
             }
             [name, "=", rest @ ..] if rest.len() <= 1 => {
@@ -890,7 +935,12 @@ impl Reader {
         Ok(())
     }
 
-    fn vertex_context(&mut self, path: &Path, line: usize, args: &[&str]) -> Result<(), SceneError> {
+    fn vertex_context(
+        &mut self,
+        path: &Path,
+        line: usize,
+        args: &[&str],
+    ) -> Result<(), SceneError> {
         match args {
             [] => self.vertex_name = None,
             [name] => {
@@ -914,13 +964,21 @@ impl Reader {
 
     /// `fh outer… - hole… - hole…`: each hole is joined to the outer contour by a seam between
     /// its nearest pair of vertices, giving one polygon the mesher triangulates.
-    fn face_with_holes(&self, path: &Path, line: usize, args: &[&str]) -> Result<Vec<DVec3>, SceneError> {
+    fn face_with_holes(
+        &self,
+        path: &Path,
+        line: usize,
+        args: &[&str],
+    ) -> Result<Vec<DVec3>, SceneError> {
         let mut contours: Vec<Vec<DVec3>> = vec![Vec::new()];
         for a in args {
             if *a == "-" {
                 contours.push(Vec::new());
             } else {
-                contours.last_mut().unwrap().push(self.vertex(path, line, a)?.p);
+                contours
+                    .last_mut()
+                    .unwrap()
+                    .push(self.vertex(path, line, a)?.p);
             }
         }
         if let Some(c) = contours.iter().find(|c| c.len() < 3) {
@@ -949,7 +1007,14 @@ impl Reader {
         Ok(outer)
     }
 
-    fn primitive(&mut self, path: &Path, line: usize, key: &str, args: &[&str], xf: &Xf) -> Result<(), SceneError> {
+    fn primitive(
+        &mut self,
+        path: &Path,
+        line: usize,
+        key: &str,
+        args: &[&str],
+        xf: &Xf,
+    ) -> Result<(), SceneError> {
         let vtx = |k: usize| -> Result<Vertex, SceneError> {
             let name = args
                 .get(k)
@@ -966,12 +1031,20 @@ impl Reader {
             if args.len() == n {
                 Ok(())
             } else {
-                Err(invalid(path, line, format!("{key} takes {n} arguments, not {}", args.len())))
+                Err(invalid(
+                    path,
+                    line,
+                    format!("{key} takes {n} arguments, not {}", args.len()),
+                ))
             }
         };
         let axis_of = |v: &Vertex| -> Result<DVec3, SceneError> {
             v.n.try_normalize().ok_or_else(|| {
-                invalid(path, line, format!("{key}: its centre vertex has no normal (n) to orient it"))
+                invalid(
+                    path,
+                    line,
+                    format!("{key}: its centre vertex has no normal (n) to orient it"),
+                )
             })
         };
         match key {
@@ -1002,11 +1075,15 @@ impl Reader {
                     (vtx(0)?.p, num(1)?, vtx(2)?.p, num(3)?)
                 };
                 if r1 * r2 < 0.0 || (r1 == 0.0 && r2 == 0.0) {
-                    return Err(invalid(path, line, format!("{key} radii {r1} and {r2} must share a sign and not both be 0")));
+                    return Err(invalid(
+                        path,
+                        line,
+                        format!("{key} radii {r1} and {r2} must share a sign and not both be 0"),
+                    ));
                 }
-                let a = (v2 - v1)
-                    .try_normalize()
-                    .ok_or_else(|| invalid(path, line, format!("{key}: its two end vertices coincide")))?;
+                let a = (v2 - v1).try_normalize().ok_or_else(|| {
+                    invalid(path, line, format!("{key}: its two end vertices coincide"))
+                })?;
                 let (u, w) = basis(a);
                 let ring1 = circle(v1, a, u, w, 0.0, r1.abs());
                 let ring2 = circle(v2, a, u, w, 0.0, r2.abs());
@@ -1024,7 +1101,11 @@ impl Reader {
                 let a = axis_of(&cv)?;
                 let (r0, r1) = (num(1)?, num(2)?);
                 if r0 < 0.0 || r1 < 0.0 || r0 == r1 {
-                    return Err(invalid(path, line, format!("ring radii {r0} and {r1} must be non-negative and differ")));
+                    return Err(invalid(
+                        path,
+                        line,
+                        format!("ring radii {r0} and {r1} must be non-negative and differ"),
+                    ));
                 }
                 let (u, w) = basis(a);
                 let inner = circle(cv.p, a, u, w, 0.0, r0.min(r1));
@@ -1061,10 +1142,19 @@ impl Reader {
             _ => {
                 // prism v1 … vk length
                 if args.len() < 4 {
-                    return Err(invalid(path, line, format!("prism needs at least 3 vertices and a length; got {} arguments", args.len())));
+                    return Err(invalid(
+                        path,
+                        line,
+                        format!(
+                            "prism needs at least 3 vertices and a length; got {} arguments",
+                            args.len()
+                        ),
+                    ));
                 }
                 let len = num(args.len() - 1)?;
-                let base: Vec<DVec3> = (0..args.len() - 1).map(|k| vtx(k).map(|v| v.p)).collect::<Result<_, _>>()?;
+                let base: Vec<DVec3> = (0..args.len() - 1)
+                    .map(|k| vtx(k).map(|v| v.p))
+                    .collect::<Result<_, _>>()?;
                 let mut area = DVec3::ZERO;
                 for k in 1..base.len() - 1 {
                     area += (base[k] - base[0]).cross(base[k + 1] - base[0]);
@@ -1141,7 +1231,11 @@ pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
         skipped.push(format!("zero-area faces ×{}", r.degenerate));
     }
     if !skipped.is_empty() {
-        warnings.push(format!("{}: skipped: {}", path.display(), skipped.join(", ")));
+        warnings.push(format!(
+            "{}: skipped: {}",
+            path.display(),
+            skipped.join(", ")
+        ));
     }
     if r.clipped > 0 {
         warnings.push(format!(
@@ -1212,20 +1306,35 @@ mod tests {
         origins.sort();
         assert_eq!(
             origins,
-            vec![(0, 0, 1), (0, 5, 1), (2, 0, 1), (2, 5, 1), (4, 0, 1), (4, 5, 1)]
+            vec![
+                (0, 0, 1),
+                (0, 5, 1),
+                (2, 0, 1),
+                (2, 5, 1),
+                (4, 0, 1),
+                (4, 5, 1)
+            ]
         );
     }
 
     #[test]
     fn transforms_apply_in_order_and_mirrors_keep_faces_facing_out() {
         // Rotate 90° about z, then translate: (1, 0, 0) → (0, 1, 0) → (10, 1, 0).
-        let s = load_text("order", &format!("{SQUARE}xf -rz 90 -t 10 0 0\nf a b c d\nxf\n")).unwrap();
+        let s = load_text(
+            "order",
+            &format!("{SQUARE}xf -rz 90 -t 10 0 0\nf a b c d\nxf\n"),
+        )
+        .unwrap();
         assert!((s.polygons[0].vertices[1] - Vec3::new(10.0, 1.0, 0.0)).length() < 1e-5);
         // A mirror in x keeps the face looking up (+z).
         let s = load_text("mirror", &format!("{SQUARE}xf -mx\nf a b c d\nxf\n")).unwrap();
         assert!(vector_area(&s.polygons[0].vertices).z > 0.0);
         // -i repeats: three quarter turns about z.
-        let s = load_text("iterate", &format!("{SQUARE}xf -i 3 -rz 90\nf a b c d\nxf\n")).unwrap();
+        let s = load_text(
+            "iterate",
+            &format!("{SQUARE}xf -i 3 -rz 90\nf a b c d\nxf\n"),
+        )
+        .unwrap();
         assert!((s.polygons[0].vertices[1] - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-5);
     }
 
@@ -1250,7 +1359,10 @@ mod tests {
                     (c.dot(vector_area(&p.vertices)) / 3.0) as f64
                 })
                 .sum();
-            assert!(v > 0.0 && (v - volume).abs() < tol * volume, "{v} vs {volume}");
+            assert!(
+                v > 0.0 && (v - volume).abs() < tol * volume,
+                "{v} vs {volume}"
+            );
         }
         // 8 bands × 16 segments.
         assert_eq!(sphere.len(), 8 * 16);
@@ -1276,13 +1388,26 @@ mod tests {
             let a = vector_area(&p.vertices);
             Vec3::new(c.x, c.y, 0.0).dot(a)
         };
-        assert!(groups[0].iter().all(|p| radial(p) > 0.0), "cylinder faces out");
-        assert!(groups[1].iter().all(|p| radial(p) < 0.0), "negative radius faces in");
+        assert!(
+            groups[0].iter().all(|p| radial(p) > 0.0),
+            "cylinder faces out"
+        );
+        assert!(
+            groups[1].iter().all(|p| radial(p) < 0.0),
+            "negative radius faces in"
+        );
         assert!(groups[2].iter().all(|p| radial(p) > 0.0), "cone faces out");
-        assert!(groups[3].iter().all(|p| vector_area(&p.vertices).z > 0.0), "ring faces n");
+        assert!(
+            groups[3].iter().all(|p| vector_area(&p.vertices).z > 0.0),
+            "ring faces n"
+        );
         assert_eq!(groups[4].len(), 16 * 16);
         // Ring area: π (1 − 0.25) less the polygon's shortfall; torus area 4π² R r.
-        let area = |g: &[Polygon]| g.iter().map(|p| super::super::polygon_area(&p.vertices)).sum::<f64>();
+        let area = |g: &[Polygon]| {
+            g.iter()
+                .map(|p| super::super::polygon_area(&p.vertices))
+                .sum::<f64>()
+        };
         let pi = std::f64::consts::PI;
         assert!((area(groups[3]) / (pi * 0.75) - 1.0).abs() < 0.03);
         assert!((area(groups[4]) / (4.0 * pi * pi * 1.5 * 0.5) - 1.0).abs() < 0.04);
@@ -1290,25 +1415,46 @@ mod tests {
 
     #[test]
     fn colours_and_emission_convert_as_documented() {
-        let text = "c red =\n cxy 0.64 0.33\nm lamp =\n c\n ed 179\n rd 0.2\nm paint =\n c red\n rd 0.2\n\
+        let text =
+            "c red =\n cxy 0.64 0.33\nm lamp =\n c\n ed 179\n rd 0.2\nm paint =\n c red\n rd 0.2\n\
                     v a =\n p 0 0 0\nv b =\n p 1 0 0\nv c =\n p 1 1 0\n\
                     m lamp\nf a b c\nm paint\nf a b c\n";
         let s = load_text("colour", text).unwrap();
         let lamp = &s.materials[s.polygons[0].material];
         // ed 179 lm/m² of white is 1 W/m² in every channel; rd 0.2 of white is grey 0.2.
-        assert!(lamp.emission.max_abs_diff(Rgb::splat(1.0)) < 1e-9, "{}", lamp.emission);
+        assert!(
+            lamp.emission.max_abs_diff(Rgb::splat(1.0)) < 1e-9,
+            "{}",
+            lamp.emission
+        );
         assert!(lamp.reflectance.max_abs_diff(Rgb::splat(0.2)) < 1e-9);
         // The sRGB red primary's chromaticity is pure red, its luminance Y = 0.2 (the red
         // primary's luminance weight is 0.2126, so R = 0.2 / 0.2126 after balancing).
         let paint = &s.materials[s.polygons[1].material];
-        assert!(paint.reflectance.r > 0.5 && paint.reflectance.g < 0.02 && paint.reflectance.b < 0.02, "{}", paint.reflectance);
+        assert!(
+            paint.reflectance.r > 0.5 && paint.reflectance.g < 0.02 && paint.reflectance.b < 0.02,
+            "{}",
+            paint.reflectance
+        );
     }
 
     #[test]
     fn two_sided_surfaces_are_doubled_unless_one_sided() {
-        let dir = folder("sides", &[("s.mgf", &format!("{SQUARE}f a b c d\nm white\nsides 1\nf a b c d\n"))]);
-        assert_eq!(load_with(&dir.join("s.mgf"), false).unwrap().polygons.len(), 3);
-        assert_eq!(load_with(&dir.join("s.mgf"), true).unwrap().polygons.len(), 2);
+        let dir = folder(
+            "sides",
+            &[(
+                "s.mgf",
+                &format!("{SQUARE}f a b c d\nm white\nsides 1\nf a b c d\n"),
+            )],
+        );
+        assert_eq!(
+            load_with(&dir.join("s.mgf"), false).unwrap().polygons.len(),
+            3
+        );
+        assert_eq!(
+            load_with(&dir.join("s.mgf"), true).unwrap().polygons.len(),
+            2
+        );
     }
 
     #[test]
@@ -1319,7 +1465,11 @@ mod tests {
         );
         let s = load_text("holes", &text).unwrap();
         let mesh = crate::mesh::Mesh::build(&s, crate::mesh::MeshParams::Faces).unwrap();
-        assert!((mesh.total_area() - 0.75).abs() < 1e-5, "{}", mesh.total_area());
+        assert!(
+            (mesh.total_area() - 0.75).abs() < 1e-5,
+            "{}",
+            mesh.total_area()
+        );
     }
 
     #[test]
@@ -1331,9 +1481,16 @@ mod tests {
                 ("sub/part.mgf", ""),
             ],
         );
-        std::fs::write(dir.join("sub/part.mgf"), format!("{SQUARE}f a b c\nf a b\n")).unwrap();
+        std::fs::write(
+            dir.join("sub/part.mgf"),
+            format!("{SQUARE}f a b c\nf a b\n"),
+        )
+        .unwrap();
         let err = load(&dir.join("top.mgf")).unwrap_err().to_string();
-        assert!(err.contains("part.mgf:13") && err.contains("at least 3"), "{err}");
+        assert!(
+            err.contains("part.mgf:13") && err.contains("at least 3"),
+            "{err}"
+        );
         std::fs::write(dir.join("sub/part.mgf"), format!("{SQUARE}f a b c\n")).unwrap();
         let s = load_with(&dir.join("top.mgf"), true).unwrap();
         assert_eq!(s.polygons.len(), 2);
