@@ -258,17 +258,7 @@ fn invalid(path: &Path, line: usize, message: impl Into<String>) -> SceneError {
 
 /// Read a file into logical lines.
 fn read_lines(path: &Path) -> Result<Vec<(usize, String)>, SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let text = String::from_utf8(bytes).map_err(|e| SceneError::Invalid {
-        place: path.display().to_string(),
-        message: format!(
-            "not UTF-8 text (invalid byte at offset {})",
-            e.utf8_error().valid_up_to()
-        ),
-    })?;
+    let text = super::obj::read(path)?;
     let mut out = Vec::new();
     let mut pending: Option<(usize, String)> = None;
     for (k, raw) in text.lines().enumerate() {
@@ -292,19 +282,7 @@ fn read_lines(path: &Path) -> Result<Vec<(usize, String)>, SceneError> {
     Ok(out)
 }
 
-fn number(path: &Path, line: usize, tok: &str, what: &str) -> Result<f64, SceneError> {
-    let v: f64 = tok
-        .parse()
-        .map_err(|_| invalid(path, line, format!("malformed number '{tok}' in {what}")))?;
-    if !v.is_finite() {
-        return Err(invalid(
-            path,
-            line,
-            format!("{what}: '{tok}' is not finite"),
-        ));
-    }
-    Ok(v)
-}
+use super::obj::parse_f64 as number;
 
 fn count(path: &Path, line: usize, tok: &str, what: &str) -> Result<u32, SceneError> {
     tok.parse::<u32>().ok().filter(|n| *n >= 1).ok_or_else(|| {

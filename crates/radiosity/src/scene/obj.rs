@@ -26,7 +26,8 @@ fn invalid(path: &Path, line: usize, message: impl Into<String>) -> SceneError {
     }
 }
 
-fn read(path: &Path) -> Result<String, SceneError> {
+/// A text file, or an error naming it.
+pub(super) fn read(path: &Path) -> Result<String, SceneError> {
     let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
         path: path.to_path_buf(),
         source,
@@ -40,7 +41,13 @@ fn read(path: &Path) -> Result<String, SceneError> {
     })
 }
 
-fn parse_f64(path: &Path, line: usize, tok: &str, what: &str) -> Result<f64, SceneError> {
+/// A finite number, or an error naming the file, line and token.
+pub(super) fn parse_f64(
+    path: &Path,
+    line: usize,
+    tok: &str,
+    what: &str,
+) -> Result<f64, SceneError> {
     let v: f64 = tok
         .parse()
         .map_err(|_| invalid(path, line, format!("malformed number '{tok}' in {what}")))?;
