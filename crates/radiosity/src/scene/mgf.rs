@@ -143,7 +143,7 @@ struct Vertex {
 /// One transform argument list, split at `-i` and `-a`.
 #[derive(Clone, Debug)]
 struct XfSpec {
-    /// `(kind, transform)`: kind 0 = once, `Iterate(n)`, `Array(n)`.
+    /// `(kind, transform)` per run of arguments: before any `-i`/`-a`, then one per `-i N` or `-a N`.
     parts: Vec<(Part, DAffine3)>,
 }
 
