@@ -163,8 +163,9 @@ pub struct SolveArgs {
     /// or .mgf file.
     #[arg(default_value = "cornell")]
     pub scene: String,
-    /// MGF scenes: keep every surface one-sided, ignoring `sides 2` (RenderPark's
-    /// -force-onesided). By default a two-sided MGF surface is two polygons back to back.
+    /// MGF and glTF scenes: keep every surface one-sided, ignoring MGF's `sides 2` (RenderPark's
+    /// -force-onesided) and glTF's `doubleSided`. By default a two-sided surface is two polygons
+    /// back to back.
     #[arg(long)]
     pub one_sided: bool,
     /// Approximate total number of patches.
@@ -267,9 +268,20 @@ pub struct RenderArgs {
 pub struct SolveCmdArgs {
     #[command(flatten)]
     pub solve: SolveArgs,
-    /// Output CSV, one row per patch.
+    /// Output: .csv (one row per patch: geometry, material, radiosity), or a baked mesh with the
+    /// radiosity at its vertices: .glb / .gltf (glTF 2.0: COLOR_0 display colours, unlit
+    /// materials, _RADIOSITY linear values) or .ply (vertex colours plus float radiosity).
     #[arg(long, short, value_name = "FILE")]
     pub out: PathBuf,
+    /// Baked meshes: exposure adjustment in stops, relative to automatic exposure (which maps
+    /// the 97th percentile of patch luminance, by area, to 0.9). COLOR_0 = min(1, B · scale).
+    #[arg(
+        long,
+        value_name = "EV",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub exposure: f32,
 }
 
 /// `radiosity bench`.

@@ -177,6 +177,7 @@ fn unit_squares() -> Vec<(&'static str, radiosity::scene::Scene, f64)> {
                 vertices,
                 material: 0,
                 line: 0,
+                group: 0,
             })
             .collect(),
         ..Default::default()

@@ -11,6 +11,7 @@ mod view_factors;
 use anyhow::{Context, Result};
 use args::{Cli, Command, RenderArgs, SolveArgs, SolveCmdArgs, SolveSystemArgs};
 use clap::Parser;
+use radiosity::export::bake::{self, Bake, BakeFormat};
 use radiosity::export::{write_image, write_patches_csv, write_radiosity_csv, ImageFormat, Trace};
 use radiosity::pipeline::{self, Event, Solution};
 use radiosity::render::{auto_exposure, RenderParams};
@@ -251,8 +252,18 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase());
-    if ext.as_deref() != Some("csv") {
-        anyhow::bail!("{}: unsupported output format (use .csv)", a.out.display());
+    let baked = BakeFormat::from_path(&a.out).is_some();
+    if ext.as_deref() != Some("csv") && !baked {
+        anyhow::bail!(
+            "{}: unsupported output format (use .csv, .glb, .gltf or .ply)",
+            a.out.display()
+        );
+    }
+    if !a.exposure.is_finite() {
+        anyhow::bail!(
+            "--exposure {}: must be a finite number of stops",
+            a.exposure
+        );
     }
     settings::check_output(&a.out)?;
     if let Some(t) = &a.solve.trace {
@@ -262,7 +273,19 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     settings::threads(a.solve.threads)?;
     let (scene, solution) = solve_scene(&a.solve)?;
     let t = Instant::now();
-    write_patches_csv(&a.out, &scene, &solution.mesh, &solution.radiosity)?;
+    if baked {
+        let vertex = solution.vertex_display_radiosity();
+        let bake = Bake {
+            scene: &scene,
+            mesh: &solution.mesh,
+            vertex_radiosity: &vertex,
+            scale: solution.auto_exposure() * 2f32.powf(a.exposure),
+            camera: Some(solution.default_camera(&scene)),
+        };
+        bake::write(&a.out, &bake)?;
+    } else {
+        write_patches_csv(&a.out, &scene, &solution.mesh, &solution.radiosity)?;
+    }
     let write_s = t.elapsed().as_secs_f64();
     report::summary(&scene, &solution, None);
     println!(

@@ -135,3 +135,13 @@ impl std::fmt::Display for Rgb {
         }
     }
 }
+
+/// The sRGB decoding function (IEC 61966-2-1): the linear value of an encoded value in `[0, 1]`
+/// (8-bit colours in images and PLY files are encoded).
+pub fn srgb_to_linear(c: f64) -> f64 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}

@@ -146,6 +146,17 @@ impl Solution {
         }
     }
 
+    /// The display radiosity at each mesh vertex, interpolated within surfaces
+    /// ([`vertex_radiosity`]): what pictures and baked files show.
+    pub fn vertex_display_radiosity(&self) -> Vec<Rgb> {
+        vertex_radiosity(&self.mesh, &self.display_radiosity())
+    }
+
+    /// Automatic exposure for baked colours ([`crate::render::auto_exposure_patches`]).
+    pub fn auto_exposure(&self) -> f32 {
+        crate::render::auto_exposure_patches(&self.display_radiosity(), &self.area)
+    }
+
     /// Render the display radiosity, Gouraud-interpolated within surfaces.
     pub fn render(
         &self,

@@ -23,6 +23,7 @@ fn scene_of(polys: Vec<Vec<Vec3>>) -> Scene {
                 vertices,
                 material: 0,
                 line: 0,
+                group: 0,
             })
             .collect(),
         ..Default::default()

@@ -17,6 +17,7 @@ fn quad(v: [[f32; 3]; 4]) -> Polygon {
         vertices: v.iter().map(|p| Vec3::from_array(*p)).collect(),
         material: 0,
         line: 0,
+        group: 0,
     }
 }
 

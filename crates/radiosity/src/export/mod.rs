@@ -1,7 +1,9 @@
-//! Files out: images (PNG, OpenEXR, PFM) and the per-patch CSV. Every file is written to a
+//! Files out: images (PNG, OpenEXR, PFM), the per-patch CSV and baked meshes (glTF, PLY;
+//! [`bake`]). Every file is written to a
 //! temporary file next to its destination and renamed into place when complete, so a failure
 //! never leaves a half-written output.
 
+pub mod bake;
 pub mod plot;
 
 use crate::color::Rgb;

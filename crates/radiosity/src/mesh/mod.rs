@@ -82,6 +82,8 @@ pub struct Mesh {
     pub patches: Vec<Patch>,
     /// The edge length the mesh was built with (0 for [`MeshParams::Faces`]).
     pub max_edge: f32,
+    /// Smoothing group of each surface (input polygon), from [`crate::scene::Polygon::group`].
+    pub groups: Vec<u32>,
 }
 
 /// A piece of an input polygon: a triangle or a convex quad.
@@ -324,6 +326,7 @@ impl Mesh {
         };
         let mut mesh = Mesh {
             max_edge,
+            groups: scene.polygons.iter().map(|p| p.group).collect(),
             ..Default::default()
         };
         let expected = count(&all, max_edge) as usize;
@@ -470,6 +473,7 @@ mod tests {
                 vertices,
                 material: 0,
                 line: 0,
+                group: 0,
             }],
             ..Default::default()
         }

@@ -58,23 +58,78 @@ impl Image {
     }
 }
 
-/// Radiosity at each mesh vertex: the area-weighted mean of the patches that share it. Vertices
-/// are shared only inside a surface piece, so this smooths within a surface and keeps edges
-/// between surfaces hard.
+/// Radiosity at each mesh vertex, interpolated within surfaces and hard between them.
+///
+/// A vertex takes the area-weighted mean of the patches around its position that belong to the
+/// same surface: the patches that share the vertex, plus those of other pieces of the same input
+/// polygon, or of other polygons of the same smoothing group ([`crate::scene::Polygon::group`])
+/// whose normal is within [`crate::scene::CREASE_ANGLE_DEG`] of its own. So patches of one
+/// surface show no seams, and edges between surfaces (or across a crease) stay hard.
 pub fn vertex_radiosity(mesh: &Mesh, patch_values: &[Rgb]) -> Vec<Rgb> {
-    let mut sum = vec![Rgb::BLACK; mesh.vertices.len()];
-    let mut weight = vec![0.0f64; mesh.vertices.len()];
+    let nv = mesh.vertices.len();
+    let mut sum = vec![Rgb::BLACK; nv];
+    let mut weight = vec![0.0f64; nv];
+    let mut normal = vec![Vec3::ZERO; nv];
+    let mut surface = vec![u32::MAX; nv];
     for (p, b) in mesh.patches.iter().zip(patch_values) {
         let n = if p.is_triangle() { 3 } else { 4 };
         for &v in &p.vertices[..n] {
-            sum[v as usize] += *b * p.area as f64;
-            weight[v as usize] += p.area as f64;
+            let v = v as usize;
+            sum[v] += *b * p.area as f64;
+            weight[v] += p.area as f64;
+            normal[v] += p.normal * p.area;
+            surface[v] = p.surface;
         }
     }
-    sum.iter()
+    let mut out: Vec<Rgb> = sum
+        .iter()
         .zip(&weight)
         .map(|(s, w)| if *w > 0.0 { *s / *w } else { Rgb::BLACK })
-        .collect()
+        .collect();
+    // Vertices of one surface at one position: sort by (surface key, position), then blend each
+    // run. Adding 0.0 maps −0.0 to +0.0 so that equal positions have equal bits.
+    let key = |v: usize| {
+        let s = surface[v];
+        let g = mesh.groups.get(s as usize).copied().unwrap_or(0);
+        let group = if g == 0 {
+            s as u64
+        } else {
+            (1 << 32) | g as u64
+        };
+        let p = mesh.vertices[v];
+        (
+            group,
+            [
+                (p.x + 0.0).to_bits(),
+                (p.y + 0.0).to_bits(),
+                (p.z + 0.0).to_bits(),
+            ],
+        )
+    };
+    let mut order: Vec<u32> = (0..nv as u32)
+        .filter(|&v| weight[v as usize] > 0.0)
+        .collect();
+    order.par_sort_unstable_by_key(|&v| key(v as usize));
+    let cos_crease = crate::scene::CREASE_ANGLE_DEG.to_radians().cos();
+    for run in order.chunk_by(|a, b| key(*a as usize) == key(*b as usize)) {
+        if run.len() < 2 {
+            continue;
+        }
+        for &i in run {
+            let ni = normal[i as usize].normalize_or_zero();
+            let (mut s, mut w) = (Rgb::BLACK, 0.0);
+            for &j in run {
+                if normal[j as usize].normalize_or_zero().dot(ni) >= cos_crease {
+                    s += sum[j as usize];
+                    w += weight[j as usize];
+                }
+            }
+            if w > 0.0 {
+                out[i as usize] = s / w;
+            }
+        }
+    }
+    out
 }
 
 /// The camera's orthonormal frame `(forward, right, up)`.
@@ -158,6 +213,31 @@ pub fn auto_exposure(image: &Image) -> f32 {
     let k = ((lum.len() as f64 * 0.97) as usize).min(lum.len() - 1);
     let (_, v, _) = lum.select_nth_unstable_by(k, f32::total_cmp);
     0.9 / *v
+}
+
+/// The exposure scale that maps the 97th percentile of luminance over the patches, weighted by
+/// `area`, to 0.9: the scene-space counterpart of [`auto_exposure`], for baked vertex colours.
+/// 1 when everything is black.
+pub fn auto_exposure_patches(values: &[Rgb], area: &[f64]) -> f32 {
+    let mut lum: Vec<(f64, f64)> = values
+        .iter()
+        .zip(area)
+        .map(|(v, a)| (v.luminance(), *a))
+        .filter(|(l, a)| *l > 0.0 && *a > 0.0)
+        .collect();
+    if lum.is_empty() {
+        return 1.0;
+    }
+    lum.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = lum.iter().map(|x| x.1).sum();
+    let mut acc = 0.0;
+    for (l, a) in &lum {
+        acc += a;
+        if acc >= 0.97 * total {
+            return (0.9 / l) as f32;
+        }
+    }
+    (0.9 / lum[lum.len() - 1].0) as f32
 }
 
 /// The sRGB transfer function (IEC 61966-2-1) of a linear value in `[0, 1]`.

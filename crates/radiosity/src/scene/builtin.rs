@@ -82,6 +82,7 @@ fn poly(vertices: Vec<Vec3>, material: usize) -> Polygon {
         vertices,
         material,
         line: 0,
+        group: 0,
     }
 }
 

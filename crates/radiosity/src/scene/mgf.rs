@@ -486,6 +486,7 @@ impl Reader {
                 vertices: v.clone(),
                 material,
                 line: line as u32,
+                group: 0,
             });
             if self.mat.sides == 2 && !self.one_sided {
                 // The back side: the same polygon reversed. Where the two coincide the ray caster
@@ -495,6 +496,7 @@ impl Reader {
                     vertices: v.iter().rev().copied().collect(),
                     material,
                     line: line as u32,
+                    group: 0,
                 });
             }
         }

@@ -9,8 +9,10 @@
 //! radiance of a Lambertian surface is `B/π`. Reflectance `ρ` is the diffuse albedo, in `[0, 1)`.
 
 pub mod builtin;
+pub mod gltf;
 pub mod mgf;
 pub mod obj;
+pub mod ply;
 pub mod spectrum;
 
 use crate::color::Rgb;
@@ -59,7 +61,17 @@ pub struct Polygon {
     pub material: usize,
     /// Line of the scene file that defined it (0 for built-in scenes), for error messages.
     pub line: u32,
+    /// Smoothing group. Polygons with the same non-zero group form one smooth surface: where
+    /// they meet at a shared vertex with normals less than [`CREASE_ANGLE_DEG`] apart, radiosity
+    /// is interpolated across the edge. Group 0 means the polygon is a surface of its own, with
+    /// hard edges all round. Triangle-mesh formats (glTF, PLY) give each mesh its own group, so
+    /// that the triangles of a wall shade as one wall.
+    pub group: u32,
 }
+
+/// Largest angle between the normals of two polygons of one smoothing group at which radiosity
+/// is still interpolated across their common edge (Blender's default auto-smooth angle).
+pub const CREASE_ANGLE_DEG: f32 = 30.0;
 
 /// A pinhole camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -319,7 +331,7 @@ pub struct LoadOptions {
     pub one_sided: bool,
 }
 
-/// Load a scene by built-in name or from a file (`.obj`, `.mgf`).
+/// Load a scene by built-in name or from a file (`.obj`, `.mgf`, `.gltf`, `.glb`, `.ply`).
 pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
     load_with(name_or_path, &LoadOptions::default())
 }
@@ -337,10 +349,14 @@ pub fn load_with(name_or_path: &str, options: &LoadOptions) -> Result<Scene, Sce
     match ext.as_deref() {
         Some("obj") => obj::load(path),
         Some("mgf") => mgf::load_with(path, options.one_sided),
+        Some("gltf" | "glb") => gltf::load_with(path, options.one_sided),
+        Some("ply") => ply::load(path),
         _ if !path.exists() => Err(SceneError::Unknown(name_or_path.to_string())),
         _ => Err(SceneError::Invalid {
             place: path.display().to_string(),
-            message: "unsupported scene format (supported: .obj with .mtl, .mgf)".into(),
+            message:
+                "unsupported scene format (supported: .obj with .mtl, .mgf, .gltf, .glb, .ply)"
+                    .into(),
         }),
     }
 }

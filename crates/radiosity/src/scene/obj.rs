@@ -222,6 +222,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                     vertices: face.clone(),
                     material,
                     line: line as u32,
+                    group: 0,
                 });
             }
             "mtllib" => {

@@ -1,0 +1,369 @@
+//! Baked light: the patch mesh with the radiosity at its vertices, for other tools (game engines,
+//! Blender, web viewers) to show as is. Written as glTF 2.0 ([`write_gltf`], `.glb` or `.gltf`)
+//! or PLY ([`write_ply`]).
+//!
+//! **Values.** Each vertex carries two things:
+//! - the *linear radiosity* B (W/m² per channel, the display radiosity of
+//!   [`crate::pipeline::Solution::display_radiosity`]) interpolated as
+//!   [`crate::render::vertex_radiosity`] does: smooth within a surface, hard between surfaces;
+//! - a *display colour*, what our PNG pictures show: `c = min(1, B · scale)` per channel, with
+//!   `scale` the exposure. A PNG stores `srgb(c)` in 8 bits; glTF's `COLOR_0` is linear, so it
+//!   holds `c` itself (sRGB-encoded display value decoded back to linear, which is the identity
+//!   on `[0, 1]`), and a viewer that encodes its output to sRGB shows the same colours as our
+//!   pictures. PLY's `red`/`green`/`blue` are 8-bit and hold `srgb(c)`, as images do.
+//!
+//! **glTF layout.** One mesh with one primitive per scene material, each with its own vertices:
+//! `POSITION`, `COLOR_0` (display colour, float VEC3) and `_RADIOSITY` (linear B, float VEC3; an
+//! application-specific attribute, as glTF allows for names starting with `_`), and u32
+//! triangle indices (quad patches are split along their first diagonal). Materials are unlit
+//! (`KHR_materials_unlit`) and white, so a viewer shows `COLOR_0` unchanged; the physical
+//! material goes in the material's `extras` as `{"radiosity": {"reflectance": [r, g, b],
+//! "emission": [r, g, b]}}`, which [`crate::scene::gltf`] reads back, so a baked file can be
+//! solved again. The scene's camera, when given, becomes a perspective camera node. `.glb` holds
+//! the binary buffer in its BIN chunk; `.gltf` embeds it as a base64 `data:` URI, so either is a
+//! single self-contained file.
+//!
+//! **PLY layout** (binary little-endian): vertex `x y z` (float), `red green blue` (uchar,
+//! display colour, sRGB), `radiosity_red radiosity_green radiosity_blue` (float, linear B); face
+//! `vertex_indices` (list uchar uint, 3 or 4: quad patches stay quads), `reflectance_red …` and
+//! `emission_red …` (float), the names [`crate::scene::ply`] reads.
+
+use super::{write_atomic, ExportError};
+use crate::color::Rgb;
+use crate::mesh::{Mesh, Patch};
+use crate::render::srgb_encode;
+use crate::scene::{Camera, Scene};
+use base64::Engine as _;
+use std::io::Write;
+use std::path::Path;
+
+/// What a baked file is made of.
+#[derive(Clone, Copy, Debug)]
+pub struct Bake<'a> {
+    /// The scene (for materials and names).
+    pub scene: &'a Scene,
+    /// The patch mesh.
+    pub mesh: &'a Mesh,
+    /// Linear radiosity at each mesh vertex (e.g. [`crate::render::vertex_radiosity`]).
+    pub vertex_radiosity: &'a [Rgb],
+    /// Exposure: display colour = min(1, B · scale).
+    pub scale: f32,
+    /// A camera to include, if any.
+    pub camera: Option<Camera>,
+}
+
+impl Bake<'_> {
+    fn display(&self, b: Rgb) -> [f32; 3] {
+        [b.r, b.g, b.b].map(|c| ((c as f32) * self.scale).clamp(0.0, 1.0))
+    }
+}
+
+/// Baked-output formats, chosen by file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BakeFormat {
+    /// Binary glTF.
+    Glb,
+    /// glTF JSON with the buffer embedded.
+    Gltf,
+    /// Binary little-endian PLY.
+    Ply,
+}
+
+impl BakeFormat {
+    /// The format `path`'s extension names, if it is one.
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "glb" => Some(Self::Glb),
+            "gltf" => Some(Self::Gltf),
+            "ply" => Some(Self::Ply),
+            _ => None,
+        }
+    }
+}
+
+/// Write `bake` to `path` in the format its extension names (`.glb`, `.gltf`, `.ply`).
+pub fn write(path: &Path, bake: &Bake) -> Result<(), ExportError> {
+    match BakeFormat::from_path(path) {
+        Some(BakeFormat::Ply) => write_ply(path, bake),
+        Some(f) => write_gltf(path, bake, f == BakeFormat::Glb),
+        None => Err(ExportError::Format {
+            path: path.to_path_buf(),
+            what: "baked mesh",
+            supported: ".glb, .gltf or .ply",
+        }),
+    }
+}
+
+/// The vertex count of a patch.
+fn corners(p: &Patch) -> usize {
+    if p.is_triangle() {
+        3
+    } else {
+        4
+    }
+}
+
+/// Per material: the patches that use it, and their vertices renumbered from 0.
+struct Group {
+    material: usize,
+    vertices: Vec<u32>,
+    triangles: Vec<[u32; 3]>,
+}
+
+fn groups(bake: &Bake) -> Vec<Group> {
+    let mesh = bake.mesh;
+    let mut by_material: Vec<Vec<usize>> = vec![Vec::new(); bake.scene.materials.len()];
+    for (i, p) in mesh.patches.iter().enumerate() {
+        by_material[p.material as usize].push(i);
+    }
+    let mut local = vec![u32::MAX; mesh.vertices.len()];
+    let mut out = Vec::new();
+    for (material, patches) in by_material.into_iter().enumerate() {
+        if patches.is_empty() {
+            continue;
+        }
+        let mut g = Group {
+            material,
+            vertices: Vec::new(),
+            triangles: Vec::with_capacity(patches.len() * 2),
+        };
+        for &pi in &patches {
+            let p = &mesh.patches[pi];
+            for &v in &p.vertices[..corners(p)] {
+                if local[v as usize] == u32::MAX {
+                    local[v as usize] = g.vertices.len() as u32;
+                    g.vertices.push(v);
+                }
+            }
+            for t in p.triangles() {
+                g.triangles.push(t.map(|v| local[v as usize]));
+            }
+        }
+        for &v in &g.vertices {
+            local[v as usize] = u32::MAX;
+        }
+        out.push(g);
+    }
+    out
+}
+
+fn push_f32s(buf: &mut Vec<u8>, v: &[f32]) {
+    for x in v {
+        buf.extend_from_slice(&x.to_le_bytes());
+    }
+}
+
+/// A rotation quaternion `[x, y, z, w]` turning glTF's camera frame (looking down −z, up +y) to
+/// look along `forward` with `up` up.
+fn look_rotation(forward: glam::Vec3, up: glam::Vec3) -> [f32; 4] {
+    let f = forward.normalize();
+    let r = f.cross(up).normalize();
+    let u = r.cross(f);
+    let m = glam::Mat3::from_cols(r, u, -f);
+    glam::Quat::from_mat3(&m).normalize().to_array()
+}
+
+/// Write a baked glTF: binary (`.glb`) when `binary`, else JSON with an embedded buffer.
+pub fn write_gltf(path: &Path, bake: &Bake, binary: bool) -> Result<(), ExportError> {
+    use serde_json::json;
+    let groups = groups(bake);
+    let mesh = bake.mesh;
+    let total: usize = groups.iter().map(|g| g.vertices.len()).sum();
+    let tri_total: usize = groups.iter().map(|g| g.triangles.len()).sum();
+    // Buffer: positions, colours, radiosities (each all groups in order), then indices.
+    let vec3_bytes = total * 12;
+    let mut buf: Vec<u8> = Vec::with_capacity(3 * vec3_bytes + tri_total * 12);
+    for g in &groups {
+        for &v in &g.vertices {
+            push_f32s(&mut buf, &mesh.vertices[v as usize].to_array());
+        }
+    }
+    for g in &groups {
+        for &v in &g.vertices {
+            push_f32s(&mut buf, &bake.display(bake.vertex_radiosity[v as usize]));
+        }
+    }
+    for g in &groups {
+        for &v in &g.vertices {
+            let b = bake.vertex_radiosity[v as usize];
+            push_f32s(&mut buf, &[b.r as f32, b.g as f32, b.b as f32]);
+        }
+    }
+    for g in &groups {
+        for t in &g.triangles {
+            for i in t {
+                buf.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+    }
+    let index_bytes = tri_total * 12;
+
+    let mut accessors = Vec::new();
+    let mut primitives = Vec::new();
+    let mut materials = Vec::new();
+    let (mut voff, mut ioff) = (0usize, 0usize);
+    for g in &groups {
+        let n = g.vertices.len();
+        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+        for &v in &g.vertices {
+            let p = mesh.vertices[v as usize].to_array();
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let base = accessors.len();
+        accessors.push(
+            json!({"bufferView": 0, "byteOffset": voff * 12, "componentType": 5126,
+            "count": n, "type": "VEC3", "min": lo, "max": hi}),
+        );
+        accessors.push(
+            json!({"bufferView": 1, "byteOffset": voff * 12, "componentType": 5126,
+            "count": n, "type": "VEC3"}),
+        );
+        accessors.push(
+            json!({"bufferView": 2, "byteOffset": voff * 12, "componentType": 5126,
+            "count": n, "type": "VEC3"}),
+        );
+        accessors.push(
+            json!({"bufferView": 3, "byteOffset": ioff * 12, "componentType": 5125,
+            "count": g.triangles.len() * 3, "type": "SCALAR"}),
+        );
+        voff += n;
+        ioff += g.triangles.len();
+        let m = &bake.scene.materials[g.material];
+        primitives.push(json!({
+            "attributes": {"POSITION": base, "COLOR_0": base + 1, "_RADIOSITY": base + 2},
+            "indices": base + 3,
+            "material": materials.len(),
+            "mode": 4
+        }));
+        materials.push(json!({
+            "name": m.name,
+            "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0],
+                "metallicFactor": 0.0, "roughnessFactor": 1.0},
+            "extensions": {"KHR_materials_unlit": {}},
+            "extras": {"radiosity": {"reflectance": m.reflectance.to_array(),
+                "emission": m.emission.to_array()}}
+        }));
+    }
+    let mut nodes = vec![json!({"name": bake.scene.name, "mesh": 0})];
+    let mut cameras = Vec::new();
+    if let Some(c) = bake.camera {
+        let diag = crate::geom::Aabb::from_points(mesh.vertices.iter()).diagonal();
+        cameras.push(json!({"type": "perspective", "perspective": {
+            "yfov": c.fov_y_deg.to_radians(), "znear": (diag * 1e-3).max(1e-6)}}));
+        nodes.push(
+            json!({"name": "camera", "camera": 0, "translation": c.eye.to_array(),
+            "rotation": look_rotation(c.target - c.eye, c.up)}),
+        );
+    }
+    let buffer_length = buf.len();
+    let mut buffer = json!({"byteLength": buffer_length});
+    if !binary {
+        buffer["uri"] = json!(format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&buf)
+        ));
+    }
+    let mut root = json!({
+        "asset": {"version": "2.0", "generator": concat!("radiosity ", env!("CARGO_PKG_VERSION"))},
+        "extensionsUsed": ["KHR_materials_unlit"],
+        "scene": 0,
+        "scenes": [{"name": bake.scene.name, "nodes": (0..nodes.len()).collect::<Vec<_>>()}],
+        "nodes": nodes,
+        "meshes": [{"name": bake.scene.name, "primitives": primitives}],
+        "materials": materials,
+        "accessors": accessors,
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": vec3_bytes, "byteStride": 12, "target": 34962},
+            {"buffer": 0, "byteOffset": vec3_bytes, "byteLength": vec3_bytes, "byteStride": 12, "target": 34962},
+            {"buffer": 0, "byteOffset": 2 * vec3_bytes, "byteLength": vec3_bytes, "byteStride": 12, "target": 34962},
+            {"buffer": 0, "byteOffset": 3 * vec3_bytes, "byteLength": index_bytes, "target": 34963}
+        ],
+        "buffers": [buffer]
+    });
+    if !cameras.is_empty() {
+        root["cameras"] = json!(cameras);
+    }
+    let text = serde_json::to_string(&root).map_err(|e| ExportError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(e),
+    })?;
+    write_atomic(path, |out| {
+        if !binary {
+            return out.write_all(text.as_bytes());
+        }
+        // GLB: header, JSON chunk padded with spaces, BIN chunk padded with zeros (4-byte
+        // alignment for both, as the specification requires).
+        let mut json_bytes = text.into_bytes();
+        while json_bytes.len() % 4 != 0 {
+            json_bytes.push(b' ');
+        }
+        while buf.len() % 4 != 0 {
+            buf.push(0);
+        }
+        let total = 12 + 8 + json_bytes.len() + 8 + buf.len();
+        out.write_all(b"glTF")?;
+        out.write_all(&2u32.to_le_bytes())?;
+        out.write_all(&(total as u32).to_le_bytes())?;
+        out.write_all(&(json_bytes.len() as u32).to_le_bytes())?;
+        out.write_all(&0x4E4F_534Au32.to_le_bytes())?;
+        out.write_all(&json_bytes)?;
+        out.write_all(&(buf.len() as u32).to_le_bytes())?;
+        out.write_all(&0x004E_4942u32.to_le_bytes())?;
+        out.write_all(&buf)
+    })
+}
+
+/// Write a baked binary little-endian PLY.
+pub fn write_ply(path: &Path, bake: &Bake) -> Result<(), ExportError> {
+    let mesh = bake.mesh;
+    write_atomic(path, |out| {
+        write!(
+            out,
+            "ply\nformat binary_little_endian 1.0\n\
+             comment radiosity {}: baked radiosity of scene '{}'\n\
+             comment red green blue: display colour, sRGB, after exposure scale {}\n\
+             comment radiosity_*: linear radiosity, W/m2 (scene units)\n\
+             element vertex {}\n\
+             property float x\nproperty float y\nproperty float z\n\
+             property uchar red\nproperty uchar green\nproperty uchar blue\n\
+             property float radiosity_red\nproperty float radiosity_green\nproperty float radiosity_blue\n\
+             element face {}\n\
+             property list uchar uint vertex_indices\n\
+             property float reflectance_red\nproperty float reflectance_green\nproperty float reflectance_blue\n\
+             property float emission_red\nproperty float emission_green\nproperty float emission_blue\n\
+             end_header\n",
+            env!("CARGO_PKG_VERSION"),
+            bake.scene.name.replace('\n', " "),
+            bake.scale,
+            mesh.vertices.len(),
+            mesh.patches.len()
+        )?;
+        let mut rec = Vec::with_capacity(64);
+        for (p, b) in mesh.vertices.iter().zip(bake.vertex_radiosity) {
+            rec.clear();
+            push_f32s(&mut rec, &p.to_array());
+            for c in bake.display(*b) {
+                rec.push((srgb_encode(c) * 255.0 + 0.5) as u8);
+            }
+            push_f32s(&mut rec, &[b.r as f32, b.g as f32, b.b as f32]);
+            out.write_all(&rec)?;
+        }
+        for p in &mesh.patches {
+            rec.clear();
+            let n = corners(p);
+            rec.push(n as u8);
+            for &v in &p.vertices[..n] {
+                rec.extend_from_slice(&v.to_le_bytes());
+            }
+            let m = &bake.scene.materials[p.material as usize];
+            let (r, e) = (m.reflectance, m.emission);
+            push_f32s(&mut rec, &[r.r, r.g, r.b, e.r, e.g, e.b].map(|x| x as f32));
+            out.write_all(&rec)?;
+        }
+        Ok(())
+    })
+}

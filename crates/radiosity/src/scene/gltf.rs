@@ -1,0 +1,727 @@
+//! glTF 2.0 scenes: `.gltf` (JSON with `.bin` buffers and images beside it, or embedded as
+//! `data:` URIs) and `.glb` (binary container).
+//!
+//! **Geometry.** Every mesh instance of the default scene (or of the first scene when none is
+//! marked default), each in its node's world transform. Primitive modes `TRIANGLES`,
+//! `TRIANGLE_STRIP` and `TRIANGLE_FAN` become triangles; points and lines are refused (radiosity
+//! needs surfaces). Each triangle is one [`Polygon`]; the triangles of one primitive instance
+//! share a smoothing group ([`Polygon::group`]), so a wall made of two triangles is shaded as one
+//! wall. A node whose world transform mirrors (negative determinant) has its triangles reversed,
+//! as the glTF specification asks, so they keep facing the same way. Zero-area triangles (used by
+//! strips to restart) are skipped and counted in a warning. Units are metres, as glTF defines;
+//! +y is up.
+//!
+//! **Materials.** Reflectance ρ = `baseColorFactor` (rgb) × the mean of `baseColorTexture` over
+//! its texels (decoded from sRGB to linear first), scaled down to a largest channel of
+//! [`MAX_REFLECTANCE`] when it is brighter (glTF's default white is 1.0, which no real surface
+//! reaches; reported in a warning). Emission E (W/m²) = `emissiveFactor` ×
+//! `KHR_materials_emissive_strength` × the mean of `emissiveTexture`. A primitive without a
+//! material gets glTF's default material (white, scaled as above). A `doubleSided` material
+//! gives two polygons back to back, as a two-sided MGF surface does, unless
+//! [`super::LoadOptions::one_sided`]. Metallic, roughness, transparency and `COLOR_0` are
+//! ignored (with a warning): the engine is diffuse, and reflectance is per material.
+//!
+//! **Baked files.** A material whose `extras` hold `{"radiosity": {"reflectance": [r, g, b],
+//! "emission": [r, g, b]}}` takes ρ and E from there. The baked files this engine writes
+//! ([`crate::export::gltf`]) carry them, because their visible material is unlit white (the light
+//! is in the vertex colours): so a baked file can be read back and solved again.
+//!
+//! **Camera.** The first node of the scene (depth first, in document order) that carries a
+//! perspective camera gives the default view: eye at the node's origin, looking down its −z, up
+//! along its +y, `yfov` as the vertical field of view.
+//!
+//! **Errors** name the file and the glTF object: a truncated `.glb`, a missing or short buffer
+//! file, an accessor reaching past its buffer view, an index out of range, a point or line mode,
+//! a required extension the engine does not implement (Draco, meshopt compression), a cycle in
+//! the node hierarchy.
+
+use super::mgf::MAX_REFLECTANCE;
+use super::{Camera, Material, Polygon, Scene, SceneError};
+use crate::color::Rgb;
+use crate::geom::Vec3;
+use ::gltf::accessor::{DataType, Dimensions};
+use ::gltf::mesh::Mode;
+use base64::Engine as _;
+use glam::{DMat4, DVec3};
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+/// Extensions whose presence in `extensionsRequired` we can honour: the two we read, and those
+/// that only change what we ignore anyway.
+const SUPPORTED_REQUIRED: &[&str] = &[
+    "KHR_materials_emissive_strength",
+    "KHR_materials_unlit",
+    "KHR_texture_transform",
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_mesh_quantization",
+];
+
+fn invalid(path: &Path, message: impl Into<String>) -> SceneError {
+    SceneError::Invalid {
+        place: path.display().to_string(),
+        message: message.into(),
+    }
+}
+
+/// Split a `.glb` into its JSON chunk and optional BIN chunk, checking every length first.
+fn split_glb<'a>(path: &Path, bytes: &'a [u8]) -> Result<(&'a [u8], Option<&'a [u8]>), SceneError> {
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
+    if bytes.len() < 12 {
+        return Err(invalid(
+            path,
+            format!(
+                "truncated GLB: {} bytes, shorter than the 12-byte header",
+                bytes.len()
+            ),
+        ));
+    }
+    let version = u32_at(bytes, 4);
+    if version != 2 {
+        return Err(invalid(
+            path,
+            format!("GLB version {version} is not supported (only 2)"),
+        ));
+    }
+    let length = u32_at(bytes, 8) as usize;
+    if length > bytes.len() {
+        return Err(invalid(
+            path,
+            format!(
+                "truncated GLB: the header says {length} bytes but the file has {}",
+                bytes.len()
+            ),
+        ));
+    }
+    let data = &bytes[..length];
+    let (mut json, mut bin) = (None, None);
+    let mut pos = 12;
+    while pos < data.len() {
+        if pos + 8 > data.len() {
+            return Err(invalid(
+                path,
+                format!("truncated GLB: chunk header at byte {pos} is cut off"),
+            ));
+        }
+        let len = u32_at(data, pos) as usize;
+        let kind = u32_at(data, pos + 4);
+        let start = pos + 8;
+        if len > data.len() - start {
+            return Err(invalid(
+                path,
+                format!(
+                    "truncated GLB: the chunk at byte {pos} says {len} bytes but {} remain",
+                    data.len() - start
+                ),
+            ));
+        }
+        let chunk = &data[start..start + len];
+        match kind {
+            0x4E4F_534A if json.is_none() && pos == 12 => json = Some(chunk),
+            0x004E_4942 if json.is_some() && bin.is_none() => bin = Some(chunk),
+            _ if pos == 12 => {
+                return Err(invalid(path, "GLB: the first chunk is not JSON"));
+            }
+            _ => {} // unknown chunks are skipped, as the specification allows
+        }
+        pos = start + len;
+    }
+    let json = json.ok_or_else(|| invalid(path, "GLB has no JSON chunk"))?;
+    Ok((json, bin))
+}
+
+/// Decode `%XX` escapes of a relative URI.
+fn percent_decode(uri: &str) -> String {
+    let b = uri.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+struct Reader<'a> {
+    path: &'a Path,
+    doc: &'a ::gltf::Document,
+    buffers: Vec<Vec<u8>>,
+    /// Mean linear colour of each image already decoded.
+    image_means: HashMap<usize, Rgb>,
+    warnings: Vec<String>,
+}
+
+impl<'a> Reader<'a> {
+    /// The bytes a URI names: a `data:` URI, or a file relative to the glTF file.
+    fn resolve(&self, uri: &str, what: &str) -> Result<(Vec<u8>, String), SceneError> {
+        if let Some(rest) = uri.strip_prefix("data:") {
+            let (_, payload) = rest.split_once(";base64,").ok_or_else(|| {
+                invalid(
+                    self.path,
+                    format!("{what}: only base64 data URIs are supported"),
+                )
+            })?;
+            let bytes = base64::engine::general_purpose::STANDARD
+                .decode(payload.trim())
+                .map_err(|e| invalid(self.path, format!("{what}: bad base64 data URI ({e})")))?;
+            return Ok((bytes, format!("{what} (data URI)")));
+        }
+        if uri.contains("://") {
+            return Err(invalid(
+                self.path,
+                format!("{what}: URI '{uri}' is not a relative file path (nothing is downloaded)"),
+            ));
+        }
+        let file: PathBuf = self
+            .path
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join(percent_decode(uri));
+        let bytes = std::fs::read(&file).map_err(|e| {
+            invalid(
+                self.path,
+                format!("{what}: cannot read '{}': {e}", file.display()),
+            )
+        })?;
+        Ok((bytes, file.display().to_string()))
+    }
+
+    fn load_buffers(&mut self, bin: Option<&[u8]>) -> Result<(), SceneError> {
+        for b in self.doc.buffers() {
+            let what = format!("buffers[{}]", b.index());
+            let (data, from) = match b.source() {
+                ::gltf::buffer::Source::Bin => match bin {
+                    Some(bin) => (bin.to_vec(), format!("{what} (GLB binary chunk)")),
+                    None => {
+                        return Err(invalid(
+                            self.path,
+                            format!("{what} has no URI and there is no GLB binary chunk"),
+                        ))
+                    }
+                },
+                ::gltf::buffer::Source::Uri(uri) => self.resolve(uri, &what)?,
+            };
+            if data.len() < b.length() {
+                return Err(invalid(
+                    self.path,
+                    format!(
+                        "{from}: {} bytes, but the glTF says the buffer has {}",
+                        data.len(),
+                        b.length()
+                    ),
+                ));
+            }
+            self.buffers.push(data);
+        }
+        Ok(())
+    }
+
+    /// The components of every element of an accessor, as f64 (normalised integers mapped to
+    /// [0, 1] or [−1, 1] as the specification defines), checked against its view and buffer.
+    fn read(&self, acc: &::gltf::Accessor, what: &str) -> Result<(Vec<f64>, usize), SceneError> {
+        let err = |m: String| {
+            invalid(
+                self.path,
+                format!("accessors[{}] ({what}): {m}", acc.index()),
+            )
+        };
+        if acc.sparse().is_some() {
+            return Err(err("sparse accessors are not supported".into()));
+        }
+        let dims = match acc.dimensions() {
+            Dimensions::Scalar => 1,
+            Dimensions::Vec2 => 2,
+            Dimensions::Vec3 => 3,
+            Dimensions::Vec4 => 4,
+            d => return Err(err(format!("{d:?} elements are not expected here"))),
+        };
+        let ty = acc.data_type();
+        let size = ty.size();
+        let count = acc.count();
+        let Some(view) = acc.view() else {
+            return Ok((vec![0.0; count * dims], dims)); // no view: all zeros
+        };
+        let buffer = &self.buffers[view.buffer().index()];
+        if view.offset() + view.length() > buffer.len() {
+            return Err(err(format!(
+                "bufferViews[{}] reaches byte {} of a {}-byte buffer",
+                view.index(),
+                view.offset() + view.length(),
+                buffer.len()
+            )));
+        }
+        let data = &buffer[view.offset()..view.offset() + view.length()];
+        let elem = size * dims;
+        let stride = view.stride().unwrap_or(elem);
+        if count > 0 && acc.offset() + stride * (count - 1) + elem > data.len() {
+            return Err(err(format!(
+                "{count} elements from byte {} do not fit in bufferViews[{}] ({} bytes)",
+                acc.offset(),
+                view.index(),
+                data.len()
+            )));
+        }
+        let norm = acc.normalized();
+        let mut out = Vec::with_capacity(count * dims);
+        for i in 0..count {
+            let at = acc.offset() + i * stride;
+            for c in 0..dims {
+                let b = &data[at + c * size..at + (c + 1) * size];
+                let v = match ty {
+                    DataType::I8 => {
+                        let x = b[0] as i8 as f64;
+                        if norm {
+                            (x / 127.0).max(-1.0)
+                        } else {
+                            x
+                        }
+                    }
+                    DataType::U8 => {
+                        let x = b[0] as f64;
+                        if norm {
+                            x / 255.0
+                        } else {
+                            x
+                        }
+                    }
+                    DataType::I16 => {
+                        let x = i16::from_le_bytes([b[0], b[1]]) as f64;
+                        if norm {
+                            (x / 32767.0).max(-1.0)
+                        } else {
+                            x
+                        }
+                    }
+                    DataType::U16 => {
+                        let x = u16::from_le_bytes([b[0], b[1]]) as f64;
+                        if norm {
+                            x / 65535.0
+                        } else {
+                            x
+                        }
+                    }
+                    DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+                    DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+                };
+                out.push(v);
+            }
+        }
+        Ok((out, dims))
+    }
+
+    /// Mean linear colour (rgb) of a texture's image.
+    fn texture_mean(&mut self, tex: ::gltf::Texture, what: &str) -> Result<Rgb, SceneError> {
+        let image = tex.source();
+        if let Some(m) = self.image_means.get(&image.index()) {
+            return Ok(*m);
+        }
+        let what = format!("{what}: images[{}]", image.index());
+        let (bytes, from) = match image.source() {
+            ::gltf::image::Source::View { view, .. } => {
+                let buffer = &self.buffers[view.buffer().index()];
+                let end = view.offset() + view.length();
+                if end > buffer.len() {
+                    return Err(invalid(
+                        self.path,
+                        format!("{what}: its buffer view reaches past the buffer"),
+                    ));
+                }
+                (buffer[view.offset()..end].to_vec(), what.clone())
+            }
+            ::gltf::image::Source::Uri { uri, .. } => self.resolve(uri, &what)?,
+        };
+        let img = image::load_from_memory(&bytes)
+            .map_err(|e| invalid(self.path, format!("{from}: cannot decode the image ({e})")))?
+            .to_rgba8();
+        let lut: Vec<f64> = (0..256)
+            .map(|v| crate::color::srgb_to_linear(v as f64 / 255.0))
+            .collect();
+        let mut sum = [0.0f64; 3];
+        for p in img.pixels() {
+            for c in 0..3 {
+                sum[c] += lut[p.0[c] as usize];
+            }
+        }
+        let n = (img.width() as f64 * img.height() as f64).max(1.0);
+        let mean = Rgb::new(sum[0] / n, sum[1] / n, sum[2] / n);
+        self.image_means.insert(image.index(), mean);
+        Ok(mean)
+    }
+
+    /// The engine's material for a glTF material (None: the default material), and whether it
+    /// is double-sided.
+    fn material(
+        &mut self,
+        m: &::gltf::Material,
+        clipped: &mut usize,
+    ) -> Result<(Material, bool), SceneError> {
+        let what = match m.index() {
+            Some(i) => format!("materials[{i}]"),
+            None => "default material".to_string(),
+        };
+        let name = m.name().map(str::to_string).unwrap_or_else(|| what.clone());
+        if let Some(baked) = baked_material(m) {
+            let (rho, e) = baked
+                .map_err(|msg| invalid(self.path, format!("{what}: extras.radiosity: {msg}")))?;
+            return Ok((Material::emitter(&name, rho, e), m.double_sided()));
+        }
+        let pbr = m.pbr_metallic_roughness();
+        let f = pbr.base_color_factor();
+        let mut rho = Rgb::new(f[0] as f64, f[1] as f64, f[2] as f64);
+        if let Some(t) = pbr.base_color_texture() {
+            rho = rho * self.texture_mean(t.texture(), &format!("{what}.baseColorTexture"))?;
+        }
+        if rho.max_channel() > MAX_REFLECTANCE {
+            rho = rho * (MAX_REFLECTANCE / rho.max_channel());
+            *clipped += 1;
+        }
+        let ef = m.emissive_factor();
+        let strength = m.emissive_strength().unwrap_or(1.0) as f64;
+        let mut e = Rgb::new(ef[0] as f64, ef[1] as f64, ef[2] as f64) * strength;
+        if let Some(t) = m.emissive_texture() {
+            if e.max_channel() > 0.0 {
+                e = e * self.texture_mean(t.texture(), &format!("{what}.emissiveTexture"))?;
+            }
+        }
+        Ok((Material::emitter(&name, rho, e), m.double_sided()))
+    }
+}
+
+/// `extras.radiosity` of a material, if present: `Ok((ρ, E))` or what is wrong with it.
+fn baked_material(m: &::gltf::Material) -> Option<Result<(Rgb, Rgb), String>> {
+    let raw = m.extras().as_ref()?;
+    let v: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
+    let r = v.get("radiosity")?;
+    let rgb = |key: &str| -> Result<Rgb, String> {
+        let a = r
+            .get(key)
+            .and_then(|x| x.as_array())
+            .filter(|a| a.len() == 3)
+            .ok_or_else(|| format!("'{key}' must be an array of 3 numbers"))?;
+        let c: Vec<f64> = a
+            .iter()
+            .map(|x| {
+                x.as_f64()
+                    .ok_or_else(|| format!("'{key}' must be an array of 3 numbers"))
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Rgb::new(c[0], c[1], c[2]))
+    };
+    Some(rgb("reflectance").and_then(|rho| Ok((rho, rgb("emission")?))))
+}
+
+/// Load a glTF 2.0 scene (`.gltf` or `.glb`); `one_sided` drops the back copies of
+/// double-sided materials.
+pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let (json, bin) = if bytes.starts_with(b"glTF") {
+        split_glb(path, &bytes)?
+    } else {
+        (&bytes[..], None)
+    };
+    let gltf = ::gltf::Gltf::from_slice(json).map_err(|e| match e {
+        ::gltf::Error::Validation(list) => {
+            let (p, err) = &list[0];
+            let more = match list.len() {
+                1 => String::new(),
+                n => format!(" (and {} more problems)", n - 1),
+            };
+            invalid(path, format!("invalid glTF: {p}: {err}{more}"))
+        }
+        e => invalid(path, format!("invalid glTF: {e}")),
+    })?;
+    let doc = &gltf.document;
+    for ext in doc.extensions_required() {
+        if !SUPPORTED_REQUIRED.contains(&ext) {
+            return Err(invalid(
+                path,
+                format!("the file requires extension {ext}, which this engine does not implement"),
+            ));
+        }
+    }
+    let mut r = Reader {
+        path,
+        doc,
+        buffers: Vec::new(),
+        image_means: HashMap::new(),
+        warnings: Vec::new(),
+    };
+    r.load_buffers(bin)?;
+
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| invalid(path, "the file has no scene"))?;
+
+    // Depth-first over the node tree, with world transforms.
+    let mut stack: Vec<(::gltf::Node, DMat4, usize)> =
+        scene.nodes().map(|n| (n, DMat4::IDENTITY, 0)).collect();
+    stack.reverse();
+    let node_count = doc.nodes().count();
+    let mut materials: Vec<Material> = Vec::new();
+    let mut material_of: HashMap<Option<usize>, (usize, bool)> = HashMap::new();
+    let mut polygons: Vec<Polygon> = Vec::new();
+    let mut camera: Option<Camera> = None;
+    let (mut degenerate, mut clipped, mut group) = (0usize, 0usize, 0u32);
+    let mut ignored: BTreeMap<&'static str, usize> = BTreeMap::new();
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth > node_count {
+            return Err(invalid(
+                path,
+                format!("nodes[{}]: the node hierarchy has a cycle", node.index()),
+            ));
+        }
+        let local =
+            DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(|x| x as f64)));
+        let world = parent * local;
+        for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+            stack.push((child, world, depth + 1));
+        }
+        if let (None, Some(cam)) = (camera, node.camera()) {
+            match cam.projection() {
+                ::gltf::camera::Projection::Perspective(p) => {
+                    let eye = world.transform_point3(DVec3::ZERO);
+                    let forward = world.transform_vector3(-DVec3::Z).normalize_or_zero();
+                    let up = world.transform_vector3(DVec3::Y).normalize_or_zero();
+                    let c = Camera {
+                        eye: eye.as_vec3(),
+                        target: (eye + forward).as_vec3(),
+                        up: up.as_vec3(),
+                        fov_y_deg: p.yfov().to_degrees(),
+                    };
+                    c.validate().map_err(|m| {
+                        invalid(
+                            path,
+                            format!("cameras[{}] on nodes[{}]: {m}", cam.index(), node.index()),
+                        )
+                    })?;
+                    camera = Some(c);
+                }
+                ::gltf::camera::Projection::Orthographic(_) => {
+                    *ignored.entry("orthographic cameras").or_default() += 1;
+                }
+            }
+        }
+        if node.light().is_some() {
+            *ignored
+                .entry("punctual lights (only emissive surfaces emit)")
+                .or_default() += 1;
+        }
+        let Some(mesh) = node.mesh() else { continue };
+        let mirrored = world.determinant() < 0.0;
+        for prim in mesh.primitives() {
+            let what = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+            let mode = prim.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                return Err(invalid(
+                    path,
+                    format!(
+                        "{what}: mode {mode:?} ({}) is not supported: radiosity needs surfaces (TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN)",
+                        mode.as_gl_enum()
+                    ),
+                ));
+            }
+            let pos_acc = prim
+                .get(&::gltf::Semantic::Positions)
+                .ok_or_else(|| invalid(path, format!("{what} has no POSITION attribute")))?;
+            let (pos, dims) = r.read(&pos_acc, &format!("{what}.POSITION"))?;
+            if dims != 3 {
+                return Err(invalid(path, format!("{what}: POSITION must be VEC3")));
+            }
+            let nverts = pos.len() / 3;
+            let indices: Vec<u32> = match prim.indices() {
+                Some(acc) => {
+                    if !matches!(
+                        acc.data_type(),
+                        DataType::U8 | DataType::U16 | DataType::U32
+                    ) || acc.dimensions() != Dimensions::Scalar
+                    {
+                        return Err(invalid(
+                            path,
+                            format!("{what}: indices must be unsigned integer scalars"),
+                        ));
+                    }
+                    let (idx, _) = r.read(&acc, &format!("{what}.indices"))?;
+                    let mut out = Vec::with_capacity(idx.len());
+                    for (k, &i) in idx.iter().enumerate() {
+                        if i as usize >= nverts {
+                            return Err(invalid(
+                                path,
+                                format!("{what}: index {i} (entry {k} of accessors[{}]) is out of range: the primitive has {nverts} vertices", acc.index()),
+                            ));
+                        }
+                        out.push(i as u32);
+                    }
+                    out
+                }
+                None => (0..nverts as u32).collect(),
+            };
+            let tris: Vec<[u32; 3]> = match mode {
+                Mode::Triangles => {
+                    if indices.len() % 3 != 0 {
+                        return Err(invalid(
+                            path,
+                            format!(
+                                "{what}: {} indices is not a multiple of 3 for TRIANGLES",
+                                indices.len()
+                            ),
+                        ));
+                    }
+                    indices
+                        .chunks_exact(3)
+                        .map(|t| [t[0], t[1], t[2]])
+                        .collect()
+                }
+                Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+                    .map(|i| {
+                        let (a, b, c) = (indices[i], indices[i + 1], indices[i + 2]);
+                        if i % 2 == 0 {
+                            [a, b, c]
+                        } else {
+                            [b, a, c]
+                        }
+                    })
+                    .collect(),
+                _ => (1..indices.len().saturating_sub(1))
+                    .map(|i| [indices[0], indices[i], indices[i + 1]])
+                    .collect(),
+            };
+            if prim.get(&::gltf::Semantic::Colors(0)).is_some() {
+                *ignored
+                    .entry("COLOR_0 vertex colours (reflectance is per material)")
+                    .or_default() += 1;
+            }
+            let gm = prim.material();
+            let (mat, double) = match material_of.get(&gm.index()) {
+                Some(v) => *v,
+                None => {
+                    let (m, double) = r.material(&gm, &mut clipped)?;
+                    let pbr = gm.pbr_metallic_roughness();
+                    if pbr.metallic_factor() > 0.0
+                        && gm.index().is_some()
+                        && !gm.unlit()
+                        && baked_material(&gm).is_none()
+                    {
+                        *ignored
+                            .entry("metallic factors (surfaces are diffuse)")
+                            .or_default() += 1;
+                    }
+                    materials.push(m);
+                    let v = (materials.len() - 1, double);
+                    material_of.insert(gm.index(), v);
+                    v
+                }
+            };
+            let world_pos: Vec<Vec3> = pos
+                .chunks_exact(3)
+                .map(|p| {
+                    world
+                        .transform_point3(DVec3::new(p[0], p[1], p[2]))
+                        .as_vec3()
+                })
+                .collect();
+            group += 1;
+            let front = group;
+            let back = if double && !one_sided {
+                group += 1;
+                Some(group)
+            } else {
+                None
+            };
+            for t in tris {
+                let mut v = vec![
+                    world_pos[t[0] as usize],
+                    world_pos[t[1] as usize],
+                    world_pos[t[2] as usize],
+                ];
+                if !v.iter().all(|p| p.is_finite()) {
+                    return Err(invalid(
+                        path,
+                        format!("{what}: a vertex position is not finite"),
+                    ));
+                }
+                if super::vector_area(&v).length() <= 0.0
+                    || t[0] == t[1]
+                    || t[1] == t[2]
+                    || t[0] == t[2]
+                {
+                    degenerate += 1;
+                    continue;
+                }
+                if mirrored {
+                    v.reverse();
+                }
+                let reversed = back.map(|b| (v.iter().rev().copied().collect(), b));
+                polygons.push(Polygon {
+                    vertices: v,
+                    material: mat,
+                    line: 0,
+                    group: front,
+                });
+                if let Some((vertices, b)) = reversed {
+                    polygons.push(Polygon {
+                        vertices,
+                        material: mat,
+                        line: 0,
+                        group: b,
+                    });
+                }
+            }
+        }
+    }
+    // Slivers too thin for f32 relative to the scene (the threshold of Scene::validate) count
+    // as degenerate too.
+    let size = crate::geom::Aabb::from_points(polygons.iter().flat_map(|p| p.vertices.iter()))
+        .diagonal() as f64;
+    let before = polygons.len();
+    polygons.retain(|p| super::polygon_area(&p.vertices) > (1e-7 * size).powi(2));
+    degenerate += before - polygons.len();
+    let mut warnings = std::mem::take(&mut r.warnings);
+    if degenerate > 0 {
+        warnings.push(format!(
+            "{}: skipped {degenerate} zero-area triangles",
+            path.display()
+        ));
+    }
+    if clipped > 0 {
+        warnings.push(format!(
+            "{}: {clipped} materials had a base colour brighter than a reflectance of {MAX_REFLECTANCE} and were scaled down to it",
+            path.display()
+        ));
+    }
+    if !ignored.is_empty() {
+        let list: Vec<String> = ignored.iter().map(|(k, n)| format!("{k} ×{n}")).collect();
+        warnings.push(format!("{}: ignored: {}", path.display(), list.join(", ")));
+    }
+    if polygons.is_empty() {
+        return Err(invalid(path, "the scene has no triangles"));
+    }
+    Ok(Scene {
+        name: path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("scene")
+            .to_string(),
+        source: Some(path.to_path_buf()),
+        materials,
+        polygons,
+        camera,
+        warnings,
+        origins: vec![],
+        up: Some(Vec3::Y),
+    })
+}
