@@ -4,6 +4,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+#[path = "../../radiosity/tests/validator.rs"]
+mod validator;
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_radiosity"))
 }
@@ -1192,4 +1195,248 @@ fn mgf_scene_solves_and_renders() {
         lit * 10 > 9 * img.pixels().count() as usize,
         "mostly black: {lit}"
     );
+}
+
+/// The committed glTF and PLY test scenes of the library (`crates/radiosity/tests/data`).
+fn test_scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../radiosity/tests/data")
+        .join(name)
+}
+
+/// The share of pixels brighter than 20 of 255 in any channel.
+fn lit_fraction(png: &Path) -> f64 {
+    let img = image::open(png).unwrap().to_rgb8();
+    let lit = img.pixels().filter(|p| p.0.iter().any(|c| *c > 20)).count();
+    lit as f64 / img.pixels().count() as f64
+}
+
+fn succeed(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+#[test]
+fn gltf_and_ply_scenes_solve_render_and_bake() {
+    let dir = scratch("interchange");
+    let mut written = Vec::new();
+    for (scene, stem) in [
+        ("room.gltf", "room"),
+        ("room.ply", "box"),
+        ("room_be.ply", "box_be"),
+    ] {
+        let src = test_scene(scene);
+        let src = src.to_str().unwrap();
+        // Solved and rendered: the glTF from its own camera, the PLY boxes from inside.
+        let png = format!("{stem}.png");
+        let text = succeed(&run(
+            &[
+                "render",
+                src,
+                "--patches",
+                "1500",
+                "--width",
+                "64",
+                "--height",
+                "48",
+                "-o",
+                &png,
+            ],
+            &dir,
+        ));
+        assert!(text.contains("escaped"), "{text}");
+        assert!(lit_fraction(&dir.join(&png)) > 0.9, "{stem}: mostly black");
+        // Baked to every format.
+        for ext in ["glb", "gltf", "ply"] {
+            let out = format!("{stem}.{ext}");
+            succeed(&run(&["solve", src, "--patches", "1500", "-o", &out], &dir));
+            if ext != "ply" {
+                written.push(dir.join(&out));
+            }
+        }
+    }
+    // A baked file is a scene too: rendered from the camera it carries.
+    succeed(&run(
+        &[
+            "render",
+            "room.glb",
+            "--patches",
+            "1500",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "-o",
+            "again.png",
+        ],
+        &dir,
+    ));
+    assert!(lit_fraction(&dir.join("again.png")) > 0.9);
+    // The built-in scenes baked too, with a darker exposure.
+    for (scene, out) in [("cornell", "cornell.glb"), ("cube", "cube.gltf")] {
+        succeed(&run(
+            &[
+                "solve",
+                scene,
+                "--patches",
+                "800",
+                "--exposure",
+                "-1",
+                "-o",
+                out,
+            ],
+            &dir,
+        ));
+        written.push(dir.join(out));
+    }
+    validator::validate_gltf(&written);
+}
+
+/// A one-triangle glTF with its buffer in `tri.bin`: three positions (36 bytes) then the
+/// given u16 indices; `mode` is the primitive mode.
+fn tiny_gltf(dir: &Path, indices: &[u16], mode: u32, extra_accessor: bool) {
+    let mut bin = Vec::new();
+    for p in [[0f32, 0., 0.], [1., 0., 0.], [0., 0., -1.]] {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for i in indices {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    std::fs::write(dir.join("tri.bin"), &bin).unwrap();
+    let index_accessor = if extra_accessor { 7 } else { 1 };
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+        "nodes": [{{"mesh": 0}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": {index_accessor}, "mode": {mode}, "material": 0}}]}}],
+        "materials": [{{"emissiveFactor": [1, 1, 1]}}],
+        "accessors": [
+          {{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, -1], "max": [1, 0, 0]}},
+          {{"bufferView": 1, "componentType": 5123, "count": {n}, "type": "SCALAR"}}],
+        "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 36}},
+                        {{"buffer": 0, "byteOffset": 36, "byteLength": {len}}}],
+        "buffers": [{{"uri": "tri.bin", "byteLength": {total}}}]}}"#,
+        n = indices.len(),
+        len = indices.len() * 2,
+        total = bin.len()
+    );
+    std::fs::write(dir.join("tri.gltf"), json).unwrap();
+}
+
+#[test]
+fn tiny_gltf_is_a_valid_scene() {
+    let dir = scratch("tiny-gltf");
+    tiny_gltf(&dir, &[0, 1, 2], 4, false);
+    let text = succeed(&run(
+        &["solve", "tri.gltf", "--patches", "50", "-o", "out.csv"],
+        &dir,
+    ));
+    assert!(text.contains("(1 polygons)"), "{text}");
+}
+
+#[test]
+fn bad_gltf_and_ply_fail_cleanly() {
+    // (setup, scene file, files it leaves, expected fragments)
+    type Setup = fn(&Path);
+    let cases: &[(Setup, &str, &[&str], &[&str])] = &[
+        (
+            |d| tiny_gltf(d, &[0, 1, 5], 4, false),
+            "tri.gltf",
+            &["tri.gltf", "tri.bin"],
+            &["tri.gltf", "index 5", "out of range"],
+        ),
+        (
+            |d| tiny_gltf(d, &[0, 1, 2], 1, false),
+            "tri.gltf",
+            &["tri.gltf", "tri.bin"],
+            &["tri.gltf", "mode LINES", "not supported"],
+        ),
+        (
+            |d| tiny_gltf(d, &[0, 1, 2], 4, true),
+            "tri.gltf",
+            &["tri.gltf", "tri.bin"],
+            &["tri.gltf", "indices", "Index out of bounds"],
+        ),
+        (
+            |d| {
+                tiny_gltf(d, &[0, 1, 2], 4, false);
+                std::fs::remove_file(d.join("tri.bin")).unwrap();
+            },
+            "tri.gltf",
+            &["tri.gltf"],
+            &["tri.gltf", "tri.bin", "cannot read"],
+        ),
+        (
+            |d| {
+                // A real .glb cut short.
+                let out = run(
+                    &["solve", "cornell", "--patches", "100", "-o", "whole.glb"],
+                    d,
+                );
+                assert!(out.status.success());
+                let bytes = std::fs::read(d.join("whole.glb")).unwrap();
+                std::fs::write(d.join("cut.glb"), &bytes[..bytes.len() / 2]).unwrap();
+                std::fs::remove_file(d.join("whole.glb")).unwrap();
+            },
+            "cut.glb",
+            &["cut.glb"],
+            &["cut.glb", "truncated GLB"],
+        ),
+        (
+            |d| {
+                let ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nproperty float emission\nend_header\n0 0 0\n1 0 0\n0 0 -1\n3 0 1 2 1\n";
+                std::fs::write(d.join("lie.ply"), ply).unwrap();
+            },
+            "lie.ply",
+            &["lie.ply"],
+            &["lie.ply:14", "element counts (4 vertex, 1 face)"],
+        ),
+        (
+            |d| {
+                let ply = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nproperty float emission\nend_header\n0 0 0\n1 0 0\n0 0 -1\n3 0 1 2 1\n";
+                std::fs::write(d.join("lie.ply"), ply).unwrap();
+            },
+            "lie.ply",
+            &["lie.ply"],
+            &["lie.ply:", "element counts (2 vertex, 1 face)"],
+        ),
+        (
+            |d| {
+                let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nproperty float emission\nend_header\n0 0 0\n1 0 0\n0 0 -1\n3 0 1 7 1\n";
+                std::fs::write(d.join("idx.ply"), ply).unwrap();
+            },
+            "idx.ply",
+            &["idx.ply"],
+            &["idx.ply:14", "index 7 is out of range"],
+        ),
+        (
+            |d| {
+                let mut ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n".to_vec();
+                for c in [0f32, 0., 0., 1., 0., 0.] {
+                    ply.extend_from_slice(&c.to_le_bytes());
+                }
+                std::fs::write(d.join("short.ply"), ply).unwrap();
+            },
+            "short.ply",
+            &["short.ply"],
+            &["short.ply", "ends in vertex 2", "declares 3 vertex"],
+        ),
+    ];
+    for (k, (setup, scene, keep, needles)) in cases.iter().enumerate() {
+        let dir = scratch(&format!("badmesh{k}"));
+        setup(&dir);
+        for (cmd, out) in [
+            ("render", "out.png"),
+            ("solve", "out.glb"),
+            ("solve", "out.ply"),
+        ] {
+            let out = run(&[cmd, scene, "-o", out], &dir);
+            assert_fails(&out, needles, &dir, keep);
+        }
+    }
 }

@@ -1,6 +1,8 @@
 //! Integration tests of the library: physics against closed forms and invariants.
 
 mod formfactors;
+mod interchange;
 mod physics;
 mod renderpark;
 mod solvers;
+mod validator;

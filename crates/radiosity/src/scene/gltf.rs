@@ -530,7 +530,13 @@ pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
                 return Err(invalid(
                     path,
                     format!(
-                        "{what}: mode {mode:?} ({}) is not supported: radiosity needs surfaces (TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN)",
+                        "{what}: mode {} ({}) is not supported: radiosity needs surfaces (TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN)",
+                        match mode {
+                            Mode::Points => "POINTS",
+                            Mode::Lines => "LINES",
+                            Mode::LineLoop => "LINE_LOOP",
+                            _ => "LINE_STRIP",
+                        },
                         mode.as_gl_enum()
                     ),
                 ));

@@ -324,6 +324,7 @@ fn header(path: &Path, bytes: &[u8]) -> Result<(Format, Vec<Element>, usize, usi
 fn read_element(
     c: &mut Cursor,
     e: &Element,
+    counts: &str,
     keep: &[&str],
     list: Option<&str>,
 ) -> Result<Columns, SceneError> {
@@ -387,9 +388,9 @@ fn read_element(
             }
             if let Some(t) = c.tokens.next() {
                 return Err(c.fail(format!(
-                    "{} {i} has more values than its {} properties (extra '{t}')",
+                    "{} {i} has more values than its {} properties (extra '{t}'): do the header's element counts ({counts}) match the data?",
                     e.name,
-                    e.props.len()
+                    e.props.len(),
                 )));
             }
         }
@@ -497,10 +498,15 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         line: header_lines,
         tokens: Vec::new().into_iter(),
     };
+    let counts = elements
+        .iter()
+        .map(|e| format!("{} {}", e.count, e.name))
+        .collect::<Vec<_>>()
+        .join(", ");
     let (mut vcols, mut fcols) = (None, None);
     for e in &elements {
         let list = (e.name == "face").then_some(index_list.as_str());
-        let cols = read_element(&mut cursor, e, &keep, list)?;
+        let cols = read_element(&mut cursor, e, &counts, &keep, list)?;
         match e.name.as_str() {
             "vertex" if vcols.is_none() => vcols = Some(cols),
             "face" if fcols.is_none() => fcols = Some(cols),
@@ -513,13 +519,8 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         _ => cursor.pos < bytes.len(),
     };
     if trailing {
-        let counts: Vec<String> = elements
-            .iter()
-            .map(|e| format!("{} {}", e.count, e.name))
-            .collect();
         return Err(cursor.fail(format!(
-            "the data goes on after the elements the header declares ({})",
-            counts.join(", ")
+            "the data goes on after the elements the header declares ({counts})"
         )));
     }
     let (v, f) = (vcols.unwrap_or_default(), fcols.unwrap_or_default());
