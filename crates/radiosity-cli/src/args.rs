@@ -17,8 +17,11 @@ pub struct Cli {
 pub enum Command {
     /// Solve a scene and render a picture (PNG, or linear HDR as .exr / .pfm).
     Render(RenderArgs),
-    /// Solve a scene and write one CSV row per patch.
+    /// Solve a scene and write one CSV row per patch, or bake the radiosity into a mesh's vertex
+    /// colours (.glb, .gltf, .ply).
     Solve(SolveCmdArgs),
+    /// Show a baked glTF as a glTF viewer does (unlit, COLOR_0 as is), without solving.
+    View(ViewArgs),
     /// Measure ray-casting speed and the time to converge the Cornell box.
     Bench(BenchArgs),
     /// Solve a given linear system: a form-factor matrix (Matrix Market) and a patches CSV.
@@ -311,4 +314,27 @@ pub struct BenchArgs {
     /// by monte-carlo and by hemicube, with time and peak memory.
     #[arg(long)]
     pub city: bool,
+}
+
+/// `radiosity view`.
+#[derive(Debug, Args)]
+pub struct ViewArgs {
+    /// A baked glTF (.glb or .gltf) whose primitives carry COLOR_0, e.g. from
+    /// `radiosity solve SCENE --out baked.glb`.
+    pub file: PathBuf,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    /// Output image: .png (COLOR_0 sRGB-encoded), .exr or .pfm (COLOR_0 linear). Default
+    /// FILE.png.
+    #[arg(long, short, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Image width in pixels.
+    #[arg(long, value_name = "W", default_value_t = 512)]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, value_name = "H", default_value_t = 512)]
+    pub height: u32,
+    /// Camera rays per pixel.
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub spp: u32,
 }

@@ -9,7 +9,7 @@ mod settings;
 mod view_factors;
 
 use anyhow::{Context, Result};
-use args::{Cli, Command, RenderArgs, SolveArgs, SolveCmdArgs, SolveSystemArgs};
+use args::{Cli, Command, RenderArgs, SolveArgs, SolveCmdArgs, SolveSystemArgs, ViewArgs};
 use clap::Parser;
 use radiosity::export::bake::{self, Bake, BakeFormat};
 use radiosity::export::{write_image, write_patches_csv, write_radiosity_csv, ImageFormat, Trace};
@@ -28,6 +28,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(a) => render(a),
         Command::Solve(a) => solve(a),
+        Command::View(a) => view(a),
         Command::Bench(a) => bench::run(a),
         Command::SolveSystem(a) => solve_system(a),
         Command::FormFactors(a) => view_factors::run(a),
@@ -292,6 +293,70 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
         "wrote       {} ({} patches) in {write_s:.3} s",
         a.out.display(),
         solution.mesh.len()
+    );
+    Ok(())
+}
+
+/// Show a baked glTF's vertex colours from its camera (or `--eye`/`--target`), as an unlit
+/// glTF viewer would: no solving, PNG pixels are the sRGB encoding of COLOR_0.
+fn view(a: ViewArgs) -> Result<()> {
+    use radiosity::mesh::{Mesh, MeshParams};
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_output(&a.file.to_string_lossy(), "png"));
+    ImageFormat::from_path(&out)?;
+    settings::check_output(&out)?;
+    if a.width == 0 || a.height == 0 || a.spp == 0 {
+        anyhow::bail!("--width, --height and --spp must be at least 1");
+    }
+    let ext = a
+        .file
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    if !matches!(ext.as_deref(), Some("glb" | "gltf")) {
+        anyhow::bail!(
+            "{}: view shows baked glTF files (.glb or .gltf)",
+            a.file.display()
+        );
+    }
+    let (scene, colours) = scene::gltf::load_vertex_colours(&a.file)?;
+    for w in &scene.warnings {
+        eprintln!("radiosity: warning: {w}");
+    }
+    scene.validate_geometry()?;
+    let mesh = Mesh::build(&scene, MeshParams::Faces)?;
+    // Each triangle is one patch; give its vertices the colours of the polygon's corners.
+    let mut values = vec![radiosity::Rgb::BLACK; mesh.vertices.len()];
+    for p in &mesh.patches {
+        let poly = &scene.polygons[p.surface as usize];
+        for &v in &p.vertices[..3] {
+            let at = mesh.vertices[v as usize];
+            let j = poly.vertices.iter().position(|q| *q == at).unwrap_or(0);
+            // The renderer shows radiance B/π; scale by π so that pixels are COLOR_0.
+            values[v as usize] = colours[p.surface as usize][j] * std::f64::consts::PI;
+        }
+    }
+    let bvh = radiosity::accel::Bvh::build(&mesh);
+    let own = scene.camera.unwrap_or_else(|| {
+        radiosity::render::camera::default_camera(&bvh, radiosity::geom::Vec3::Y)
+    });
+    let camera = settings::camera(own, &a.camera)?;
+    let params = RenderParams {
+        width: a.width,
+        height: a.height,
+        samples_per_pixel: a.spp,
+        seed: 1,
+    };
+    let image = radiosity::render::render(&mesh, &bvh, &values, &camera, &params, &|_| {});
+    write_image(&out, &image, 1.0).context("writing the image")?;
+    println!(
+        "wrote       {} ({}×{}, {} triangles shown with their COLOR_0)",
+        out.display(),
+        a.width,
+        a.height,
+        mesh.patches.len()
     );
     Ok(())
 }

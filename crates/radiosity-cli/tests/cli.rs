@@ -1440,3 +1440,48 @@ fn bad_gltf_and_ply_fail_cleanly() {
         }
     }
 }
+
+#[test]
+fn view_shows_a_baked_gltf_without_solving() {
+    let dir = scratch("view");
+    succeed(&run(
+        &["solve", "cornell", "--patches", "800", "-o", "baked.glb"],
+        &dir,
+    ));
+    let text = succeed(&run(
+        &[
+            "view",
+            "baked.glb",
+            "--width",
+            "96",
+            "--height",
+            "96",
+            "-o",
+            "shot.png",
+        ],
+        &dir,
+    ));
+    assert!(text.contains("triangles shown"), "{text}");
+    let img = image::open(dir.join("shot.png")).unwrap().to_rgb8();
+    // Seen through the open side, from the camera stored in the file: the box fills the view,
+    // and the light, far brighter than the walls, is clipped to white.
+    assert!(lit_fraction(&dir.join("shot.png")) > 0.9);
+    assert!(img.pixels().any(|p| p.0 == [255, 255, 255]));
+    // A glTF without vertex colours, and a PLY, are refused.
+    let room = test_scene("room.gltf");
+    let out = run(&["view", room.to_str().unwrap(), "-o", "room.png"], &dir);
+    assert_fails(
+        &out,
+        &["room.gltf", "no COLOR_0"],
+        &dir,
+        &["baked.glb", "shot.png"],
+    );
+    let ply = test_scene("room.ply");
+    let out = run(&["view", ply.to_str().unwrap(), "-o", "room.png"], &dir);
+    assert_fails(
+        &out,
+        &["room.ply", ".glb or .gltf"],
+        &dir,
+        &["baked.glb", "shot.png"],
+    );
+}

@@ -421,6 +421,23 @@ fn baked_material(m: &::gltf::Material) -> Option<Result<(Rgb, Rgb), String>> {
 /// Load a glTF 2.0 scene (`.gltf` or `.glb`); `one_sided` drops the back copies of
 /// double-sided materials.
 pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
+    read_scene(path, one_sided, None)
+}
+
+/// A baked file as a viewer shows it: the scene, and for each polygon (triangle) the linear
+/// `COLOR_0` of its three corners, in the polygon's vertex order. Every primitive must have
+/// `COLOR_0` (VEC3 or VEC4; alpha is ignored).
+pub fn load_vertex_colours(path: &Path) -> Result<(Scene, Vec<[Rgb; 3]>), SceneError> {
+    let mut colours = Vec::new();
+    let scene = read_scene(path, false, Some(&mut colours))?;
+    Ok((scene, colours))
+}
+
+fn read_scene(
+    path: &Path,
+    one_sided: bool,
+    mut colours: Option<&mut Vec<[Rgb; 3]>>,
+) -> Result<Scene, SceneError> {
     let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
         path: path.to_path_buf(),
         source,
@@ -606,7 +623,35 @@ pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
                     .map(|i| [indices[0], indices[i], indices[i + 1]])
                     .collect(),
             };
-            if prim.get(&::gltf::Semantic::Colors(0)).is_some() {
+            let corner_colours: Option<Vec<Rgb>> = match (
+                &colours,
+                prim.get(&::gltf::Semantic::Colors(0)),
+            ) {
+                (None, _) => None,
+                (Some(_), None) => {
+                    return Err(invalid(
+                        path,
+                        format!("{what} has no COLOR_0 vertex colours to show"),
+                    ))
+                }
+                (Some(_), Some(acc)) => {
+                    let (c, dims) = r.read(&acc, &format!("{what}.COLOR_0"))?;
+                    if c.len() / dims.max(1) != nverts || dims < 3 {
+                        return Err(invalid(
+                            path,
+                            format!(
+                                "{what}: COLOR_0 must be VEC3 or VEC4 with one colour per vertex"
+                            ),
+                        ));
+                    }
+                    Some(
+                        c.chunks_exact(dims)
+                            .map(|c| Rgb::new(c[0], c[1], c[2]))
+                            .collect(),
+                    )
+                }
+            };
+            if colours.is_none() && prim.get(&::gltf::Semantic::Colors(0)).is_some() {
                 *ignored
                     .entry("COLOR_0 vertex colours (reflectance is per material)")
                     .or_default() += 1;
@@ -668,8 +713,20 @@ pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
                     degenerate += 1;
                     continue;
                 }
+                let mut corner = corner_colours
+                    .as_ref()
+                    .map(|c| [c[t[0] as usize], c[t[1] as usize], c[t[2] as usize]]);
                 if mirrored {
                     v.reverse();
+                    if let Some(c) = &mut corner {
+                        c.reverse();
+                    }
+                }
+                if let (Some(out), Some(c)) = (colours.as_deref_mut(), corner) {
+                    out.push(c);
+                    if back.is_some() {
+                        out.push([c[2], c[1], c[0]]);
+                    }
                 }
                 let reversed = back.map(|b| (v.iter().rev().copied().collect(), b));
                 polygons.push(Polygon {
@@ -694,7 +751,22 @@ pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
     let size = crate::geom::Aabb::from_points(polygons.iter().flat_map(|p| p.vertices.iter()))
         .diagonal() as f64;
     let before = polygons.len();
-    polygons.retain(|p| super::polygon_area(&p.vertices) > (1e-7 * size).powi(2));
+    let keep: Vec<bool> = polygons
+        .iter()
+        .map(|p| super::polygon_area(&p.vertices) > (1e-7 * size).powi(2))
+        .collect();
+    let mut k = 0;
+    polygons.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+    if let Some(out) = colours.as_deref_mut() {
+        let mut k = 0;
+        out.retain(|_| {
+            k += 1;
+            keep[k - 1]
+        });
+    }
     degenerate += before - polygons.len();
     let mut warnings = std::mem::take(&mut r.warnings);
     if degenerate > 0 {
