@@ -760,7 +760,7 @@ fn read_scene(
         k += 1;
         keep[k - 1]
     });
-    if let Some(out) = colours.as_deref_mut() {
+    if let Some(out) = colours {
         let mut k = 0;
         out.retain(|_| {
             k += 1;
