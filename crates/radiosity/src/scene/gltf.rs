@@ -651,7 +651,9 @@ fn read_scene(
                     )
                 }
             };
-            if colours.is_none() && prim.get(&::gltf::Semantic::Colors(0)).is_some() {
+            // A baked or unlit material's COLOR_0 is light, not reflectance: expected, not lost.
+            let baked = prim.material().unlit() || baked_material(&prim.material()).is_some();
+            if colours.is_none() && !baked && prim.get(&::gltf::Semantic::Colors(0)).is_some() {
                 *ignored
                     .entry("COLOR_0 vertex colours (reflectance is per material)")
                     .or_default() += 1;
