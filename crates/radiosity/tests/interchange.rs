@@ -405,3 +405,56 @@ fn vertex_radiosity_is_seamless_within_a_surface_and_hard_between_surfaces() {
     assert!(shared > 0, "the L wall should be cut into pieces");
     assert!(hard > 0, "the wall and floor meet");
 }
+
+/// Damaged files are errors, never panics: every truncation of a baked `.glb` and of the PLY
+/// boxes, and seeded random byte corruption of the `.glb`, either load or fail with a message.
+#[test]
+fn damaged_files_fail_without_panicking() {
+    use rand::{Rng, SeedableRng};
+    let scene = builtin::cornell();
+    let sol = solve(&scene, &settings(MeshParams::Patches(60), 1));
+    let vertex = vertex_radiosity(&sol.mesh, &sol.radiosity);
+    let bake = Bake {
+        scene: &scene,
+        mesh: &sol.mesh,
+        vertex_radiosity: &vertex,
+        scale: 1.0,
+        camera: scene.camera,
+    };
+    let glb = scratch("damage.glb");
+    bake::write(&glb, &bake).unwrap();
+    let whole = std::fs::read(&glb).unwrap();
+    let cut = scratch("cut.glb");
+    for len in (0..whole.len()).step_by(97) {
+        std::fs::write(&cut, &whole[..len]).unwrap();
+        let r = scene::load(cut.to_str().unwrap());
+        assert!(r.is_err(), "a .glb cut to {len} bytes loaded");
+    }
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+    for _ in 0..200 {
+        let mut bytes = whole.clone();
+        for _ in 0..4 {
+            let at = rng.random_range(0..bytes.len());
+            bytes[at] = rng.random();
+        }
+        std::fs::write(&cut, &bytes).unwrap();
+        if let Err(e) = scene::load(cut.to_str().unwrap()) {
+            assert!(e.to_string().contains("cut.glb"), "{e}");
+        }
+    }
+    for name in ["room.ply", "room_be.ply"] {
+        let whole = std::fs::read(data(name)).unwrap();
+        let cut = scratch(name);
+        for len in 0..whole.len() - 1 {
+            std::fs::write(&cut, &whole[..len]).unwrap();
+            if let Ok(s) = scene::load(cut.to_str().unwrap()) {
+                // Only a cut in the last line's trailing digits can still parse.
+                assert!(
+                    name == "room.ply" && len >= whole.len() - 4,
+                    "{len}: {}",
+                    s.polygons.len()
+                );
+            }
+        }
+    }
+}

@@ -247,21 +247,29 @@ impl<'a> Reader<'a> {
         let size = ty.size();
         let count = acc.count();
         let Some(view) = acc.view() else {
-            return Ok((vec![0.0; count * dims], dims)); // no view: all zeros
+            // No view: all zeros (only meaningful with sparse data, which we refuse).
+            return Err(err("the accessor has no buffer view".into()));
         };
         let buffer = &self.buffers[view.buffer().index()];
-        if view.offset() + view.length() > buffer.len() {
+        let view_end = view.offset().checked_add(view.length());
+        if view_end.is_none_or(|end| end > buffer.len()) {
             return Err(err(format!(
-                "bufferViews[{}] reaches byte {} of a {}-byte buffer",
+                "bufferViews[{}] (offset {}, length {}) reaches past its {}-byte buffer",
                 view.index(),
-                view.offset() + view.length(),
+                view.offset(),
+                view.length(),
                 buffer.len()
             )));
         }
         let data = &buffer[view.offset()..view.offset() + view.length()];
         let elem = size * dims;
         let stride = view.stride().unwrap_or(elem);
-        if count > 0 && acc.offset() + stride * (count - 1) + elem > data.len() {
+        // Checked: counts and offsets come from the file and may be absurd.
+        let last_end = stride
+            .checked_mul(count.saturating_sub(1))
+            .and_then(|x| x.checked_add(acc.offset()))
+            .and_then(|x| x.checked_add(elem));
+        if count > 0 && last_end.is_none_or(|end| end > data.len()) {
             return Err(err(format!(
                 "{count} elements from byte {} do not fit in bufferViews[{}] ({} bytes)",
                 acc.offset(),
@@ -623,34 +631,32 @@ fn read_scene(
                     .map(|i| [indices[0], indices[i], indices[i + 1]])
                     .collect(),
             };
-            let corner_colours: Option<Vec<Rgb>> = match (
-                &colours,
-                prim.get(&::gltf::Semantic::Colors(0)),
-            ) {
-                (None, _) => None,
-                (Some(_), None) => {
-                    return Err(invalid(
-                        path,
-                        format!("{what} has no COLOR_0 vertex colours to show"),
-                    ))
-                }
-                (Some(_), Some(acc)) => {
-                    let (c, dims) = r.read(&acc, &format!("{what}.COLOR_0"))?;
-                    if c.len() / dims.max(1) != nverts || dims < 3 {
+            let corner_colours: Option<Vec<Rgb>> =
+                match (&colours, prim.get(&::gltf::Semantic::Colors(0))) {
+                    (None, _) => None,
+                    (Some(_), None) => {
                         return Err(invalid(
                             path,
-                            format!(
+                            format!("{what} has no COLOR_0 vertex colours to show"),
+                        ))
+                    }
+                    (Some(_), Some(acc)) => {
+                        let (c, dims) = r.read(&acc, &format!("{what}.COLOR_0"))?;
+                        if c.len() / dims.max(1) != nverts || dims < 3 {
+                            return Err(invalid(
+                                path,
+                                format!(
                                 "{what}: COLOR_0 must be VEC3 or VEC4 with one colour per vertex"
                             ),
-                        ));
+                            ));
+                        }
+                        Some(
+                            c.chunks_exact(dims)
+                                .map(|c| Rgb::new(c[0], c[1], c[2]))
+                                .collect(),
+                        )
                     }
-                    Some(
-                        c.chunks_exact(dims)
-                            .map(|c| Rgb::new(c[0], c[1], c[2]))
-                            .collect(),
-                    )
-                }
-            };
+                };
             // A baked or unlit material's COLOR_0 is light, not reflectance: expected, not lost.
             let baked = prim.material().unlit() || baked_material(&prim.material()).is_some();
             if colours.is_none() && !baked && prim.get(&::gltf::Semantic::Colors(0)).is_some() {

@@ -125,7 +125,9 @@ struct Cursor<'a> {
     pos: usize,
     line: usize,
     /// Tokens of the current ASCII line not yet used.
-    tokens: std::vec::IntoIter<&'a str>,
+    /// Tokens of the current ASCII line, and the next one to use (the buffer is reused).
+    tokens: Vec<&'a str>,
+    next: usize,
 }
 
 impl<'a> Cursor<'a> {
@@ -140,7 +142,8 @@ impl<'a> Cursor<'a> {
     /// The next ASCII token, moving to further lines as needed; `None` at the end of the data.
     fn token(&mut self) -> Option<&'a str> {
         loop {
-            if let Some(t) = self.tokens.next() {
+            if let Some(&t) = self.tokens.get(self.next) {
+                self.next += 1;
                 return Some(t);
             }
             if self.pos >= self.bytes.len() {
@@ -151,7 +154,9 @@ impl<'a> Cursor<'a> {
             let text = std::str::from_utf8(&rest[..end]).unwrap_or("\u{fffd}");
             self.pos += (end + 1).min(rest.len());
             self.line += 1;
-            self.tokens = text.split_whitespace().collect::<Vec<_>>().into_iter();
+            self.tokens.clear();
+            self.tokens.extend(text.split_whitespace());
+            self.next = 0;
         }
     }
 
@@ -331,8 +336,10 @@ fn read_element(
     let mut cols = Columns::default();
     for p in &e.props {
         if p.list.is_none() && keep.contains(&p.name.as_str()) {
-            cols.scalars
-                .insert(p.name.clone(), (p.ty, Vec::with_capacity(e.count)));
+            cols.scalars.insert(
+                p.name.clone(),
+                (p.ty, Vec::with_capacity(e.count.min(c.bytes.len()))),
+            );
         }
     }
     let short = |c: &Cursor, i: usize| {
@@ -344,7 +351,7 @@ fn read_element(
     for i in 0..e.count {
         if c.format == Format::Ascii {
             // Each element starts on its own line.
-            c.tokens = Vec::new().into_iter();
+            c.next = c.tokens.len();
         }
         for (k, p) in e.props.iter().enumerate() {
             let what = || format!("property '{}' of {} {i}", p.name, e.name);
@@ -386,7 +393,7 @@ fn read_element(
             if e.props.len() < 2 {
                 cols.lines.push(c.line as u32);
             }
-            if let Some(t) = c.tokens.next() {
+            if let Some(&t) = c.tokens.get(c.next) {
                 return Err(c.fail(format!(
                     "{} {i} has more values than its {} properties (extra '{t}'): do the header's element counts ({counts}) match the data?",
                     e.name,
@@ -496,7 +503,8 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         bytes: &bytes,
         pos: start,
         line: header_lines,
-        tokens: Vec::new().into_iter(),
+        tokens: Vec::new(),
+        next: 0,
     };
     let counts = elements
         .iter()
@@ -534,7 +542,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 
     let mut materials: Vec<Material> = Vec::new();
     let mut material_of: HashMap<[u64; 6], usize> = HashMap::new();
-    let mut polygons = Vec::with_capacity(face_el.count);
+    let mut polygons = Vec::with_capacity(f.list_end.len());
     let (mut clipped, mut uncoloured) = (0usize, 0usize);
     let mut start_idx = 0;
     for (i, &end) in f.list_end.iter().enumerate() {
