@@ -247,15 +247,8 @@ pub struct RenderArgs {
     /// Output image: .png (tone-mapped sRGB), .exr or .pfm (linear radiance). Default SCENE.png.
     #[arg(long, short, value_name = "FILE")]
     pub out: Option<PathBuf>,
-    /// Image width in pixels.
-    #[arg(long, value_name = "W", default_value_t = 512)]
-    pub width: u32,
-    /// Image height in pixels.
-    #[arg(long, value_name = "H", default_value_t = 512)]
-    pub height: u32,
-    /// Camera rays per pixel.
-    #[arg(long, value_name = "N", default_value_t = 4)]
-    pub spp: u32,
+    #[command(flatten)]
+    pub image: ImageArgs,
     /// Exposure adjustment in stops, relative to automatic exposure (PNG only).
     #[arg(
         long,
@@ -328,6 +321,13 @@ pub struct ViewArgs {
     /// FILE.png.
     #[arg(long, short, value_name = "FILE")]
     pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub image: ImageArgs,
+}
+
+/// Picture size and sampling, shared by `render` and `view`.
+#[derive(Debug, Args)]
+pub struct ImageArgs {
     /// Image width in pixels.
     #[arg(long, value_name = "W", default_value_t = 512)]
     pub width: u32,

@@ -14,7 +14,7 @@ use clap::Parser;
 use radiosity::export::bake::{self, Bake, BakeFormat};
 use radiosity::export::{write_image, write_patches_csv, write_radiosity_csv, ImageFormat, Trace};
 use radiosity::pipeline::{self, Event, Solution};
-use radiosity::render::{auto_exposure, RenderParams};
+use radiosity::render::auto_exposure;
 use radiosity::scene::{self, Scene};
 use radiosity::solve::gauss::{bytes_needed, dense_solve_matrix};
 use radiosity::solve::matrix::SparseMatrix;
@@ -202,16 +202,7 @@ fn render(a: RenderArgs) -> Result<()> {
         settings::check_output(t)?;
     }
     settings::settings(&a.solve)?;
-    if a.width == 0 || a.height == 0 {
-        anyhow::bail!(
-            "--width {} --height {}: the image needs at least one pixel",
-            a.width,
-            a.height
-        );
-    }
-    if a.spp == 0 {
-        anyhow::bail!("--spp 0: at least one sample per pixel is needed");
-    }
+    let params = settings::image(&a.image, a.solve.seed)?;
     if !a.exposure.is_finite() {
         anyhow::bail!(
             "--exposure {}: must be a finite number of stops",
@@ -221,14 +212,8 @@ fn render(a: RenderArgs) -> Result<()> {
     settings::threads(a.solve.threads)?;
     let (scene, solution) = solve_scene(&a.solve)?;
     let camera = settings::camera(solution.default_camera(&scene), &a.camera)?;
-    let params = RenderParams {
-        width: a.width,
-        height: a.height,
-        samples_per_pixel: a.spp,
-        seed: a.solve.seed,
-    };
     let t = Instant::now();
-    let bar = report::rows_bar(a.height);
+    let bar = report::rows_bar(params.height);
     let image = solution.render(&camera, &params, &|rows| bar.set_position(rows as u64));
     bar.finish_and_clear();
     let render_s = t.elapsed().as_secs_f64();
@@ -240,9 +225,9 @@ fn render(a: RenderArgs) -> Result<()> {
     println!(
         "wrote       {} ({}×{}, {} samples per pixel)",
         out.display(),
-        a.width,
-        a.height,
-        a.spp
+        params.width,
+        params.height,
+        params.samples_per_pixel
     );
     Ok(())
 }
@@ -307,9 +292,7 @@ fn view(a: ViewArgs) -> Result<()> {
         .unwrap_or_else(|| default_output(&a.file.to_string_lossy(), "png"));
     ImageFormat::from_path(&out)?;
     settings::check_output(&out)?;
-    if a.width == 0 || a.height == 0 || a.spp == 0 {
-        anyhow::bail!("--width, --height and --spp must be at least 1");
-    }
+    let params = settings::image(&a.image, 1)?;
     let ext = a
         .file
         .extension()
@@ -343,19 +326,13 @@ fn view(a: ViewArgs) -> Result<()> {
         radiosity::render::camera::default_camera(&bvh, radiosity::geom::Vec3::Y)
     });
     let camera = settings::camera(own, &a.camera)?;
-    let params = RenderParams {
-        width: a.width,
-        height: a.height,
-        samples_per_pixel: a.spp,
-        seed: 1,
-    };
     let image = radiosity::render::render(&mesh, &bvh, &values, &camera, &params, &|_| {});
     write_image(&out, &image, 1.0).context("writing the image")?;
     println!(
         "wrote       {} ({}×{}, {} triangles shown with their COLOR_0)",
         out.display(),
-        a.width,
-        a.height,
+        params.width,
+        params.height,
         mesh.patches.len()
     );
     Ok(())

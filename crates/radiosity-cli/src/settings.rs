@@ -1,6 +1,6 @@
 //! Arguments to library settings, with the checks that span several flags.
 
-use crate::args::{CameraArgs, SolveArgs};
+use crate::args::{CameraArgs, ImageArgs, SolveArgs};
 use anyhow::{bail, Context, Result};
 use radiosity::formfactor::monte_carlo::MonteCarloParams;
 use radiosity::geom::Vec3;
@@ -142,6 +142,26 @@ pub fn camera(base: Camera, a: &CameraArgs) -> Result<Camera> {
     }
     c.validate().map_err(|m| anyhow::anyhow!("camera: {m}"))?;
     Ok(c)
+}
+
+/// Render parameters from `--width`, `--height` and `--spp` (each at least 1).
+pub fn image(a: &ImageArgs, seed: u64) -> Result<radiosity::render::RenderParams> {
+    if a.width == 0 || a.height == 0 {
+        bail!(
+            "--width {} --height {}: the image needs at least one pixel",
+            a.width,
+            a.height
+        );
+    }
+    if a.spp == 0 {
+        bail!("--spp 0: at least one sample per pixel is needed");
+    }
+    Ok(radiosity::render::RenderParams {
+        width: a.width,
+        height: a.height,
+        samples_per_pixel: a.spp,
+        seed,
+    })
 }
 
 /// Fail early, before any work, if `path` cannot be an output: its folder must exist.

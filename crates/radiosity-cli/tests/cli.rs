@@ -1339,6 +1339,15 @@ fn tiny_gltf_is_a_valid_scene() {
     assert!(text.contains("(1 polygons)"), "{text}");
 }
 
+/// An ASCII PLY triangle whose header declares `vertices` vertices and one face with an
+/// emission, followed by `body`.
+fn ascii_ply(vertices: usize, body: &str) -> String {
+    format!(
+        "ply\nformat ascii 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\nproperty float z\n\
+         element face 1\nproperty list uchar int vertex_indices\nproperty float emission\nend_header\n{body}"
+    )
+}
+
 #[test]
 fn bad_gltf_and_ply_fail_cleanly() {
     // (setup, scene file, files it leaves, expected fragments)
@@ -1389,8 +1398,11 @@ fn bad_gltf_and_ply_fail_cleanly() {
         ),
         (
             |d| {
-                let ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nproperty float emission\nend_header\n0 0 0\n1 0 0\n0 0 -1\n3 0 1 2 1\n";
-                std::fs::write(d.join("lie.ply"), ply).unwrap();
+                std::fs::write(
+                    d.join("lie.ply"),
+                    ascii_ply(4, "0 0 0\n1 0 0\n0 0 -1\n3 0 1 2 1\n"),
+                )
+                .unwrap();
             },
             "lie.ply",
             &["lie.ply"],
@@ -1398,8 +1410,11 @@ fn bad_gltf_and_ply_fail_cleanly() {
         ),
         (
             |d| {
-                let ply = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nproperty float emission\nend_header\n0 0 0\n1 0 0\n0 0 -1\n3 0 1 2 1\n";
-                std::fs::write(d.join("lie.ply"), ply).unwrap();
+                std::fs::write(
+                    d.join("lie.ply"),
+                    ascii_ply(2, "0 0 0\n1 0 0\n0 0 -1\n3 0 1 2 1\n"),
+                )
+                .unwrap();
             },
             "lie.ply",
             &["lie.ply"],
@@ -1407,8 +1422,11 @@ fn bad_gltf_and_ply_fail_cleanly() {
         ),
         (
             |d| {
-                let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nproperty float emission\nend_header\n0 0 0\n1 0 0\n0 0 -1\n3 0 1 7 1\n";
-                std::fs::write(d.join("idx.ply"), ply).unwrap();
+                std::fs::write(
+                    d.join("idx.ply"),
+                    ascii_ply(3, "0 0 0\n1 0 0\n0 0 -1\n3 0 1 7 1\n"),
+                )
+                .unwrap();
             },
             "idx.ply",
             &["idx.ply"],

@@ -797,11 +797,7 @@ fn read_scene(
         return Err(invalid(path, "the scene has no triangles"));
     }
     Ok(Scene {
-        name: path
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("scene")
-            .to_string(),
+        name: super::name_of(path),
         source: Some(path.to_path_buf()),
         materials,
         polygons,

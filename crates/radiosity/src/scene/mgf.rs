@@ -1226,11 +1226,7 @@ pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
     }
     let origins = std::mem::take(&mut r.origins);
     let scene = Scene {
-        name: path
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("scene")
-            .to_string(),
+        name: super::name_of(path),
         source: Some(path.to_path_buf()),
         materials: r.materials,
         polygons: r.polygons,

@@ -323,6 +323,14 @@ pub fn vector_area(v: &[Vec3]) -> Vec3 {
     s * 0.5
 }
 
+/// A scene's name from its file: the file stem.
+fn name_of(path: &Path) -> String {
+    path.file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("scene")
+        .to_string()
+}
+
 /// Choices made while reading a scene file.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LoadOptions {

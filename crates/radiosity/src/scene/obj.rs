@@ -270,11 +270,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         ));
     }
     Ok(Scene {
-        name: path
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("scene")
-            .to_string(),
+        name: super::name_of(path),
         source: Some(path.to_path_buf()),
         materials,
         polygons,
