@@ -1388,6 +1388,7 @@ fn bad_gltf_and_ply_fail_cleanly() {
                     d,
                 );
                 assert!(out.status.success());
+                validator::validate_gltf(&[d.join("whole.glb")]);
                 let bytes = std::fs::read(d.join("whole.glb")).unwrap();
                 std::fs::write(d.join("cut.glb"), &bytes[..bytes.len() / 2]).unwrap();
                 std::fs::remove_file(d.join("whole.glb")).unwrap();
@@ -1480,6 +1481,7 @@ fn view_shows_a_baked_gltf_without_solving() {
         &dir,
     ));
     assert!(text.contains("triangles shown"), "{text}");
+    validator::validate_gltf(&[dir.join("baked.glb")]);
     let img = image::open(dir.join("shot.png")).unwrap().to_rgb8();
     // Seen through the open side, from the camera stored in the file: the box fills the view,
     // and the light, far brighter than the walls, is clipped to white.

@@ -423,6 +423,7 @@ fn damaged_files_fail_without_panicking() {
     };
     let glb = scratch("damage.glb");
     bake::write(&glb, &bake).unwrap();
+    crate::validator::validate_gltf(std::slice::from_ref(&glb));
     let whole = std::fs::read(&glb).unwrap();
     let cut = scratch("cut.glb");
     for len in (0..whole.len()).step_by(97) {
