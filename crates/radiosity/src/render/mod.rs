@@ -106,20 +106,25 @@ pub fn vertex_radiosity(mesh: &Mesh, patch_values: &[Rgb]) -> Vec<Rgb> {
             ],
         )
     };
-    let mut order: Vec<u32> = (0..nv as u32)
-        .filter(|&v| weight[v as usize] > 0.0)
+    // Keys computed once per vertex, not per comparison.
+    let mut keyed: Vec<((u64, [u32; 3]), u32)> = (0..nv)
+        .filter(|&v| weight[v] > 0.0)
+        .map(|v| (key(v), v as u32))
         .collect();
-    order.par_sort_unstable_by_key(|&v| key(v as usize));
+    keyed.par_sort_unstable_by_key(|k| k.0);
+    for n in &mut normal {
+        *n = n.normalize_or_zero();
+    }
     let cos_crease = crate::scene::CREASE_ANGLE_DEG.to_radians().cos();
-    for run in order.chunk_by(|a, b| key(*a as usize) == key(*b as usize)) {
+    for run in keyed.chunk_by(|a, b| a.0 == b.0) {
         if run.len() < 2 {
             continue;
         }
-        for &i in run {
-            let ni = normal[i as usize].normalize_or_zero();
+        for &(_, i) in run {
+            let ni = normal[i as usize];
             let (mut s, mut w) = (Rgb::BLACK, 0.0);
-            for &j in run {
-                if normal[j as usize].normalize_or_zero().dot(ni) >= cos_crease {
+            for &(_, j) in run {
+                if normal[j as usize].dot(ni) >= cos_crease {
                     s += sum[j as usize];
                     w += weight[j as usize];
                 }

@@ -156,7 +156,6 @@ struct Reader<'a> {
     buffers: Vec<Vec<u8>>,
     /// Mean linear colour of each image already decoded.
     image_means: HashMap<usize, Rgb>,
-    warnings: Vec<String>,
 }
 
 impl<'a> Reader<'a> {
@@ -480,7 +479,6 @@ fn read_scene(
         doc,
         buffers: Vec::new(),
         image_means: HashMap::new(),
-        warnings: Vec::new(),
     };
     r.load_buffers(bin)?;
 
@@ -776,7 +774,7 @@ fn read_scene(
         });
     }
     degenerate += before - polygons.len();
-    let mut warnings = std::mem::take(&mut r.warnings);
+    let mut warnings = Vec::new();
     if degenerate > 0 {
         warnings.push(format!(
             "{}: skipped {degenerate} zero-area triangles",
