@@ -28,8 +28,8 @@ pub enum Command {
     SolveSystem(SolveSystemArgs),
     /// Compute a view-factor (form-factor) matrix and write it as Matrix Market.
     FormFactors(FormFactorsArgs),
-    /// Reproduce the papers' experiments: `convergence` (003_… section 6, figures 3–8) or
-    /// `complexity` (000_…'s claims as N grows). Writes CSVs, plots (SVG and PNG) and a
+    /// Reproduce the papers' experiments: `convergence` (Gortler et al. section 6, figures 3–8) or
+    /// `complexity` (Szirmay-Kalos & Márton's claims as N grows). Writes CSVs, plots (SVG and PNG) and a
     /// Markdown summary.
     Experiment(ExperimentArgs),
 }

@@ -5,15 +5,15 @@
 use crate::args::BenchArgs;
 use anyhow::{bail, Result};
 use radiosity::accel::Bvh;
-use radiosity::formfactor::monte_carlo::{estimate_all_rows, trace_random_rays};
+use radiosity::formfactor::monte_carlo::trace_random_rays;
 use radiosity::formfactor::{
-    closed_form, Estimator, Method as FfMethod, Params as FfParams, Storage,
+    closed_form, Estimator, FormFactorMethod, Params as FfParams, Storage,
 };
 use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
-use radiosity::pipeline::{self, PatchData, Settings};
+use radiosity::pipeline::{self, Settings};
 use radiosity::scene::builtin;
-use radiosity::solve::{Method, SolverParams};
+use radiosity::solve::{Solver, SolverParams};
 use std::time::Instant;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -37,13 +37,19 @@ fn solvers(sizes: &[usize], runs: usize) -> Result<()> {
     for &n in sizes {
         let mesh = Mesh::build(&scene, MeshParams::Patches(n))?;
         let bvh = Bvh::build(&mesh);
-        let mut f = estimate_all_rows(&mesh, &bvh, 256, 1);
-        let data = PatchData::new(&scene, &mesh);
-        let system = data.system();
-        for method in Method::ALL {
+        let mut f = radiosity::formfactor::Estimator::new(
+            &mesh,
+            &bvh,
+            radiosity::formfactor::Params::monte_carlo(256, 1),
+        )
+        .expect("valid parameters")
+        .sparse_matrix();
+        let data = pipeline::patch_system(&scene, &mesh);
+        let system = &data;
+        for method in Solver::ALL {
             let iterations = match method {
-                Method::Gauss => 1,
-                Method::Stochastic => 200_000,
+                Solver::Gauss => 1,
+                Solver::Stochastic => 200_000,
                 _ => mesh.len() as u64,
             };
             let params = SolverParams {
@@ -208,7 +214,7 @@ fn form_factor_table(runs: usize) -> Result<()> {
     println!("| method | setting | parallel (F = 0.19982) | perpendicular (F = 0.20004) |");
     println!("|---|---|---|---|");
     let cases = unit_squares();
-    let row = |method: FfMethod, label: String, params: FfParams| -> Result<()> {
+    let row = |method: FormFactorMethod, label: String, params: FfParams| -> Result<()> {
         let mut cells = Vec::new();
         for (_, scene, exact) in &cases {
             let f = ff_estimate(scene, params)?;
@@ -218,9 +224,9 @@ fn form_factor_table(runs: usize) -> Result<()> {
         Ok(())
     };
     for method in [
-        FfMethod::Hemicube,
-        FfMethod::Hemisphere,
-        FfMethod::Tetrahedron,
+        FormFactorMethod::Hemicube,
+        FormFactorMethod::Hemisphere,
+        FormFactorMethod::Tetrahedron,
     ] {
         for p in [32u32, 128, 512] {
             row(
@@ -236,20 +242,20 @@ fn form_factor_table(runs: usize) -> Result<()> {
     }
     for n in [10_000u32, 100_000, 1_000_000] {
         row(
-            FfMethod::MonteCarlo,
+            FormFactorMethod::MonteCarlo,
             format!("n = {n}"),
             FfParams {
-                method: FfMethod::MonteCarlo,
+                method: FormFactorMethod::MonteCarlo,
                 rays: n,
                 ..Default::default()
             },
         )?;
     }
     row(
-        FfMethod::Analytic,
+        FormFactorMethod::Analytic,
         "exact quadrature".into(),
         FfParams {
-            method: FfMethod::Analytic,
+            method: FormFactorMethod::Analytic,
             ..Default::default()
         },
     )?;
@@ -265,7 +271,7 @@ fn form_factor_table(runs: usize) -> Result<()> {
         .map(|&n| Mesh::build(&scene, MeshParams::Patches(n)))
         .collect::<Result<_, _>>()?;
     let bvhs: Vec<Bvh> = meshes.iter().map(Bvh::build).collect();
-    for method in FfMethod::ALL {
+    for method in FormFactorMethod::ALL {
         let mut times = Vec::new();
         for (mesh, bvh) in meshes.iter().zip(&bvhs) {
             let est = Estimator::new(
@@ -326,7 +332,7 @@ fn city() -> Result<()> {
         (
             "monte-carlo, 10,000 rays per row",
             FfParams {
-                method: FfMethod::MonteCarlo,
+                method: FormFactorMethod::MonteCarlo,
                 rays: 10_000,
                 ..Default::default()
             },
@@ -334,7 +340,7 @@ fn city() -> Result<()> {
         (
             "hemicube, P = 64, K = 1",
             FfParams {
-                method: FfMethod::Hemicube,
+                method: FormFactorMethod::Hemicube,
                 resolution: 64,
                 samples: 1,
                 ..Default::default()

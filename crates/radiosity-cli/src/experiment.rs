@@ -9,7 +9,7 @@ use radiosity::experiment::convergence::{self, paper_name, Case, Curve};
 use radiosity::experiment::{self as exp, Progress};
 use radiosity::export::plot::{write_plot, Mark, Plot, Series};
 use radiosity::export::write_atomic;
-use radiosity::solve::Method;
+use radiosity::solve::Solver;
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
@@ -94,7 +94,7 @@ pub fn run(a: ExperimentArgs) -> Result<()> {
     }
 }
 
-fn label(m: Method) -> String {
+fn label(m: Solver) -> String {
     match paper_name(m) {
         Some(p) => format!("{m} ({p})"),
         None => m.name().to_string(),
@@ -136,7 +136,7 @@ fn convergence_experiment(params: &convergence::Params, out: &Path, bars: &mut B
                 below.map_or(String::new(), |p| p.iteration.to_string()),
                 below.map_or(String::new(), |p| p.seconds.to_string()),
             );
-            if c.method == Method::Gauss {
+            if c.method == Solver::Gauss {
                 let _ = writeln!(
                     md,
                     "| {} | – | – | – | – | direct | {} |",
@@ -185,12 +185,12 @@ fn write_case(case: &Case, curves: &[Curve], out: &Path) -> Result<()> {
     // the iterative methods reached, as a marker of when the direct solution is ready.
     let lowest = curves
         .iter()
-        .filter(|c| c.method != Method::Gauss)
+        .filter(|c| c.method != Solver::Gauss)
         .flat_map(|c| c.points.iter().map(|p| p.error.abs()))
         .filter(|&e| e > 0.0)
         .fold(1.0f64, f64::min);
-    let floor = |m: Method, e: f64| {
-        if m == Method::Gauss {
+    let floor = |m: Solver, e: f64| {
+        if m == Solver::Gauss {
             lowest
         } else {
             e.abs().max(1e-12)
@@ -199,9 +199,9 @@ fn write_case(case: &Case, curves: &[Curve], out: &Path) -> Result<()> {
     let series = |x: fn(&convergence::Point) -> f64, with_gauss: bool| -> Vec<Series> {
         curves
             .iter()
-            .filter(|c| with_gauss || c.method != Method::Gauss)
+            .filter(|c| with_gauss || c.method != Solver::Gauss)
             .map(|c| Series {
-                name: if c.method == Method::Gauss {
+                name: if c.method == Solver::Gauss {
                     "gauss (direct: time to B*)".into()
                 } else {
                     label(c.method)
@@ -211,7 +211,7 @@ fn write_case(case: &Case, curves: &[Curve], out: &Path) -> Result<()> {
                     .iter()
                     .map(|p| (x(p), floor(c.method, p.error)))
                     .collect(),
-                mark: if c.method == Method::Gauss {
+                mark: if c.method == Solver::Gauss {
                     Mark::LinePoints
                 } else {
                     Mark::Line

@@ -17,8 +17,8 @@ use radiosity::pipeline::{self, Event, Solution};
 use radiosity::render::auto_exposure;
 use radiosity::scene::{self, Scene};
 use radiosity::solve::gauss::{bytes_needed, dense_solve_matrix};
-use radiosity::solve::matrix::SparseMatrix;
 use radiosity::solve::System;
+use radiosity::system::SparseMatrix;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -82,7 +82,7 @@ fn solve_scene(a: &SolveArgs) -> Result<(Scene, Solution)> {
     let solution = pipeline::solve(&scene, &settings, &mut |e| {
         match e {
             Event::Matrix(m, system) if tracing => {
-                trace = Some(Trace::new(trace_reference(system, m), system.emission));
+                trace = Some(Trace::new(trace_reference(system, m), &system.emission));
             }
             Event::Solve(status, solver) => {
                 if let Some(t) = trace.as_mut() {
@@ -130,18 +130,18 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
         );
     }
     let system = System {
-        area: &patches.area,
-        reflectance: &patches.reflectance,
-        emission: &patches.emission,
+        area: patches.area.to_vec(),
+        reflectance: patches.reflectance.to_vec(),
+        emission: patches.emission.to_vec(),
     };
     let mut params = params;
     params.memory_limit = pipeline::available_memory().unwrap_or(u64::MAX) / 2;
     let mut trace = a
         .trace
         .as_ref()
-        .map(|_| Trace::new(trace_reference(&system, &matrix), system.emission));
+        .map(|_| Trace::new(trace_reference(&system, &matrix), &system.emission));
     let mut progress = report::Progress::new(params.tolerance);
-    let mut solver = radiosity::solve::start(method, system, &mut matrix, &params)?;
+    let mut solver = radiosity::solve::start(method, &system, &mut matrix, &params)?;
     let info = radiosity::solve::run(
         &mut *solver,
         &mut matrix,

@@ -2,12 +2,11 @@
 
 use crate::args::{CameraArgs, ImageArgs, SolveArgs};
 use anyhow::{bail, Context, Result};
-use radiosity::formfactor::monte_carlo::MonteCarloParams;
 use radiosity::geom::Vec3;
 use radiosity::mesh::MeshParams;
 use radiosity::pipeline::Settings;
 use radiosity::scene::Camera;
-use radiosity::solve::{Method, SolverParams};
+use radiosity::solve::{Solver, SolverParams};
 use std::path::Path;
 
 /// Library settings from the shared solve options.
@@ -27,17 +26,18 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
     if a.threads == Some(0) {
         bail!("--threads 0: at least one thread is needed");
     }
-    let ff = radiosity::formfactor::Method::from_name(&a.form_factors).with_context(|| {
-        let names: Vec<&str> = radiosity::formfactor::Method::ALL
-            .iter()
-            .map(|m| m.name())
-            .collect();
-        format!(
-            "--form-factors {}: unknown method (known: {})",
-            a.form_factors,
-            names.join(", ")
-        )
-    })?;
+    let ff =
+        radiosity::formfactor::FormFactorMethod::from_name(&a.form_factors).with_context(|| {
+            let names: Vec<&str> = radiosity::formfactor::FormFactorMethod::ALL
+                .iter()
+                .map(|m| m.name())
+                .collect();
+            format!(
+                "--form-factors {}: unknown method (known: {})",
+                a.form_factors,
+                names.join(", ")
+            )
+        })?;
     if a.resolution < 2 {
         bail!(
             "--resolution {}: at least 2 pixels along a face are needed",
@@ -47,34 +47,32 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
     if a.samples == 0 {
         bail!("--samples 0: at least one point per patch is needed");
     }
-    let geometric = (ff != radiosity::formfactor::Method::MonteCarlo).then_some(
-        radiosity::formfactor::Params {
-            method: ff,
-            resolution: a.resolution,
-            samples: a.samples,
-            rays: a.rays,
-            seed: a.seed,
-        },
-    );
+    let form_factors = radiosity::formfactor::Params {
+        method: ff,
+        resolution: a.resolution,
+        samples: a.samples,
+        rays: a.rays,
+        seed: a.seed,
+        ..radiosity::formfactor::Params::shooting()
+    };
     Ok(Settings {
         mesh,
-        geometric,
-        monte_carlo: MonteCarloParams {
-            rays: a.rays,
-            seed: a.seed,
-            ..Default::default()
+        form_factors,
+        rows: if a.trace.is_some() {
+            radiosity::pipeline::Rows::Stored
+        } else {
+            radiosity::pipeline::Rows::Auto
         },
         solver: method(&a.solver)?,
         params: solver_params(a.tolerance, a.max_iterations, a.omega, a.photons, a.seed)?,
-        store_matrix: a.trace.is_some(),
         memory_limit: 0,
     })
 }
 
 /// The method named by `--solver`.
-pub fn method(name: &str) -> Result<Method> {
-    Method::from_name(name).with_context(|| {
-        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+pub fn method(name: &str) -> Result<Solver> {
+    Solver::from_name(name).with_context(|| {
+        let names: Vec<&str> = Solver::ALL.iter().map(|m| m.name()).collect();
         format!(
             "--solver {name}: unknown method (known: {})",
             names.join(", ")

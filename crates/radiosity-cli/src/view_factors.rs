@@ -5,7 +5,7 @@ use anyhow::{bail, Context, Result};
 use radiosity::accel::Bvh;
 use radiosity::export::{write_patch_table, PatchRow};
 use radiosity::formfactor::{
-    aggregate, enforce, summary, Enforce, Estimator, Method, Params, Storage,
+    aggregate, enforce, summary, Enforce, Estimator, FormFactorMethod, Params, Storage,
 };
 use radiosity::geom::Vec3;
 use radiosity::io::matrix_market;
@@ -22,8 +22,8 @@ fn ext_is(path: &std::path::Path, ext: &str) -> bool {
 
 /// Run the command.
 pub fn run(a: FormFactorsArgs) -> Result<()> {
-    let method = Method::from_name(&a.method).with_context(|| {
-        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+    let method = FormFactorMethod::from_name(&a.method).with_context(|| {
+        let names: Vec<&str> = FormFactorMethod::ALL.iter().map(|m| m.name()).collect();
         format!(
             "--method {}: unknown method (known: {})",
             a.method,
@@ -87,6 +87,7 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         samples: a.samples,
         rays: a.rays,
         seed: a.seed,
+        ..Params::default()
     };
     let estimator = Estimator::new(&mesh, &bvh, params)?;
     let bar = indicatif::ProgressBar::new(mesh.len() as u64);

@@ -32,6 +32,7 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod solve;
+pub mod system;
 
 pub use color::Rgb;
 
@@ -41,9 +42,12 @@ pub enum Error {
     /// The scene could not be read or is not fit to solve.
     #[error(transparent)]
     Scene(#[from] scene::SceneError),
-    /// The linear system is malformed.
+    /// The linear system is malformed, or a solver refused it.
     #[error(transparent)]
     Solve(#[from] solve::SolveError),
+    /// Form-factor parameters are out of range.
+    #[error(transparent)]
+    FormFactors(#[from] formfactor::FormFactorError),
     /// An output could not be written.
     #[error(transparent)]
     Export(#[from] export::ExportError),

@@ -5,33 +5,43 @@
 
 use crate::accel::Bvh;
 use crate::color::Rgb;
-use crate::formfactor::monte_carlo::{estimate_all_rows, MonteCarloParams, MonteCarloRows};
-use crate::formfactor::FormFactorStats;
+use crate::formfactor::{Estimator, FormFactorMethod, FormFactorStats, OnDemandRows};
 use crate::mesh::{Mesh, MeshParams};
 use crate::render::{render, vertex_radiosity, Image, RenderParams};
 use crate::scene::{Camera, Scene};
-use crate::solve::matrix::SparseMatrix;
-use crate::solve::{ambient_term, Info, Method, RowSource, Solver, SolverParams, Status, System};
+use crate::solve::{ambient_term, Info, Solver, SolverParams, SolverState, Status};
+use crate::system::{Operator, SparseMatrix, System};
 use crate::Error;
 use std::time::Instant;
+
+/// Whether every row of F is computed and stored before the solver starts, or computed when
+/// the solver asks for it ([`OnDemandRows`], O(N) memory plus a bounded cache).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Rows {
+    /// On demand for the shooting solvers with Monte Carlo form factors; stored otherwise.
+    #[default]
+    Auto,
+    /// Every row stored first (a trace's reference solution needs the very matrix the solver
+    /// used).
+    Stored,
+    /// Rows on demand for any method; solvers that need every row before they start still get
+    /// them computed up front.
+    OnDemand,
+}
 
 /// Everything that decides a solution.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
     /// How to cut surfaces into patches.
     pub mesh: MeshParams,
-    /// Monte Carlo form factors.
-    pub monte_carlo: MonteCarloParams,
-    /// Another form-factor method (hemicube, hemisphere, tetrahedron, analytic) whose full
-    /// matrix is computed first; `None` for Monte Carlo.
-    pub geometric: Option<crate::formfactor::Params>,
+    /// Form factors: the method and its parameters.
+    pub form_factors: crate::formfactor::Params,
+    /// Stored or on-demand rows.
+    pub rows: Rows,
     /// The solution method.
-    pub solver: Method,
+    pub solver: Solver,
     /// Its parameters (tolerance, iterations, ω, photons, seed, memory).
     pub params: SolverParams,
-    /// Estimate and store every row of F first, whatever the method (a trace's reference
-    /// solution needs the very matrix the method used).
-    pub store_matrix: bool,
     /// Refuse jobs whose estimated memory exceeds this many bytes (0: the machine's available
     /// memory).
     pub memory_limit: u64,
@@ -41,13 +51,24 @@ impl Default for Settings {
     fn default() -> Self {
         Self {
             mesh: MeshParams::default(),
-            monte_carlo: MonteCarloParams::default(),
-            geometric: None,
-            solver: Method::Progressive,
+            form_factors: crate::formfactor::Params::shooting(),
+            rows: Rows::Auto,
+            solver: Solver::Progressive,
             params: SolverParams::default(),
-            store_matrix: false,
             memory_limit: 0,
         }
+    }
+}
+
+impl Settings {
+    /// True when every row of F is computed and stored before the solver starts.
+    pub fn stores_rows(&self) -> bool {
+        self.solver.needs_all_rows()
+            || match self.rows {
+                Rows::Auto => self.form_factors.method != FormFactorMethod::MonteCarlo,
+                Rows::Stored => true,
+                Rows::OnDemand => false,
+            }
     }
 }
 
@@ -70,9 +91,9 @@ pub enum Event<'a> {
     /// A stage begins.
     Stage(Stage),
     /// Every row of F has been estimated and stored: the system to be solved.
-    Matrix(&'a SparseMatrix, &'a System<'a>),
+    Matrix(&'a SparseMatrix, &'a System),
     /// The solver's status before each iteration, and the solver (whose current B can be read).
-    Solve(&'a Status, &'a dyn Solver),
+    Solve(&'a Status, &'a dyn SolverState),
 }
 
 /// Wall-clock seconds per stage.
@@ -95,18 +116,14 @@ pub struct Solution {
     pub mesh: Mesh,
     /// The hierarchy over them.
     pub bvh: Bvh,
-    /// Patch areas (f64).
-    pub area: Vec<f64>,
-    /// Patch reflectances.
-    pub reflectance: Vec<Rgb>,
-    /// Patch emissions.
-    pub emission: Vec<Rgb>,
+    /// The linear system that was solved (areas, reflectances, emissions).
+    pub system: System,
     /// Radiosity per patch (the method's output, without the ambient term).
     pub radiosity: Vec<Rgb>,
     /// Unshot radiosity per patch when a shooting method stopped (zero for the others).
     pub unshot: Vec<Rgb>,
     /// The method used.
-    pub method: Method,
+    pub method: Solver,
     /// The solver's report.
     pub info: Info,
     /// Form-factor work.
@@ -116,22 +133,13 @@ pub struct Solution {
 }
 
 impl Solution {
-    /// The linear system that was solved.
-    pub fn system(&self) -> System<'_> {
-        System {
-            area: &self.area,
-            reflectance: &self.reflectance,
-            emission: &self.emission,
-        }
-    }
-
     /// Radiosity for display: `B_i + ρ_i · ambient` (the ambient term of Cohen et al. 1988, see
     /// [`ambient_term`]), which stands in for the light not yet shot.
     pub fn display_radiosity(&self) -> Vec<Rgb> {
-        let ambient = ambient_term(&self.system(), &self.unshot);
+        let ambient = ambient_term(&self.system, &self.unshot);
         self.radiosity
             .iter()
-            .zip(&self.reflectance)
+            .zip(&self.system.reflectance)
             .map(|(b, r)| *b + *r * ambient)
             .collect()
     }
@@ -154,7 +162,7 @@ impl Solution {
 
     /// Automatic exposure for baked colours ([`crate::render::auto_exposure_patches`]).
     pub fn auto_exposure(&self) -> f32 {
-        crate::render::auto_exposure_patches(&self.display_radiosity(), &self.area)
+        crate::render::auto_exposure_patches(&self.display_radiosity(), &self.system.area)
     }
 
     /// Render the display radiosity, Gouraud-interpolated within surfaces.
@@ -169,39 +177,18 @@ impl Solution {
     }
 }
 
-/// The per-patch data of the radiosity system of a meshed scene, owned.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PatchData {
-    /// Patch areas.
-    pub area: Vec<f64>,
-    /// Patch reflectances (from their materials).
-    pub reflectance: Vec<Rgb>,
-    /// Patch emissions (from their materials).
-    pub emission: Vec<Rgb>,
-}
-
-impl PatchData {
-    /// The areas, reflectances and emissions of `mesh`'s patches in `scene`.
-    pub fn new(scene: &Scene, mesh: &Mesh) -> Self {
-        let material = |p: &crate::mesh::Patch| &scene.materials[p.material as usize];
-        Self {
-            area: mesh.patches.iter().map(|p| p.area as f64).collect(),
-            reflectance: mesh
-                .patches
-                .iter()
-                .map(|p| material(p).reflectance)
-                .collect(),
-            emission: mesh.patches.iter().map(|p| material(p).emission).collect(),
-        }
-    }
-
-    /// The system view the solvers take.
-    pub fn system(&self) -> System<'_> {
-        System {
-            area: &self.area,
-            reflectance: &self.reflectance,
-            emission: &self.emission,
-        }
+/// The linear system of `mesh`'s patches in `scene`: areas, and reflectances and emissions
+/// from their materials. The one bridge from geometry to the solvers.
+pub fn patch_system(scene: &Scene, mesh: &Mesh) -> System {
+    let material = |p: &crate::mesh::Patch| &scene.materials[p.material as usize];
+    System {
+        area: mesh.patches.iter().map(|p| p.area as f64).collect(),
+        reflectance: mesh
+            .patches
+            .iter()
+            .map(|p| material(p).reflectance)
+            .collect(),
+        emission: mesh.patches.iter().map(|p| material(p).emission).collect(),
     }
 }
 
@@ -233,13 +220,12 @@ pub fn solve(
         0 => available_memory().unwrap_or(u64::MAX),
         l => l,
     };
-    let store =
-        settings.store_matrix || settings.solver.needs_all_rows() || settings.geometric.is_some();
+    let store = settings.stores_rows();
     // A stored matrix holds at most min(N, rays) entries a row, 20 bytes each (rows, columns,
     // sampling sums).
     let per_patch = BYTES_PER_PATCH
         + if store {
-            20 * (mesh.len() as u64).min(settings.monte_carlo.rays as u64)
+            20 * (mesh.len() as u64).min(settings.form_factors.rays as u64)
         } else {
             0
         };
@@ -264,8 +250,10 @@ pub fn solve(
             },
         });
     }
-    let mut monte_carlo = settings.monte_carlo;
-    monte_carlo.cache_bytes = monte_carlo.cache_bytes.min(((limit - needed) / 2) as usize);
+    let mut ff = settings.form_factors;
+    ff.cache_bytes = ff.cache_bytes.min(((limit - needed) / 2) as usize);
+    // Parameters are checked before any work.
+    ff.validate()?;
     let mut params = settings.params;
     params.memory_limit = params.memory_limit.min(limit - needed);
 
@@ -275,41 +263,27 @@ pub fn solve(
     let bvh_s = t.elapsed().as_secs_f64();
 
     observer(Event::Stage(Stage::Solve));
-    let PatchData {
-        area,
-        reflectance,
-        emission,
-    } = PatchData::new(scene, &mesh);
-    let system = System {
-        area: &area,
-        reflectance: &reflectance,
-        emission: &emission,
-    };
-    system.validate()?;
+    let system = patch_system(scene, &mesh);
+    system.validate().map_err(crate::solve::SolveError::from)?;
 
+    let estimator = Estimator::new(&mesh, &bvh, ff)?;
     let mut stored;
-    let mut on_demand = MonteCarloRows::new(&mesh, &bvh, monte_carlo);
     let mut form_factors = FormFactorStats::default();
-    let source: &mut dyn RowSource = if store {
+    let mut on_demand = None;
+    let source: &mut dyn Operator = if store {
         let t = Instant::now();
-        stored = match settings.geometric {
-            Some(p) => crate::formfactor::Estimator::new(&mesh, &bvh, p)
-                .map_err(|e| Error::Solve(crate::solve::SolveError::Invalid(e.to_string())))?
-                .matrix(crate::formfactor::Storage::Sparse, &|_| {})
-                .into_sparse(),
-            None => {
-                form_factors.rays = mesh.len() as u64 * monte_carlo.rays as u64;
-                estimate_all_rows(&mesh, &bvh, monte_carlo.rays, monte_carlo.seed)
-            }
-        };
+        stored = estimator.sparse_matrix();
+        if ff.method == FormFactorMethod::MonteCarlo {
+            form_factors.rays = mesh.len() as u64 * ff.rays as u64;
+        }
         form_factors.rows = mesh.len() as u64;
         form_factors.seconds = t.elapsed().as_secs_f64();
         observer(Event::Matrix(&stored, &system));
         &mut stored
     } else {
-        &mut on_demand
+        on_demand.insert(OnDemandRows::new(estimator))
     };
-    let mut solver = crate::solve::start(settings.solver, system, source, &params)?;
+    let mut solver = crate::solve::start(settings.solver, &system, source, &params)?;
     let info = crate::solve::run(&mut *solver, source, &params, false, &mut |s, sv| {
         observer(Event::Solve(s, sv))
     });
@@ -317,10 +291,10 @@ pub fn solve(
     solver.radiosity(&mut radiosity);
     let unshot = solver
         .unshot()
-        .map_or_else(|| vec![Rgb::BLACK; area.len()], <[Rgb]>::to_vec);
+        .map_or_else(|| vec![Rgb::BLACK; system.len()], <[Rgb]>::to_vec);
     drop(solver);
-    if !store {
-        form_factors = on_demand.stats();
+    if let Some(rows) = &on_demand {
+        form_factors = rows.stats();
     }
     let solve_s = (info.seconds - if store { 0.0 } else { form_factors.seconds }).max(0.0);
     Ok(Solution {
@@ -332,9 +306,7 @@ pub fn solve(
         },
         mesh,
         bvh,
-        area,
-        reflectance,
-        emission,
+        system,
         radiosity,
         unshot,
         method: settings.solver,

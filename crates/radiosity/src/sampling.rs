@@ -1,4 +1,4 @@
-//! Random numbers and the two distributions of eq. 7's estimator (000_59d10e371b5f300d.txt,
+//! Random numbers and the two distributions of eq. 7's estimator (Szirmay-Kalos & Márton (1995),
 //! "Randomized form factor calculation"): points uniform over a patch, directions cosine-distributed
 //! about its normal.
 //!

@@ -3,7 +3,7 @@
 
 use radiosity::accel::Bvh;
 use radiosity::color::Rgb;
-use radiosity::formfactor::{aggregate, Estimator, Method, Params, Storage};
+use radiosity::formfactor::{aggregate, Estimator, FormFactorMethod, Params, Storage};
 use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::scene::{builtin, Material, Polygon, Scene};
@@ -83,7 +83,7 @@ fn closed_forms_are_howells_values() {
 #[test]
 fn every_method_matches_howell_with_defaults() {
     for (name, scene, exact) in unit_square_cases() {
-        for method in Method::ALL {
+        for method in FormFactorMethod::ALL {
             let f = face_factor(
                 &scene,
                 Params {
@@ -91,7 +91,7 @@ fn every_method_matches_howell_with_defaults() {
                     ..Default::default()
                 },
             );
-            let tol = if method == Method::Analytic {
+            let tol = if method == FormFactorMethod::Analytic {
                 1e-6
             } else {
                 0.01 * exact
@@ -110,7 +110,11 @@ fn every_method_matches_howell_with_defaults() {
 #[test]
 fn projection_error_shrinks_with_resolution() {
     let (_, scene, exact) = unit_square_cases().remove(0);
-    for method in [Method::Hemicube, Method::Hemisphere, Method::Tetrahedron] {
+    for method in [
+        FormFactorMethod::Hemicube,
+        FormFactorMethod::Hemisphere,
+        FormFactorMethod::Tetrahedron,
+    ] {
         let err = |p: u32| {
             (face_factor(
                 &scene,
@@ -140,7 +144,7 @@ fn one_point_error_is_removed_by_samples() {
     let one = face_factor(
         &scene,
         Params {
-            method: Method::Hemicube,
+            method: FormFactorMethod::Hemicube,
             samples: 1,
             resolution: 256,
             ..Default::default()
@@ -151,7 +155,7 @@ fn one_point_error_is_removed_by_samples() {
     let many = face_factor(
         &scene,
         Params {
-            method: Method::Hemicube,
+            method: FormFactorMethod::Hemicube,
             samples: 16,
             resolution: 256,
             ..Default::default()
@@ -168,7 +172,7 @@ fn monte_carlo_error_follows_one_over_root_n() {
             let f = face_factor(
                 &scene,
                 Params {
-                    method: Method::MonteCarlo,
+                    method: FormFactorMethod::MonteCarlo,
                     rays,
                     seed: 5,
                     ..Default::default()
@@ -210,7 +214,7 @@ fn coaxial_discs_as_polygons() {
     let analytic = face_factor(
         &scene,
         Params {
-            method: Method::Analytic,
+            method: FormFactorMethod::Analytic,
             ..Default::default()
         },
     );
@@ -221,10 +225,10 @@ fn coaxial_discs_as_polygons() {
         "analytic {analytic} vs disc {exact_disc}"
     );
     for method in [
-        Method::Hemicube,
-        Method::Hemisphere,
-        Method::Tetrahedron,
-        Method::MonteCarlo,
+        FormFactorMethod::Hemicube,
+        FormFactorMethod::Hemisphere,
+        FormFactorMethod::Tetrahedron,
+        FormFactorMethod::MonteCarlo,
     ] {
         let params = Params {
             method,
@@ -245,7 +249,7 @@ fn coaxial_discs_as_polygons() {
 /// quadrature's accuracy for the analytic method in a convex room without occlusion.
 #[test]
 fn rows_sum_to_one_in_closed_scenes() {
-    let check = |scene: &Scene, patches: usize, method: Method, tol: f64| {
+    let check = |scene: &Scene, patches: usize, method: FormFactorMethod, tol: f64| {
         let mesh = Mesh::build(scene, MeshParams::Patches(patches)).unwrap();
         let bvh = Bvh::build(&mesh);
         let params = Params {
@@ -269,18 +273,18 @@ fn rows_sum_to_one_in_closed_scenes() {
         );
     };
     let furnace = builtin::furnace();
-    for method in [Method::Hemisphere, Method::MonteCarlo] {
+    for method in [FormFactorMethod::Hemisphere, FormFactorMethod::MonteCarlo] {
         check(&furnace, 150, method, 1e-4);
     }
     // A point-sampled z-buffer may lose or double a pixel where faces meet: the projection
     // methods' rows sum to 1 within two pixels' worth of the largest delta form factor.
     for (method, solid) in [
         (
-            Method::Hemicube,
+            FormFactorMethod::Hemicube,
             radiosity::formfactor::projection::Solid::hemicube(64),
         ),
         (
-            Method::Tetrahedron,
+            FormFactorMethod::Tetrahedron,
             radiosity::formfactor::projection::Solid::tetrahedron(64),
         ),
     ] {
@@ -294,7 +298,7 @@ fn rows_sum_to_one_in_closed_scenes() {
     check(
         &builtin::cube(builtin::CubeVariant::Bright),
         100,
-        Method::Analytic,
+        FormFactorMethod::Analytic,
         1e-6,
     );
 }
@@ -311,7 +315,7 @@ fn methods_agree_on_an_occluded_scene() {
         &mesh,
         &bvh,
         Params {
-            method: Method::MonteCarlo,
+            method: FormFactorMethod::MonteCarlo,
             rays,
             ..Default::default()
         },
@@ -319,7 +323,11 @@ fn methods_agree_on_an_occluded_scene() {
     .unwrap()
     .matrix(Storage::Dense, &|_| {})
     .into_sparse();
-    for method in [Method::Hemisphere, Method::Tetrahedron, Method::Hemicube] {
+    for method in [
+        FormFactorMethod::Hemisphere,
+        FormFactorMethod::Tetrahedron,
+        FormFactorMethod::Hemicube,
+    ] {
         let m = Estimator::new(
             &mesh,
             &bvh,

@@ -9,7 +9,7 @@ use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::pipeline::{self, Settings, Solution};
 use radiosity::render::vertex_radiosity;
 use radiosity::scene::{self, builtin, vector_area, Polygon, Scene};
-use radiosity::solve::Method;
+use radiosity::solve::Solver;
 use std::path::{Path, PathBuf};
 
 fn data(name: &str) -> PathBuf {
@@ -166,11 +166,11 @@ fn ply_ascii_and_big_endian_agree_on_geometry_and_read_colours() {
 fn settings(mesh: MeshParams, seed: u64) -> Settings {
     let mut s = Settings {
         mesh,
-        solver: Method::Gauss,
+        solver: Solver::Gauss,
         ..Default::default()
     };
-    s.monte_carlo.seed = seed;
-    s.monte_carlo.rays = 2000;
+    s.form_factors.seed = seed;
+    s.form_factors.rays = 2000;
     s
 }
 
@@ -205,8 +205,8 @@ fn gather_triangles(original: &Mesh, reread: &Solution) -> Vec<Rgb> {
                 (q.centre - p.centre).length() < original.max_edge,
                 "triangle {k} is not in patch {i}"
             );
-            s += reread.radiosity[k] * reread.area[k];
-            w += reread.area[k];
+            s += reread.radiosity[k] * reread.system.area[k];
+            w += reread.system.area[k];
             k += 1;
         }
         out[i] = s / w;
@@ -227,7 +227,7 @@ fn baked_cornell_box_reads_back_and_solves_to_the_same_radiosity() {
     let scene = builtin::cornell();
     let first = solve(&scene, &settings(MeshParams::Patches(600), 1));
     let second = solve(&scene, &settings(MeshParams::Patches(600), 2));
-    let noise = rms(&first.radiosity, &second.radiosity, &first.area);
+    let noise = rms(&first.radiosity, &second.radiosity, &first.system.area);
     let vertex = vertex_radiosity(&first.mesh, &first.radiosity);
     let bake = Bake {
         scene: &scene,
@@ -269,7 +269,7 @@ fn baked_cornell_box_reads_back_and_solves_to_the_same_radiosity() {
             );
             gather_triangles(&first.mesh, &again)
         };
-        let diff = rms(&first.radiosity, &b, &first.area);
+        let diff = rms(&first.radiosity, &b, &first.system.area);
         eprintln!("{name}: round trip rms difference {diff:.4}, two seeds {noise:.4}");
         assert!(
             diff <= 1.5 * noise,
@@ -277,8 +277,8 @@ fn baked_cornell_box_reads_back_and_solves_to_the_same_radiosity() {
         );
         let power = |b: &[Rgb], a: &[f64]| b.iter().zip(a).map(|(b, a)| *b * *a).sum::<Rgb>();
         let (p0, p1) = (
-            power(&first.radiosity, &first.area),
-            power(&again.radiosity, &again.area),
+            power(&first.radiosity, &first.system.area),
+            power(&again.radiosity, &again.system.area),
         );
         assert!(
             p0.max_abs_diff(p1) <= 0.01 * p0.max_channel(),

@@ -1,11 +1,11 @@
 //! The engine against physics: closed-form form factors (Howell's catalogue), row sums in a
 //! closed enclosure, reciprocity, the white furnace, energy balance, and determinism across
 //! thread counts. Tolerances come from the Monte Carlo estimator's known variance (eq. 7 of
-//! 000_59d10e371b5f300d.txt: σ² = F(1 − F)/n).
+//! Szirmay-Kalos & Márton (1995): σ² = F(1 − F)/n).
 
 use radiosity::accel::Bvh;
 use radiosity::color::Rgb;
-use radiosity::formfactor::monte_carlo::{estimate_row, MonteCarloParams, RowScratch};
+use radiosity::formfactor::monte_carlo::{estimate_row, RowScratch};
 use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::pipeline::{self, Settings};
@@ -127,10 +127,10 @@ fn rows_sum_to_one_in_a_closed_scene() {
 fn furnace_solution(rays: u32, patches: usize) -> pipeline::Solution {
     let settings = Settings {
         mesh: MeshParams::Patches(patches),
-        monte_carlo: MonteCarloParams {
+        form_factors: radiosity::formfactor::Params {
             rays,
             seed: 3,
-            ..Default::default()
+            ..radiosity::formfactor::Params::shooting()
         },
         params: SolverParams {
             tolerance: 1e-7,
@@ -157,12 +157,12 @@ fn furnace_gives_e_over_one_minus_rho() {
     for rays in [256, 1024] {
         let s = furnace_solution(rays, 600);
         assert!(s.info.converged);
-        let total_area: f64 = s.area.iter().sum();
-        let mean_area = total_area / s.area.len() as f64;
+        let total_area: f64 = s.system.area.iter().sum();
+        let mean_area = total_area / s.system.area.len() as f64;
         let mean: Rgb = s
             .radiosity
             .iter()
-            .zip(&s.area)
+            .zip(&s.system.area)
             .map(|(b, a)| *b * *a)
             .sum::<Rgb>()
             / total_area;
@@ -171,7 +171,7 @@ fn furnace_gives_e_over_one_minus_rho() {
         }
         let mut sum_z2 = 0.0;
         let mut sum_rel2 = 0.0;
-        for (b, a) in s.radiosity.iter().zip(&s.area) {
+        for (b, a) in s.radiosity.iter().zip(&s.system.area) {
             for (c, (bx, ex)) in b.to_array().iter().zip(exact.to_array()).enumerate() {
                 let r = rho.to_array()[c];
                 let rel = bx / ex - 1.0;
@@ -215,14 +215,14 @@ fn energy_balance_in_the_cornell_box() {
     // The box is open at the front: some light leaves.
     assert!(i.escaped.sum() > 0.05 * i.emitted.sum());
     let mut absorbed = Rgb::BLACK;
-    for k in 0..s.area.len() {
-        let rho = s.reflectance[k];
-        let gathered = s.radiosity[k] - s.emission[k];
+    for k in 0..s.system.area.len() {
+        let rho = s.system.reflectance[k];
+        let gathered = s.radiosity[k] - s.system.emission[k];
         absorbed += Rgb::new(
             (1.0 - rho.r) / rho.r * gathered.r,
             (1.0 - rho.g) / rho.g * gathered.g,
             (1.0 - rho.b) / rho.b * gathered.b,
-        ) * s.area[k];
+        ) * s.system.area[k];
     }
     assert!(absorbed.max_abs_diff(i.absorbed) < 1e-9 * i.emitted.max_channel());
     // The walls' colours bleed: the white floor next to the red wall is redder than next to

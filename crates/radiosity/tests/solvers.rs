@@ -1,17 +1,16 @@
 //! Every solver against the direct (LU) solution, and the convergence facts the papers prove or
-//! measure: Gauss-Seidel beats Jacobi per sweep (000_… eq. 20), progressive refinement's
-//! attenuation respects eq. 25, and on the random sparse systems of section 6 of 003_… the
+//! measure: Gauss-Seidel beats Jacobi per sweep (Szirmay-Kalos & Márton eq. 20), progressive refinement's
+//! attenuation respects eq. 25, and on the random sparse systems of section 6 of Gortler et al. the
 //! error after N/4 and N/2 iterations ranks overshoot ≤ progressive < gauss-seidel-0.
 
 use radiosity::color::Rgb;
 use radiosity::experiment::random::{reciprocal, section6, Random};
-use radiosity::formfactor::monte_carlo::estimate_all_rows;
 use radiosity::mesh::{Mesh, MeshParams};
-use radiosity::pipeline::PatchData;
+use radiosity::pipeline;
 use radiosity::scene::builtin;
 use radiosity::solve::gauss::dense_solve;
-use radiosity::solve::matrix::SparseMatrix;
-use radiosity::solve::{relative_error, run, solve, start, Method, SolverParams, System};
+use radiosity::solve::{relative_error, run, solve, start, Solver, SolverParams, System};
+use radiosity::system::SparseMatrix;
 
 fn max_rel_diff(a: &[Rgb], b: &[Rgb]) -> f64 {
     let scale = b.iter().map(|x| x.max_channel()).fold(0.0, f64::max);
@@ -22,7 +21,7 @@ fn max_rel_diff(a: &[Rgb], b: &[Rgb]) -> f64 {
         / scale
 }
 
-fn check_all_methods(sys: System, f: &mut SparseMatrix, what: &str) {
+fn check_all_methods(sys: &System, f: &mut SparseMatrix, what: &str) {
     let exact = dense_solve(&sys, f, 1 << 32).unwrap();
     let params = SolverParams {
         tolerance: 1e-10,
@@ -30,7 +29,7 @@ fn check_all_methods(sys: System, f: &mut SparseMatrix, what: &str) {
         ..Default::default()
     };
     // Every method but photon shooting, whose answer is random.
-    for m in Method::ALL.into_iter().filter(|&m| m != Method::Stochastic) {
+    for m in Solver::ALL.into_iter().filter(|&m| m != Solver::Stochastic) {
         let (b, info) = solve(m, sys, f, &params).unwrap();
         assert!(
             info.converged,
@@ -63,9 +62,15 @@ fn every_method_matches_lu_on_builtin_scenes() {
         let scene = builtin::by_name(name).unwrap();
         let mesh = Mesh::build(&scene, MeshParams::Patches(patches)).unwrap();
         let bvh = radiosity::accel::Bvh::build(&mesh);
-        let mut f = estimate_all_rows(&mesh, &bvh, 2000, 7);
-        let data = PatchData::new(&scene, &mesh);
-        let sys = data.system();
+        let mut f = radiosity::formfactor::Estimator::new(
+            &mesh,
+            &bvh,
+            radiosity::formfactor::Params::monte_carlo(2000, 7),
+        )
+        .expect("valid parameters")
+        .sparse_matrix();
+        let data = pipeline::patch_system(&scene, &mesh);
+        let sys = &data;
         check_all_methods(sys, &mut f, name);
     }
 }
@@ -93,7 +98,7 @@ fn stochastic_is_unbiased_and_error_shrinks_with_photons() {
             seed,
             ..Default::default()
         };
-        let (b, info) = solve(Method::Stochastic, sys, f, &params).unwrap();
+        let (b, info) = solve(Solver::Stochastic, sys, f, &params).unwrap();
         assert!(info.converged);
         let bal = info.emitted - info.absorbed - info.escaped - info.unshot;
         assert!(bal.max_abs_diff(Rgb::BLACK) < 1e-9 * info.emitted.max_channel());
@@ -119,7 +124,7 @@ fn stochastic_is_unbiased_and_error_shrinks_with_photons() {
     );
 }
 
-fn error_after(m: Method, r: &mut Random, iterations: u64) -> f64 {
+fn error_after(m: Solver, r: &mut Random, iterations: u64) -> f64 {
     let (sys, f) = r.parts();
     let exact = dense_solve(&sys, f, 1 << 30).unwrap();
     let params = SolverParams {
@@ -131,10 +136,10 @@ fn error_after(m: Method, r: &mut Random, iterations: u64) -> f64 {
     run(&mut *s, f, &params, false, &mut |_, _| {});
     let mut b = Vec::new();
     s.radiosity(&mut b);
-    relative_error(&exact, sys.emission, &b)
+    relative_error(&exact, &sys.emission, &b)
 }
 
-/// 003_… section 6: on random sparse 390 × 390 systems (dim and bright, few and many emitters),
+/// Gortler et al. section 6: on random sparse 390 × 390 systems (dim and bright, few and many emitters),
 /// overshooting is best, progressive refinement beats Gauss-Seidel from 0, most of all early.
 #[test]
 fn section6_ranking_on_random_sparse_systems() {
@@ -143,9 +148,9 @@ fn section6_ranking_on_random_sparse_systems() {
         let mut r = section6(n, 0.1, rho, emitters, seed);
         let mut leads = Vec::new();
         for it in [n as u64 / 4, n as u64 / 2] {
-            let os = error_after(Method::Overshoot, &mut r, it);
-            let pr = error_after(Method::Progressive, &mut r, it);
-            let gs = error_after(Method::GaussSeidel0, &mut r, it);
+            let os = error_after(Solver::Overshoot, &mut r, it);
+            let pr = error_after(Solver::Progressive, &mut r, it);
+            let gs = error_after(Solver::GaussSeidel0, &mut r, it);
             let case = format!("ρ≈{rho}, {emitters} emitters, {it} iterations: overshoot {os:.4}, progressive {pr:.4}, gauss-seidel-0 {gs:.4}");
             assert!(os <= pr * 1.0001, "{case}");
             assert!(pr < gs, "{case}");
@@ -159,15 +164,15 @@ fn section6_ranking_on_random_sparse_systems() {
     }
 }
 
-/// 000_… eq. 20: Gauss-Seidel's attenuation per sweep is below Jacobi's, so from the same start
+/// Szirmay-Kalos & Márton eq. 20: Gauss-Seidel's attenuation per sweep is below Jacobi's, so from the same start
 /// (B = E) its error after each full sweep is smaller.
 #[test]
 fn gauss_seidel_beats_jacobi_per_sweep() {
     let mut r = reciprocal(150, 0.1, 0.95, (0.5, 0.9), 10, 5);
     let n = 150u64;
     for sweeps in 1..=4 {
-        let gs = error_after(Method::GaussSeidel, &mut r, sweeps * n);
-        let jac = error_after(Method::Jacobi, &mut r, sweeps * n);
+        let gs = error_after(Solver::GaussSeidel, &mut r, sweeps * n);
+        let jac = error_after(Solver::Jacobi, &mut r, sweeps * n);
         assert!(
             gs < jac,
             "after {sweeps} sweeps: gauss-seidel {gs} vs jacobi {jac}"
@@ -176,18 +181,18 @@ fn gauss_seidel_beats_jacobi_per_sweep() {
     }
 }
 
-/// 000_… eq. 25: each shot of progressive refinement multiplies the unshot energy by at most
+/// Szirmay-Kalos & Márton eq. 25: each shot of progressive refinement multiplies the unshot energy by at most
 /// q* = 1 − (1 − q)/N, where q = max_j Σ_i ρ_i F_ji (the most any shooter's energy can be
 /// reflected back into the unshot pool).
 #[test]
 fn progressive_attenuation_respects_eq25() {
     let mut r = reciprocal(100, 0.2, 0.95, (0.2, 0.9), 3, 9);
-    let n = r.area.len();
+    let n = r.system.area.len();
     let q = (0..n)
         .map(|j| {
             r.f.row_entries(j)
                 .iter()
-                .map(|&(i, f)| r.reflectance[i as usize].max_channel() * f as f64)
+                .map(|&(i, f)| r.system.reflectance[i as usize].max_channel() * f as f64)
                 .sum::<f64>()
         })
         .fold(0.0, f64::max);
@@ -198,7 +203,7 @@ fn progressive_attenuation_respects_eq25() {
         tolerance: 1e-9,
         ..Default::default()
     };
-    let mut s = start(Method::Progressive, sys, f, &params).unwrap();
+    let mut s = start(Solver::Progressive, sys, f, &params).unwrap();
     let mut last: Option<f64> = None;
     let mut worst: f64 = 0.0;
     run(&mut *s, f, &params, true, &mut |st, _| {

@@ -1,4 +1,4 @@
-//! The complexity claims of 000_59d10e371b5f300d.txt, measured as N grows on the Cornell box
+//! The complexity claims of Szirmay-Kalos & Márton (1995), measured as N grows on the Cornell box
 //! (`--patches N`, at least four sizes spanning a factor of 16):
 //!
 //! | case | claim (paper) |
@@ -17,15 +17,15 @@
 
 use super::{fit_exponent, measure, ExperimentError, MemoryProbe, Progress};
 use crate::accel::Bvh;
-use crate::formfactor::monte_carlo::{MonteCarloParams, MonteCarloRows};
-use crate::formfactor::on_demand::OnDemandRows;
-use crate::formfactor::{Estimator, Method as FfMethod, Params as FfParams, Storage};
+use crate::formfactor::OnDemandRows;
+use crate::formfactor::{Estimator, FormFactorMethod, Params as FfParams, Storage};
 use crate::mesh::{Mesh, MeshParams};
-use crate::pipeline::PatchData;
+use crate::pipeline::patch_system;
 use crate::scene::builtin;
 use crate::solve::gauss::dense_solve;
-use crate::solve::matrix::SparseMatrix;
-use crate::solve::{run, start, Method, RowSource, SolverParams};
+use crate::solve::{run, start, Solver, SolverParams};
+use crate::system::SparseMatrix;
+use crate::system::{Operator, System};
 
 /// How the experiment runs.
 #[derive(Clone, Debug, PartialEq)]
@@ -276,9 +276,9 @@ pub fn fits(measurements: &[Measurement]) -> Vec<Fit> {
 }
 
 fn solve_to_tolerance(
-    method: Method,
-    system: crate::solve::System,
-    source: &mut dyn RowSource,
+    method: Solver,
+    system: &System,
+    source: &mut dyn Operator,
     params: &SolverParams,
 ) -> Result<crate::solve::Info, ExperimentError> {
     let mut solver = start(method, system, source, params)?;
@@ -288,7 +288,7 @@ fn solve_to_tolerance(
 struct Size {
     mesh: Mesh,
     bvh: Bvh,
-    data: PatchData,
+    data: System,
     f: Option<SparseMatrix>,
 }
 
@@ -308,7 +308,7 @@ pub fn run_all(
     for &n in &params.sizes {
         let mesh = Mesh::build(&scene, MeshParams::Patches(n))?;
         let bvh = Bvh::build(&mesh);
-        let data = PatchData::new(&scene, &mesh);
+        let data = patch_system(&scene, &mesh);
         sizes.push(Size {
             mesh,
             bvh,
@@ -317,10 +317,12 @@ pub fn run_all(
         });
     }
     let hemicube = FfParams {
-        method: FfMethod::Hemicube,
+        method: FormFactorMethod::Hemicube,
         resolution: params.resolution,
         samples: 1,
         seed: params.seed,
+        // One hemicube per shot, as the paper runs it: nothing kept between shots.
+        cache_bytes: 0,
         ..Default::default()
     };
     let mut out = Vec::new();
@@ -337,7 +339,7 @@ pub fn run_all(
                 nnz: None,
                 converged: None,
             };
-            let system = s.data.system();
+            let system = &s.data;
             let solver_params = SolverParams {
                 tolerance: params.tolerance,
                 photons: params.photons,
@@ -351,7 +353,7 @@ pub fn run_all(
                         hemicube
                     } else {
                         FfParams {
-                            method: FfMethod::MonteCarlo,
+                            method: FormFactorMethod::MonteCarlo,
                             rays: params.rays,
                             seed: params.seed,
                             ..Default::default()
@@ -371,14 +373,14 @@ pub fn run_all(
                     let f = s.f.as_mut().expect("hemicube matrix first");
                     // Once unmeasured: the linear-algebra kernels allocate their per-thread
                     // packing buffers on first use at each blocking size.
-                    dense_solve(&system, f, 1 << 36)?;
-                    let (b, seconds, peak) = measure(probe, || dense_solve(&system, f, 1 << 36));
+                    dense_solve(system, f, 1 << 36)?;
+                    let (b, seconds, peak) = measure(probe, || dense_solve(system, f, 1 << 36));
                     b?;
                     m.seconds = seconds;
                     m.peak_bytes = peak;
                 }
                 "jacobi" | "gauss-seidel" => {
-                    let method = Method::from_name(case).expect("a solver name");
+                    let method = Solver::from_name(case).expect("a solver name");
                     let f = s.f.as_mut().expect("hemicube matrix first");
                     let (info, seconds, peak) = measure(probe, || {
                         solve_to_tolerance(method, system, f, &solver_params)
@@ -393,26 +395,25 @@ pub fn run_all(
                     let (result, seconds, peak) = measure(probe, || {
                         if case == "progressive" {
                             let est = Estimator::new(&s.mesh, &s.bvh, hemicube)?;
-                            let mut source = OnDemandRows::new(&s.mesh, est);
+                            let mut source = OnDemandRows::new(est);
                             solve_to_tolerance(
-                                Method::Progressive,
+                                Solver::Progressive,
                                 system,
                                 &mut source,
                                 &solver_params,
                             )
                         } else {
-                            let mc = MonteCarloParams {
-                                rays: params.rays,
-                                seed: params.seed,
+                            let mc = FfParams {
                                 cache_bytes: 0,
-                                ..Default::default()
+                                ..FfParams::monte_carlo(params.rays, params.seed)
                             };
-                            let mut source = MonteCarloRows::new(&s.mesh, &s.bvh, mc);
+                            let mut source =
+                                OnDemandRows::new(Estimator::new(&s.mesh, &s.bvh, mc)?);
                             let sp = SolverParams {
                                 tolerance: params.stochastic_tolerance,
                                 ..solver_params
                             };
-                            solve_to_tolerance(Method::Stochastic, system, &mut source, &sp)
+                            solve_to_tolerance(Solver::Stochastic, system, &mut source, &sp)
                         }
                     });
                     let info = result?;

@@ -1,4 +1,4 @@
-//! Section 6 of 003_6556f2e3d50166bb.txt: the error of its eq. 22,
+//! Section 6 of Gortler, Cohen & Slusallek (1993): the error of its eq. 22,
 //!
 //! ```text
 //! Error(k) = Σ_i (B*_i − B_i(k)) / Σ_i (B*_i − E_i),
@@ -20,12 +20,12 @@
 use super::random::section6;
 use super::{ExperimentError, Progress, StoredSystem};
 use crate::accel::Bvh;
-use crate::formfactor::{Estimator, Method as FfMethod, Params as FfParams, Storage};
+use crate::formfactor::{Estimator, FormFactorMethod, Params as FfParams, Storage};
 use crate::mesh::{Mesh, MeshParams};
-use crate::pipeline::PatchData;
+use crate::pipeline::patch_system;
 use crate::scene::builtin;
 use crate::solve::gauss::dense_solve;
-use crate::solve::{relative_error, start, Method, SolverParams};
+use crate::solve::{relative_error, start, Solver, SolverParams};
 use std::time::Instant;
 
 /// How the experiment runs.
@@ -56,29 +56,29 @@ impl Default for Params {
 }
 
 /// The methods in the order they are reported: the paper's six first.
-pub const METHODS: [Method; 11] = [
-    Method::GaussSeidel0,
-    Method::GaussSeidelJacobi,
-    Method::Southwell,
-    Method::Progressive,
-    Method::GaussSeidel,
-    Method::Overshoot,
-    Method::Jacobi,
-    Method::Sor,
-    Method::OvershootAmbient,
-    Method::Stochastic,
-    Method::Gauss,
+pub const METHODS: [Solver; 11] = [
+    Solver::GaussSeidel0,
+    Solver::GaussSeidelJacobi,
+    Solver::Southwell,
+    Solver::Progressive,
+    Solver::GaussSeidel,
+    Solver::Overshoot,
+    Solver::Jacobi,
+    Solver::Sor,
+    Solver::OvershootAmbient,
+    Solver::Stochastic,
+    Solver::Gauss,
 ];
 
 /// The paper's name for a method, where it has one.
-pub fn paper_name(m: Method) -> Option<&'static str> {
+pub fn paper_name(m: Solver) -> Option<&'static str> {
     Some(match m {
-        Method::GaussSeidel0 => "Gauss-Seidel-0",
-        Method::GaussSeidelJacobi => "Gauss-Seidel+Jacobi",
-        Method::Southwell => "Southwell",
-        Method::Progressive => "Southwell+Jacobi",
-        Method::GaussSeidel => "Gauss-Seidel-E",
-        Method::Overshoot => "Overshooting",
+        Solver::GaussSeidel0 => "Gauss-Seidel-0",
+        Solver::GaussSeidelJacobi => "Gauss-Seidel+Jacobi",
+        Solver::Southwell => "Southwell",
+        Solver::Progressive => "Southwell+Jacobi",
+        Solver::GaussSeidel => "Gauss-Seidel-E",
+        Solver::Overshoot => "Overshooting",
         _ => return None,
     })
 }
@@ -113,7 +113,7 @@ pub struct Point {
 #[derive(Clone, Debug)]
 pub struct Curve {
     /// The method.
-    pub method: Method,
+    pub method: Solver,
     /// Its points, in order of iterations.
     pub points: Vec<Point>,
 }
@@ -142,13 +142,10 @@ impl Curve {
 fn scene_system(
     scene: &crate::scene::Scene,
     mesh: &Mesh,
-    f: crate::solve::matrix::SparseMatrix,
+    f: crate::system::SparseMatrix,
 ) -> StoredSystem {
-    let d = PatchData::new(scene, mesh);
     StoredSystem {
-        area: d.area,
-        reflectance: d.reflectance,
-        emission: d.emission,
+        system: patch_system(scene, mesh),
         f,
     }
 }
@@ -158,7 +155,7 @@ fn hemicube_matrix(
     params: FfParams,
     progress: &mut dyn Progress,
     label: &str,
-) -> Result<(crate::solve::matrix::SparseMatrix, f64), ExperimentError> {
+) -> Result<(crate::system::SparseMatrix, f64), ExperimentError> {
     let bvh = Bvh::build(mesh);
     progress.begin(label, mesh.len() as u64);
     let t = Instant::now();
@@ -174,7 +171,7 @@ fn hemicube_matrix(
 /// Build the cases: office, dim and bright cube, four random systems.
 pub fn cases(params: &Params, progress: &mut dyn Progress) -> Result<Vec<Case>, ExperimentError> {
     let ff = FfParams {
-        method: FfMethod::Hemicube,
+        method: FormFactorMethod::Hemicube,
         resolution: if params.quick { 32 } else { 128 },
         samples: if params.quick { 4 } else { 16 },
         ..Default::default()
@@ -273,7 +270,7 @@ pub fn run_case(
             ..Default::default()
         };
         // Photons per reported iteration for stochastic, 1 otherwise.
-        let unit = if method == Method::Stochastic {
+        let unit = if method == Solver::Stochastic {
             params.photons as u64
         } else {
             1
@@ -281,12 +278,12 @@ pub fn run_case(
         let mut solver = start(method, sys, f, &sp)?;
         let mut points = Vec::new();
         let mut seconds = 0.0;
-        if method != Method::Gauss {
+        if method != Solver::Gauss {
             solver.radiosity(&mut b);
             points.push(Point {
                 iteration: 0.0,
                 seconds: 0.0,
-                error: relative_error(&exact, sys.emission, &b),
+                error: relative_error(&exact, &sys.emission, &b),
             });
         }
         let budget = max_iterations * unit;
@@ -297,7 +294,7 @@ pub fn run_case(
             let done = solver.iterations();
             if done % unit == 0 || !more || done >= budget {
                 solver.radiosity(&mut b);
-                let error = relative_error(&exact, sys.emission, &b);
+                let error = relative_error(&exact, &sys.emission, &b);
                 points.push(Point {
                     iteration: done as f64 / unit as f64,
                     seconds,
@@ -311,7 +308,7 @@ pub fn run_case(
         }
         curves.push(Curve { method, points });
     }
-    let last = |m: Method| {
+    let last = |m: Solver| {
         curves
             .iter()
             .find(|c| c.method == m)
@@ -320,9 +317,9 @@ pub fn run_case(
     };
     progress.end(&format!(
         "after N/2 iterations: overshoot {:.2e}, progressive {:.2e}, gauss-seidel-0 {:.2e}",
-        last(Method::Overshoot),
-        last(Method::Progressive),
-        last(Method::GaussSeidel0)
+        last(Solver::Overshoot),
+        last(Solver::Progressive),
+        last(Solver::GaussSeidel0)
     ));
     Ok(curves)
 }

@@ -1,9 +1,9 @@
 //! The papers' experiments, reproducible by one call each (and one command each in the CLI):
 //!
-//! - [`convergence`]: section 6 of 003_6556f2e3d50166bb.txt — the error of eq. 22 after every
+//! - [`convergence`]: section 6 of Gortler, Cohen & Slusallek (1993) — the error of eq. 22 after every
 //!   iteration of every solver on the office, the dim and bright cube and random sparse systems
 //!   (its figures 3–8), also against CPU time;
-//! - [`complexity`]: the claims of 000_59d10e371b5f300d.txt — time, iterations and memory of the
+//! - [`complexity`]: the claims of Szirmay-Kalos & Márton (1995) — time, iterations and memory of the
 //!   form-factor methods and the solvers as N grows, with fitted exponents beside the paper's.
 //!
 //! [`random`] makes the random systems. Memory is measured through a [`MemoryProbe`] that the
@@ -14,44 +14,32 @@ pub mod complexity;
 pub mod convergence;
 pub mod random;
 
-use crate::color::Rgb;
-use crate::solve::matrix::SparseMatrix;
-use crate::solve::System;
+use crate::system::SparseMatrix;
+use crate::system::System;
 
-/// A radiosity system that owns its data: per patch area, reflectance and emission, and F.
+/// A radiosity system with its form factors stored.
 #[derive(Clone, Debug)]
 pub struct StoredSystem {
-    /// Patch areas.
-    pub area: Vec<f64>,
-    /// Reflectances.
-    pub reflectance: Vec<Rgb>,
-    /// Emissions.
-    pub emission: Vec<Rgb>,
+    /// Areas, reflectances, emissions.
+    pub system: System,
     /// The form factors.
     pub f: SparseMatrix,
 }
 
 impl StoredSystem {
     /// The system and, separately borrowed, its matrix.
-    pub fn parts(&mut self) -> (System<'_>, &mut SparseMatrix) {
-        (
-            System {
-                area: &self.area,
-                reflectance: &self.reflectance,
-                emission: &self.emission,
-            },
-            &mut self.f,
-        )
+    pub fn parts(&mut self) -> (&System, &mut SparseMatrix) {
+        (&self.system, &mut self.f)
     }
 
     /// Number of patches.
     pub fn len(&self) -> usize {
-        self.area.len()
+        self.system.len()
     }
 
     /// True for the empty system.
     pub fn is_empty(&self) -> bool {
-        self.area.is_empty()
+        self.system.is_empty()
     }
 }
 

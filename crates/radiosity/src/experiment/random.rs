@@ -1,12 +1,12 @@
 //! Random radiosity systems for tests and experiments: reciprocal systems with a given fill and
-//! the random sparse row-diagonally-dominant systems of section 6 of 003_6556f2e3d50166bb.txt.
+//! the random sparse row-diagonally-dominant systems of section 6 of Gortler, Cohen & Slusallek (1993).
 //! Both are seeded: the same arguments give the same system on every machine.
 
 use super::StoredSystem;
 use crate::color::Rgb;
-use crate::formfactor::Entry;
 use crate::sampling::{stream, uniform, Rng64};
-use crate::solve::matrix::SparseMatrix;
+use crate::system::Entry;
+use crate::system::{SparseMatrix, System};
 
 /// A random system (the same shape as any stored system).
 pub type Random = StoredSystem;
@@ -70,14 +70,16 @@ pub fn reciprocal(
         emission[i] = Rgb::new(1.0 + u(&mut rng), 1.0 + u(&mut rng), 1.0 + u(&mut rng));
     }
     Random {
-        area,
-        reflectance,
-        emission,
+        system: System {
+            area,
+            reflectance,
+            emission,
+        },
         f: SparseMatrix::from_rows(rows),
     }
 }
 
-/// A random sparse row-diagonally-dominant system as in section 6 of 003_…: unit areas, each
+/// A random sparse row-diagonally-dominant system as in section 6 of Gortler et al.: unit areas, each
 /// row with about `fill·n` random form factors summing to 0.5–0.95 (not reciprocal), grey
 /// reflectances around `rho`, and `emitters` random emitters.
 pub fn section6(n: usize, fill: f64, rho: f64, emitters: usize, seed: u64) -> Random {
@@ -113,9 +115,11 @@ pub fn section6(n: usize, fill: f64, rho: f64, emitters: usize, seed: u64) -> Ra
         }
     }
     Random {
-        area: vec![1.0; n],
-        reflectance,
-        emission,
+        system: System {
+            area: vec![1.0; n],
+            reflectance,
+            emission,
+        },
         f: SparseMatrix::from_rows(rows),
     }
 }

@@ -10,7 +10,7 @@ use crate::color::Rgb;
 use crate::mesh::Mesh;
 use crate::render::{to_srgb8, Image};
 use crate::scene::Scene;
-use crate::solve::{relative_error, Solver, Status};
+use crate::solve::{relative_error, SolverState, Status};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -223,7 +223,7 @@ pub fn write_patch_table(path: &Path, rows: &[PatchRow]) -> Result<(), ExportErr
 pub const TRACE_HEADER: &str = "iteration,seconds,error,unshot";
 
 /// A convergence trace, one row per iteration: iteration, seconds in the solver, the error of
-/// eq. 22 of 003_6556f2e3d50166bb.txt against an exact solution (empty without one), and the
+/// eq. 22 of Gortler, Cohen & Slusallek (1993) against an exact solution (empty without one), and the
 /// unshot energy as a fraction of the emitted energy.
 #[derive(Clone, Debug, Default)]
 pub struct Trace {
@@ -245,7 +245,7 @@ impl Trace {
     }
 
     /// Record the solver's state.
-    pub fn record(&mut self, status: &Status, solver: &dyn Solver) {
+    pub fn record(&mut self, status: &Status, solver: &dyn SolverState) {
         use std::fmt::Write as _;
         let error = match &self.exact {
             Some(exact) => {

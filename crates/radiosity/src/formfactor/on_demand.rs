@@ -1,91 +1,175 @@
-//! Rows of F computed when a solver asks for them, by any [`Estimator`], and not kept.
+//! Rows of F computed when a solver asks for them, by any [`Estimator`], and cached under a
+//! memory budget: the [`Operator`] that lets shooting methods run without a stored matrix.
 //!
-//! This is how 000_59d10e371b5f300d.txt runs progressive refinement with a hemicube: "having
-//! selected a surface, the corresponding column of the form factor matrix should be calculated",
-//! one hemicube per shot, the column obtained from the row by reciprocity (its eq. 24). Memory is
-//! O(N) (one row and the estimator's buffers) instead of the O(N²) of a stored matrix; the price
-//! is recomputing a row each time its patch shoots again. For Monte Carlo rows that are cached
-//! under a budget, see [`super::monte_carlo::MonteCarloRows`].
+//! This is how Szirmay-Kalos & Márton (1995) run progressive refinement with a hemicube:
+//! "having selected a surface, the corresponding column of the form factor matrix should be
+//! calculated", one hemicube per shot, the column obtained from the row by reciprocity (their
+//! eq. 24). Memory is O(N) plus the cache ([`Params::cache_bytes`], 0 for none) instead of the
+//! O(N²) of a stored matrix; the price is recomputing a row that was not kept when its patch
+//! shoots again.
+//!
+//! Monte Carlo rows get rays in proportion to the power about to be shot ([`Params::rays_for`]);
+//! a cached row is reused unless the power now shot would want 4× its rays, and a row estimated
+//! again gets fresh random streams (its version). Photons ([`PhotonSampler`]) are single rays
+//! for Monte Carlo, draws from the row for the other methods.
 
-use super::{Entry, Estimator, FormFactorStats, Scratch};
-use crate::mesh::Mesh;
+use super::{
+    monte_carlo, Effort, Entry, Estimator, FormFactorMethod, FormFactorStats, Params, Scratch,
+};
 use crate::sampling::{uniform, Rng64};
-use crate::solve::RowSource;
+use crate::system::{Operator, PhotonSampler};
 use std::time::Instant;
 
-/// A [`RowSource`] that runs an estimator for every row asked for (the last row is reused
-/// while the same patch is asked for again).
+#[derive(Debug)]
+struct Cached {
+    entries: Box<[Entry]>,
+    rays: u32,
+}
+
+/// An [`Operator`] whose rows an estimator computes when asked, cached under a budget.
 #[derive(Debug)]
 pub struct OnDemandRows<'a> {
-    mesh: &'a Mesh,
     estimator: Estimator<'a>,
+    cache: Vec<Option<Cached>>,
+    versions: Vec<u32>,
     scratch: Scratch,
-    current: Option<usize>,
-    row: Vec<Entry>,
+    /// The last row computed, when it is not in the cache.
+    current: Vec<Entry>,
+    current_row: Option<usize>,
     column: Vec<Entry>,
     stats: FormFactorStats,
 }
 
 impl<'a> OnDemandRows<'a> {
-    /// Rows of `mesh` by `estimator` (which must have been made for the same mesh).
-    pub fn new(mesh: &'a Mesh, estimator: Estimator<'a>) -> Self {
+    /// Rows by `estimator`, cached under its parameters' `cache_bytes`.
+    pub fn new(estimator: Estimator<'a>) -> Self {
+        let n = estimator.mesh().len();
         Self {
-            mesh,
             estimator,
+            cache: (0..n).map(|_| None).collect(),
+            versions: vec![0; n],
             scratch: Scratch::default(),
-            current: None,
-            row: Vec::new(),
+            current: Vec::new(),
+            current_row: None,
             column: Vec::new(),
             stats: FormFactorStats::default(),
         }
     }
 
-    /// Rows computed and time spent so far.
+    /// Work done so far.
     pub fn stats(&self) -> FormFactorStats {
         self.stats
     }
 
-    fn ensure(&mut self, i: usize) {
-        if self.current == Some(i) {
-            return;
+    /// The Monte Carlo rays of the cached row `i`, if it is cached.
+    pub fn cached_rays(&self, i: usize) -> Option<u32> {
+        self.cache[i].as_ref().map(|c| c.rays)
+    }
+
+    fn params(&self) -> &Params {
+        self.estimator.params()
+    }
+
+    /// Make row i available; true if it is in the cache, false if only in `current`.
+    fn ensure_row(&mut self, i: usize, share: f64) -> bool {
+        let monte_carlo = self.params().method == FormFactorMethod::MonteCarlo;
+        let need = if monte_carlo {
+            self.params().rays_for(share, self.cache.len())
+        } else {
+            0
+        };
+        // A cached row is good enough unless the power now shot would want 4× more rays.
+        if matches!(&self.cache[i], Some(c) if (c.rays as u64) * 4 >= need as u64) {
+            return true;
         }
-        let t = Instant::now();
-        self.estimator.row(i, &mut self.scratch, &mut self.row);
+        if !monte_carlo && self.current_row == Some(i) {
+            return false;
+        }
+        let start = Instant::now();
+        let version = self.versions[i] as u64;
+        self.versions[i] += 1;
+        self.estimator.row_with(
+            i,
+            Effort {
+                rays: need,
+                version,
+            },
+            &mut self.scratch,
+            &mut self.current,
+        );
+        self.current_row = Some(i);
         self.stats.rows += 1;
-        self.stats.seconds += t.elapsed().as_secs_f64();
-        self.current = Some(i);
+        self.stats.rays += need as u64;
+        self.stats.seconds += start.elapsed().as_secs_f64();
+        let bytes = (self.current.len() * std::mem::size_of::<Entry>()) as u64;
+        if let Some(old) = self.cache[i].take() {
+            self.stats.cached_bytes -= (old.entries.len() * std::mem::size_of::<Entry>()) as u64;
+            self.stats.cached_rows -= 1;
+        }
+        if self.stats.cached_bytes + bytes <= self.params().cache_bytes as u64 {
+            self.stats.cached_bytes += bytes;
+            self.stats.cached_rows += 1;
+            self.cache[i] = Some(Cached {
+                entries: self.current.as_slice().into(),
+                rays: need,
+            });
+            true
+        } else {
+            false
+        }
+    }
+
+    fn row_slice(&self, i: usize, cached: bool) -> &[Entry] {
+        if cached {
+            &self.cache[i].as_ref().expect("cached").entries
+        } else {
+            &self.current
+        }
     }
 }
 
-impl RowSource for OnDemandRows<'_> {
+impl Operator for OnDemandRows<'_> {
     fn len(&self) -> usize {
-        self.mesh.len()
+        self.cache.len()
     }
 
-    fn row(&mut self, i: usize, _share: f64) -> &[Entry] {
-        self.ensure(i);
-        &self.row
+    fn row(&mut self, i: usize, share: f64) -> &[Entry] {
+        let cached = self.ensure_row(i, share);
+        self.row_slice(i, cached)
     }
 
-    /// By reciprocity from row i: `F_ji = F_ij A_i / A_j` (000_… eq. 24).
-    fn column(&mut self, i: usize, _share: f64) -> &[Entry] {
-        self.ensure(i);
-        let patches = &self.mesh.patches;
+    /// By reciprocity from row i: `F_ji = F_ij A_i / A_j` (Szirmay-Kalos & Márton, eq. 24).
+    fn column(&mut self, i: usize, share: f64) -> &[Entry] {
+        let cached = self.ensure_row(i, share);
+        let patches = &self.estimator.mesh().patches;
         let ai = patches[i].area;
-        self.column.clear();
-        self.column.extend(
-            self.row
+        let mut column = std::mem::take(&mut self.column);
+        column.clear();
+        column.extend(
+            self.row_slice(i, cached)
                 .iter()
                 .map(|&(j, f)| (j, f * ai / patches[j as usize].area)),
         );
+        self.column = column;
         &self.column
     }
 
-    /// A draw from row i: patch j with probability F_ij, none with 1 − Σ_j F_ij.
+    fn photons(&mut self) -> Option<&mut dyn PhotonSampler> {
+        Some(self)
+    }
+}
+
+impl PhotonSampler for OnDemandRows<'_> {
+    /// Monte Carlo: one ray from a uniform point of patch i in a cosine-distributed direction.
+    /// Other methods: a draw from row i, patch j with probability F_ij, none with 1 − Σ_j F_ij.
     fn sample(&mut self, i: usize, rng: &mut Rng64) -> Option<u32> {
-        self.ensure(i);
+        if self.params().method == FormFactorMethod::MonteCarlo {
+            self.stats.rays += 1;
+            return monte_carlo::sample_photon(self.estimator.mesh(), self.estimator.bvh(), i, rng);
+        }
+        let cached = self.ensure_row(i, 0.0);
         let mut u = uniform(rng) as f64;
-        for &(j, f) in &self.row {
+        for &(j, f) in self.row_slice(i, cached) {
             u -= f as f64;
             if u < 0.0 {
                 return Some(j);
@@ -99,9 +183,11 @@ impl RowSource for OnDemandRows<'_> {
 mod tests {
     use super::*;
     use crate::accel::Bvh;
-    use crate::formfactor::{Method, Params, Storage};
+    use crate::formfactor::{FormFactorMethod, Params, Storage};
+    use crate::mesh::Mesh;
     use crate::mesh::MeshParams;
     use crate::scene::builtin;
+    use crate::system::Operator;
 
     /// Rows on demand are the rows of the stored matrix, and columns follow by reciprocity.
     #[test]
@@ -110,7 +196,7 @@ mod tests {
         let mesh = Mesh::build(&scene, MeshParams::Patches(60)).unwrap();
         let bvh = Bvh::build(&mesh);
         let params = Params {
-            method: Method::Hemicube,
+            method: FormFactorMethod::Hemicube,
             resolution: 32,
             samples: 1,
             ..Default::default()
@@ -119,7 +205,7 @@ mod tests {
             .unwrap()
             .matrix(Storage::Sparse, &|_| {})
             .into_sparse();
-        let mut rows = OnDemandRows::new(&mesh, Estimator::new(&mesh, &bvh, params).unwrap());
+        let mut rows = OnDemandRows::new(Estimator::new(&mesh, &bvh, params).unwrap());
         for i in [0, 7, mesh.len() - 1] {
             assert_eq!(rows.row(i, 0.0), stored.row(i, 0.0));
             let column = rows.column(i, 0.0).to_vec();

@@ -1,5 +1,5 @@
 //! The z-buffer projection shared by the hemicube and the cubic tetrahedron
-//! (000_59d10e371b5f300d.txt, "Geometric methods", and its pseudo-code): the scene is projected
+//! (Szirmay-Kalos & Márton (1995), "Geometric methods", and its pseudo-code): the scene is projected
 //! from a point of patch i onto the faces of a projection solid around it, an item buffer records
 //! the nearest patch in each pixel, and each pixel adds its precomputed delta form factor to the
 //! patch it shows.
@@ -24,7 +24,9 @@
 //! source of hemicube aliasing, as rad.c says: a patch smaller than a pixel may be missed or
 //! counted whole.
 
-use crate::geom::Vec3;
+use super::estimator::{Estimator, Scratch};
+use super::quadrature::patch_points;
+use crate::geom::{orthonormal_basis, Vec3};
 
 const EDGE_SLACK: f32 = 1e-3;
 
@@ -385,4 +387,45 @@ mod tests {
             }
         }
     }
+}
+
+/// Row `i` through the projection solid `solid`: at each quadrature point of patch i every
+/// other patch's triangles are projected onto the solid's faces, and each pixel adds its delta
+/// form factor to the patch it shows (if it shows its front). The shared row algorithm of the
+/// hemicube and the cubic tetrahedron.
+pub(super) fn row(est: &Estimator, solid: &Solid, i: usize, scratch: &mut Scratch) {
+    let mut points = std::mem::take(&mut scratch.points);
+    patch_points(est.mesh, i, est.params.samples, &mut points);
+    let normal = est.mesh.patches[i].normal;
+    let (t, b) = orthonormal_basis(normal);
+    for &(o, weight) in &points {
+        scratch.buffers.clear(solid);
+        let local = |p: Vec3| {
+            let d = p - o;
+            Vec3::new(d.dot(t), d.dot(b), d.dot(normal))
+        };
+        for (j, pj) in est.mesh.patches.iter().enumerate() {
+            if j == i {
+                continue;
+            }
+            let front = pj.normal.dot(o - pj.centre) > 0.0;
+            let id = j as u32 | if front { 0 } else { BACK };
+            for tri in pj.triangles() {
+                let q = tri.map(|k| local(est.mesh.vertices[k as usize]));
+                if q.iter().all(|p| p.z <= 0.0) {
+                    continue;
+                }
+                rasterise(solid, &mut scratch.buffers, &q, id, est.near);
+            }
+        }
+        for (k, face) in solid.faces.iter().enumerate() {
+            for px in 0..face.delta.len() {
+                let item = scratch.buffers.item[k][px];
+                if item != EMPTY && item & BACK == 0 {
+                    scratch.add(item, weight * face.delta[px] as f64);
+                }
+            }
+        }
+    }
+    scratch.points = points;
 }

@@ -6,7 +6,7 @@
 
 use super::{at, read_text, InputError};
 use crate::export::{write_atomic, ExportError};
-use crate::solve::matrix::SparseMatrix;
+use crate::system::SparseMatrix;
 use std::io::Write;
 use std::path::Path;
 

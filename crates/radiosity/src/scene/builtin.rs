@@ -288,7 +288,7 @@ fn box_faces(lo: Vec3, hi: Vec3, materials: [usize; 6], inward: bool) -> Vec<Pol
     out
 }
 
-/// The two cube variants of section 6 of 003_6556f2e3d50166bb.txt.
+/// The two cube variants of section 6 of Gortler, Cohen & Slusallek (1993).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CubeVariant {
     /// Reflectances around 0.3.
@@ -298,7 +298,7 @@ pub enum CubeVariant {
 }
 
 /// The inside of an empty 1 m cube with a few emitting polygons on the ceiling (section 6 of
-/// 003_6556f2e3d50166bb.txt): the ceiling is a 4 × 4 grid of 0.25 m squares of which four,
+/// Gortler, Cohen & Slusallek (1993)): the ceiling is a 4 × 4 grid of 0.25 m squares of which four,
 /// scattered, emit 1 W/m² of white light. Each face has its own reflectance "around" the
 /// variant's value (0.28–0.32 dim, 0.78–0.82 bright). Meshed at `--max-edge 0.125` it has
 /// 384 patches, close to the paper's 390.
@@ -361,7 +361,7 @@ pub fn cube(variant: CubeVariant) -> Scene {
 /// Size of the `office` room (x, y = height, z), metres.
 pub const OFFICE_SIZE: [f32; 3] = [4.0, 2.7, 3.5];
 
-/// A small office in the spirit of figure 2 of 003_6556f2e3d50166bb.txt (whose model is not
+/// A small office in the spirit of figure 2 of Gortler, Cohen & Slusallek (1993) (whose model is not
 /// published): a 4 × 2.7 × 3.5 m room with a desk, a bookcase with books, a chair and a ceiling
 /// light fixture whose underside emits 12 W/m². Furniture is made of closed boxes; faces that lie
 /// on the room's walls, floor or ceiling are left out (they would be hidden). Meshed with
@@ -563,13 +563,18 @@ mod tests {
     #[test]
     fn office_is_closed_and_the_papers_size() {
         use crate::accel::Bvh;
-        use crate::formfactor::monte_carlo::estimate_all_rows;
         use crate::mesh::{Mesh, MeshParams};
         let s = office();
         let mesh = Mesh::build(&s, MeshParams::Patches(270)).unwrap();
         assert!((250..=300).contains(&mesh.len()), "{} patches", mesh.len());
         let bvh = Bvh::build(&mesh);
-        let f = estimate_all_rows(&mesh, &bvh, 4000, 7);
+        let f = crate::formfactor::Estimator::new(
+            &mesh,
+            &bvh,
+            crate::formfactor::Params::monte_carlo(4000, 7),
+        )
+        .expect("valid parameters")
+        .sparse_matrix();
         let (mut lost, mut whole) = (0.0, 0);
         for i in 0..mesh.len() {
             let sum: f64 = f.row_entries(i).iter().map(|e| e.1 as f64).sum();

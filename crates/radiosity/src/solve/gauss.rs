@@ -1,14 +1,13 @@
-//! Gauss elimination (000_59d10e371b5f300d.txt, "Solution of the linear equation"): the dense
+//! Gauss elimination (Szirmay-Kalos & Márton (1995), "Solution of the linear equation"): the dense
 //! matrix `M = I − diag(ρ) F` is built and factored by LU with partial pivoting (faer), once
 //! per distinct reflectance channel (once in all when ρ is grey), and solved for the three
 //! channels of E. O(N³) time and O(N²) memory: it is refused, with the alternative named, when
 //! the dense matrix would not fit in the memory limit. It is also the reference solution that
 //! the iterative methods are measured against.
 
-use super::matrix::{balance, SparseMatrix};
-use super::{Info, Method, RowSource, SolveError, Solver, SolverParams, System};
+use super::{Info, Operator, SolveError, Solver, SolverParams, SolverState, System};
 use crate::color::Rgb;
-use crate::formfactor::Entry;
+use crate::system::{balance, Entry, SparseMatrix};
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
@@ -20,7 +19,7 @@ pub fn bytes_needed(n: usize) -> u64 {
 /// Solve `system` exactly (to rounding) by dense LU, if it fits in `limit` bytes.
 pub fn dense_solve(
     system: &System,
-    source: &mut dyn RowSource,
+    source: &mut dyn Operator,
     limit: u64,
 ) -> Result<Vec<Rgb>, SolveError> {
     let rows: Vec<Vec<Entry>> = (0..system.len())
@@ -47,11 +46,12 @@ fn solve_rows<'m>(
     let needed = bytes_needed(n);
     if needed > limit {
         return Err(SolveError::TooLarge {
-            method: "gauss",
+            solver: Solver::Gauss,
             n,
             needed,
             limit,
-            alternative: "an iterative solver (--solver progressive, gauss-seidel or overshoot), which needs no dense matrix",
+            alternative:
+                "an iterative solver (progressive, gauss-seidel or overshoot) needs no dense matrix",
         });
     }
     let grey = system.reflectance.iter().all(|r| r.r == r.g && r.g == r.b);
@@ -81,9 +81,7 @@ fn solve_rows<'m>(
         }
     }
     if out.iter().any(|b| !b.is_finite()) {
-        return Err(SolveError::Invalid(
-            "the matrix I − diag(ρ) F is singular".into(),
-        ));
+        return Err(SolveError::Singular);
     }
     Ok(out)
 }
@@ -91,22 +89,22 @@ fn solve_rows<'m>(
 /// Gauss elimination as a one-step solver.
 #[derive(Clone, Debug)]
 pub struct Gauss<'s> {
-    system: System<'s>,
+    system: &'s System,
     b: Option<Vec<Rgb>>,
     limit: u64,
 }
 
 impl<'s> Gauss<'s> {
     /// Prepare; refuses at once if the dense matrix would not fit.
-    pub fn new(system: System<'s>, params: &SolverParams) -> Result<Self, SolveError> {
+    pub fn new(system: &'s System, params: &SolverParams) -> Result<Self, SolveError> {
         let needed = bytes_needed(system.len());
         if needed > params.memory_limit {
             return Err(SolveError::TooLarge {
-                method: "gauss",
+                solver: Solver::Gauss,
                 n: system.len(),
                 needed,
                 limit: params.memory_limit,
-                alternative: "an iterative solver (--solver progressive, gauss-seidel or overshoot), which needs no dense matrix",
+                alternative: "an iterative solver (progressive, gauss-seidel or overshoot) needs no dense matrix",
             });
         }
         Ok(Self {
@@ -117,12 +115,12 @@ impl<'s> Gauss<'s> {
     }
 }
 
-impl Solver for Gauss<'_> {
-    fn method(&self) -> Method {
-        Method::Gauss
+impl SolverState for Gauss<'_> {
+    fn method(&self) -> Solver {
+        Solver::Gauss
     }
 
-    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+    fn step(&mut self, source: &mut dyn Operator) -> bool {
         if self.b.is_none() {
             // `new` checked the size, so only a singular matrix can fail here; then keep E.
             self.b = Some(
@@ -141,7 +139,7 @@ impl Solver for Gauss<'_> {
         }
     }
 
-    fn unshot_fraction(&mut self, source: &mut dyn RowSource, _: bool) -> f64 {
+    fn unshot_fraction(&mut self, source: &mut dyn Operator, _: bool) -> f64 {
         match &self.b {
             None => 1.0,
             Some(b) => balance(&self.system, source, b).3 / self.system.emitted_power().sum(),
@@ -152,7 +150,7 @@ impl Solver for Gauss<'_> {
         self.b.is_some() as u64
     }
 
-    fn info(&mut self, source: &mut dyn RowSource) -> Info {
+    fn info(&mut self, source: &mut dyn Operator) -> Info {
         let mut b = Vec::new();
         self.radiosity(&mut b);
         let (absorbed, escaped, unshot, abs) = balance(&self.system, source, &b);
@@ -173,7 +171,7 @@ impl Solver for Gauss<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solve::{start, Method};
+    use crate::solve::{start, Solver};
 
     #[test]
     fn refuses_a_dense_matrix_beyond_the_limit_and_names_the_alternative() {
@@ -183,16 +181,16 @@ mod tests {
         let mut emis = vec![Rgb::BLACK; n];
         emis[0] = Rgb::splat(1.0);
         let sys = System {
-            area: &area,
-            reflectance: &refl,
-            emission: &emis,
+            area: area.to_vec(),
+            reflectance: refl.to_vec(),
+            emission: emis.to_vec(),
         };
         let mut f = SparseMatrix::from_rows(vec![Vec::new(); n]);
         let params = SolverParams {
             memory_limit: bytes_needed(n) - 1,
             ..Default::default()
         };
-        let err = start(Method::Gauss, sys, &mut f, &params)
+        let err = start(Solver::Gauss, &sys, &mut f, &params)
             .err()
             .expect("refused");
         let msg = err.to_string();
@@ -205,7 +203,7 @@ mod tests {
             memory_limit: bytes_needed(n),
             ..Default::default()
         };
-        let (b, _) = crate::solve::solve(Method::Gauss, sys, &mut f, &params).unwrap();
+        let (b, _) = crate::solve::solve(Solver::Gauss, &sys, &mut f, &params).unwrap();
         assert_eq!(b, emis);
     }
 }

@@ -1,16 +1,16 @@
-//! Gauss-Seidel iteration (000_59d10e371b5f300d.txt eq. 12–20; 003_6556f2e3d50166bb.txt
+//! Gauss-Seidel iteration (Szirmay-Kalos & Márton (1995) eq. 12–20; Gortler, Cohen & Slusallek (1993)
 //! section 3.1): relax the unknowns in order, each with the newest values of the others,
 //! `x_i ← (E_i + ρ_i Σ_{j≠i} F_ij x_j) / (1 − ρ_i F_ii)`, the same as `x_i += r_i / M_ii`.
-//! Three variants, the first three of section 6 of 003_…:
+//! Three variants, the first three of section 6 of Gortler et al.:
 //! - `gauss-seidel-0`: start at x = 0, output x;
-//! - `gauss-seidel`: start at x = E, output x (gathering, 003_… section 2.1);
+//! - `gauss-seidel`: start at x = E, output x (gathering, Gortler et al. section 2.1);
 //! - `gauss-seidel-jacobi`: start at x = 0, output x + r (one free Jacobi sweep, equivalent to
 //!   shooting in order).
 //!
 //! Eq. 20 proves its per-sweep attenuation β/(1 − α) is below Jacobi's q.
 
 use super::relaxation::Relaxation;
-use super::{Method, RowSource, Solver, System};
+use super::{Operator, Solver, SolverState, System};
 
 /// Which Gauss-Seidel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,7 +33,7 @@ pub struct GaussSeidel<'s> {
 
 impl<'s> GaussSeidel<'s> {
     /// Start the given variant.
-    pub fn new(system: System<'s>, source: &mut dyn RowSource, variant: Variant) -> Self {
+    pub fn new(system: &'s System, source: &mut dyn Operator, variant: Variant) -> Self {
         let core = match variant {
             Variant::Emission => Relaxation::from_emission(system, source),
             _ => Relaxation::from_zero(system),
@@ -53,16 +53,16 @@ impl GaussSeidel<'_> {
     }
 }
 
-impl Solver for GaussSeidel<'_> {
-    fn method(&self) -> Method {
+impl SolverState for GaussSeidel<'_> {
+    fn method(&self) -> Solver {
         match self.variant {
-            Variant::Zero => Method::GaussSeidel0,
-            Variant::Emission => Method::GaussSeidel,
-            Variant::ZeroPlusResidual => Method::GaussSeidelJacobi,
+            Variant::Zero => Solver::GaussSeidel0,
+            Variant::Emission => Solver::GaussSeidel,
+            Variant::ZeroPlusResidual => Solver::GaussSeidelJacobi,
         }
     }
 
-    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+    fn step(&mut self, source: &mut dyn Operator) -> bool {
         if self.core.unshot_fraction() == 0.0 {
             return false;
         }

@@ -1,11 +1,11 @@
-//! Jacobi iteration (000_59d10e371b5f300d.txt eq. 8–11; 003_6556f2e3d50166bb.txt section 3.2):
+//! Jacobi iteration (Szirmay-Kalos & Márton (1995) eq. 8–11; Gortler, Cohen & Slusallek (1993) section 3.2):
 //! `B(m+1) = E + R B(m)` with `R = diag(ρ) F`, starting from `B(0) = E`. One iteration computes
 //! one row: `x_i ← (E_i + ρ_i Σ_{j≠i} F_ij x_j^old) / (1 − ρ_i F_ii)` from the values of the
 //! previous sweep, which are kept aside until the sweep is complete. Converges for any
 //! physical system, since ‖R‖∞ = max_i ρ_i Σ_j F_ij < 1 (eq. 10–11).
 
 use super::relaxation::Relaxation;
-use super::{Method, RowSource, Solver, System};
+use super::{Operator, Solver, SolverState, System};
 use crate::color::Rgb;
 
 /// Jacobi iteration in progress.
@@ -18,7 +18,7 @@ pub struct Jacobi<'s> {
 
 impl<'s> Jacobi<'s> {
     /// Start from B = E.
-    pub fn new(system: System<'s>, source: &mut dyn RowSource) -> Self {
+    pub fn new(system: &'s System, source: &mut dyn Operator) -> Self {
         let core = Relaxation::from_emission(system, source);
         Self {
             old: core.x.clone(),
@@ -35,12 +35,12 @@ impl Jacobi<'_> {
     }
 }
 
-impl Solver for Jacobi<'_> {
-    fn method(&self) -> Method {
-        Method::Jacobi
+impl SolverState for Jacobi<'_> {
+    fn method(&self) -> Solver {
+        Solver::Jacobi
     }
 
-    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+    fn step(&mut self, source: &mut dyn Operator) -> bool {
         if self.core.unshot_fraction() == 0.0 {
             return false;
         }

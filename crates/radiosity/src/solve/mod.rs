@@ -1,22 +1,17 @@
-//! Solvers of the radiosity system (000_59d10e371b5f300d.txt eq. 3; 003_6556f2e3d50166bb.txt
-//! eq. 1)
+//! Solvers of the radiosity system `M B = E`, `M = I − diag(ρ) F` (Szirmay-Kalos & Márton
+//! 1995, eq. 3; Gortler, Cohen & Slusallek 1993, eq. 1).
 //!
-//! ```text
-//! B_i = E_i + ρ_i Σ_j F_ij B_j        for every patch i, in each colour channel,
-//! ```
-//!
-//! i.e. `M B = E` with `M = I − diag(ρ) F`. The solvers know only the linear system: areas,
-//! reflectances, emissions ([`System`]) and rows, columns and samples of F from a
-//! [`RowSource`] (a stored [`matrix::SparseMatrix`] or an estimator run on demand), never
-//! geometry. Every iterative method steps one relaxation at a time — one row or one column of F
-//! is one iteration, as in section 6 of 003_… — and can report its current B after any step
-//! ([`Solver`]). One file per method; [`relaxation`] holds what the relaxation methods share.
-//! [`run`] drives any of them to a tolerance on the unshot (residual) energy.
+//! The solvers know only the linear system ([`crate::system`]): the per-patch [`System`] and F
+//! as an [`Operator`] (a stored [`crate::system::SparseMatrix`] or an estimator run on demand),
+//! never geometry. Every iterative method steps one relaxation at a time — one row or one
+//! column of F is one iteration, as in section 6 of Gortler et al. — and can report its current
+//! B after any step ([`SolverState`]). The choice of method is [`Solver`]; one file per method;
+//! [`relaxation`] holds what the relaxation methods share. [`run`] drives any of them to a
+//! tolerance on the unshot (residual) energy.
 
 pub mod gauss;
 pub mod gauss_seidel;
 pub mod jacobi;
-pub mod matrix;
 pub mod overshoot;
 pub mod overshoot_ambient;
 pub mod progressive;
@@ -25,105 +20,10 @@ pub mod sor;
 pub mod southwell;
 pub mod stochastic;
 
+pub use crate::system::{Operator, System, SystemError};
+
 use crate::color::Rgb;
-use crate::formfactor::Entry;
-use crate::sampling::Rng64;
 use std::time::Instant;
-
-/// The data of the radiosity system besides F: per patch, area `A_i`, reflectance `ρ_i` and
-/// emission `E_i` (all three channels at once).
-#[derive(Clone, Copy, Debug)]
-pub struct System<'a> {
-    /// Patch areas (> 0).
-    pub area: &'a [f64],
-    /// Reflectances, each channel in `[0, 1)`.
-    pub reflectance: &'a [Rgb],
-    /// Emissions (radiant exitance, ≥ 0).
-    pub emission: &'a [Rgb],
-}
-
-impl System<'_> {
-    /// Number of unknowns (patches).
-    pub fn len(&self) -> usize {
-        self.area.len()
-    }
-
-    /// True for the empty system.
-    pub fn is_empty(&self) -> bool {
-        self.area.is_empty()
-    }
-
-    /// Total emitted power Σ E_i A_i per channel.
-    pub fn emitted_power(&self) -> Rgb {
-        self.emission
-            .iter()
-            .zip(self.area)
-            .map(|(e, a)| *e * *a)
-            .sum()
-    }
-
-    /// Check sizes and physical ranges.
-    pub fn validate(&self) -> Result<(), SolveError> {
-        let n = self.len();
-        if self.reflectance.len() != n || self.emission.len() != n {
-            return Err(SolveError::Invalid(format!(
-                "{} areas, {} reflectances, {} emissions: lengths differ",
-                n,
-                self.reflectance.len(),
-                self.emission.len()
-            )));
-        }
-        for i in 0..n {
-            let (a, r, e) = (self.area[i], self.reflectance[i], self.emission[i]);
-            if !(a.is_finite() && a > 0.0) {
-                return Err(SolveError::Invalid(format!(
-                    "patch {i}: area {a} is not positive"
-                )));
-            }
-            if !r.is_finite() || r.min_channel() < 0.0 || r.max_channel() >= 1.0 {
-                return Err(SolveError::Invalid(format!(
-                    "patch {i}: reflectance {r} outside [0, 1)"
-                )));
-            }
-            if !e.is_finite() || e.min_channel() < 0.0 {
-                return Err(SolveError::Invalid(format!(
-                    "patch {i}: emission {e} is negative or not finite"
-                )));
-            }
-        }
-        if self.emitted_power().max_channel() <= 0.0 {
-            return Err(SolveError::Invalid(
-                "no patch emits: the solution is zero".into(),
-            ));
-        }
-        Ok(())
-    }
-}
-
-/// Where a solver gets rows of F: a stored matrix or an estimator run on demand.
-pub trait RowSource {
-    /// Number of patches (rows).
-    fn len(&self) -> usize;
-
-    /// True when there are no rows.
-    fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Row `i` of F: `(j, F_ij)` for the non-zero entries, sorted by `j`. `share` is the
-    /// fraction of the scene's emitted power the caller is about to shoot from `i`; estimators
-    /// may use it to choose their effort, stored matrices ignore it.
-    fn row(&mut self, i: usize, share: f64) -> &[Entry];
-
-    /// Column `i` of F: `(j, F_ji)` for the non-zero entries, sorted by `j`: where the energy
-    /// shot from `i` lands, as fractions of each receiver's own exitance (shooting needs it,
-    /// 000_… eq. 23–24). `share` as for [`RowSource::row`].
-    fn column(&mut self, i: usize, share: f64) -> &[Entry];
-
-    /// Where a photon leaving patch `i` first arrives: patch `j` with probability `F_ij`, `None`
-    /// (lost) with probability `1 − Σ_j F_ij`.
-    fn sample(&mut self, i: usize, rng: &mut Rng64) -> Option<u32>;
-}
 
 /// What a solver reports after each iteration.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -158,17 +58,48 @@ pub struct Info {
     pub unshot: Rgb,
 }
 
+/// A solver parameter, for errors (the program maps it to its own option name).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Parameter {
+    /// [`SolverParams::tolerance`].
+    Tolerance,
+    /// [`SolverParams::omega`].
+    Omega,
+    /// [`SolverParams::photons`].
+    Photons,
+}
+
+impl std::fmt::Display for Parameter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Parameter::Tolerance => "tolerance",
+            Parameter::Omega => "relaxation factor ω",
+            Parameter::Photons => "photons per shot",
+        })
+    }
+}
+
 /// Why a solver could not run.
 #[derive(Debug, thiserror::Error)]
 pub enum SolveError {
     /// The system is malformed or unphysical.
     #[error("invalid radiosity system: {0}")]
-    Invalid(String),
+    System(#[from] SystemError),
+    /// A parameter is out of its range.
+    #[error("{parameter} = {value} is outside {range}")]
+    Parameter {
+        /// Which.
+        parameter: Parameter,
+        /// Its value.
+        value: f64,
+        /// The range it must lie in.
+        range: &'static str,
+    },
     /// The method would need more memory than allowed.
-    #[error("{method} on {n} patches would need about {} MiB, more than the {} MiB allowed; use {alternative}", needed >> 20, limit >> 20)]
+    #[error("{solver} on {n} patches would need about {} MiB, more than the {} MiB allowed; {alternative}", needed >> 20, limit >> 20)]
     TooLarge {
         /// The method.
-        method: &'static str,
+        solver: Solver,
         /// Unknowns.
         n: usize,
         /// Bytes it would need.
@@ -178,22 +109,33 @@ pub enum SolveError {
         /// What to use instead.
         alternative: &'static str,
     },
-    /// The method cannot handle this system.
-    #[error("{method}: {message}")]
-    Unsupported {
+    /// SuperShootGather needs `F_ii = 0`.
+    #[error("{solver}: patch {patch} sees itself (F_ii = {value}); SuperShootGather needs F_ii = 0; progressive has no such need")]
+    SelfFactor {
         /// The method.
-        method: &'static str,
-        /// Why.
-        message: String,
+        solver: Solver,
+        /// The patch.
+        patch: usize,
+        /// Its F_ii.
+        value: f32,
     },
+    /// The photon method was given an operator that cannot draw photons.
+    #[error("{solver}: this form-factor operator cannot draw photons")]
+    NoPhotons {
+        /// The method.
+        solver: Solver,
+    },
+    /// `I − diag(ρ) F` is singular.
+    #[error("the matrix I − diag(ρ) F is singular")]
+    Singular,
 }
 
 /// The solution methods, named as on the command line (`--solver`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Method {
+pub enum Solver {
     /// Gauss elimination: dense LU with partial pivoting ([`gauss`]).
     Gauss,
-    /// Jacobi iteration from B = E (000_… eq. 8), one row per iteration ([`jacobi`]).
+    /// Jacobi iteration from B = E (Szirmay-Kalos & Márton eq. 8), one row per iteration ([`jacobi`]).
     Jacobi,
     /// Gauss-Seidel from B = 0 ([`gauss_seidel`]).
     GaussSeidel0,
@@ -201,57 +143,57 @@ pub enum Method {
     GaussSeidel,
     /// Gauss-Seidel from 0 whose output is the unknowns plus their residuals ([`gauss_seidel`]).
     GaussSeidelJacobi,
-    /// Successive over-relaxation from B = E, factor ω (000_… eq. 21) ([`sor`]).
+    /// Successive over-relaxation from B = E, factor ω (Szirmay-Kalos & Márton eq. 21) ([`sor`]).
     Sor,
     /// Southwell relaxation: largest residual first, output the unknowns ([`southwell`]).
     Southwell,
     /// Progressive refinement: Southwell on the energy system plus the free Jacobi sweep
     /// ([`progressive`]).
     Progressive,
-    /// Feda's overshooting with the ambient term (003_… section 2.2.1) ([`overshoot_ambient`]).
+    /// Feda's overshooting with the ambient term (Gortler et al. section 2.2.1) ([`overshoot_ambient`]).
     OvershootAmbient,
-    /// SuperShootGather overshooting (003_… section 2.2.2, appendix C) ([`overshoot`]).
+    /// SuperShootGather overshooting (Gortler et al. section 2.2.2, appendix C) ([`overshoot`]).
     Overshoot,
-    /// Probabilistic progressive refinement: photon shooting (000_…) ([`stochastic`]).
+    /// Probabilistic progressive refinement: photon shooting (Szirmay-Kalos & Márton) ([`stochastic`]).
     Stochastic,
 }
 
-impl Method {
+impl Solver {
     /// Every method, in the order of the docs.
-    pub const ALL: [Method; 11] = [
-        Method::Gauss,
-        Method::Jacobi,
-        Method::GaussSeidel0,
-        Method::GaussSeidel,
-        Method::GaussSeidelJacobi,
-        Method::Sor,
-        Method::Southwell,
-        Method::Progressive,
-        Method::OvershootAmbient,
-        Method::Overshoot,
-        Method::Stochastic,
+    pub const ALL: [Solver; 11] = [
+        Solver::Gauss,
+        Solver::Jacobi,
+        Solver::GaussSeidel0,
+        Solver::GaussSeidel,
+        Solver::GaussSeidelJacobi,
+        Solver::Sor,
+        Solver::Southwell,
+        Solver::Progressive,
+        Solver::OvershootAmbient,
+        Solver::Overshoot,
+        Solver::Stochastic,
     ];
 
     /// The command-line name.
     pub fn name(self) -> &'static str {
         match self {
-            Method::Gauss => "gauss",
-            Method::Jacobi => "jacobi",
-            Method::GaussSeidel0 => "gauss-seidel-0",
-            Method::GaussSeidel => "gauss-seidel",
-            Method::GaussSeidelJacobi => "gauss-seidel-jacobi",
-            Method::Sor => "sor",
-            Method::Southwell => "southwell",
-            Method::Progressive => "progressive",
-            Method::OvershootAmbient => "overshoot-ambient",
-            Method::Overshoot => "overshoot",
-            Method::Stochastic => "stochastic",
+            Solver::Gauss => "gauss",
+            Solver::Jacobi => "jacobi",
+            Solver::GaussSeidel0 => "gauss-seidel-0",
+            Solver::GaussSeidel => "gauss-seidel",
+            Solver::GaussSeidelJacobi => "gauss-seidel-jacobi",
+            Solver::Sor => "sor",
+            Solver::Southwell => "southwell",
+            Solver::Progressive => "progressive",
+            Solver::OvershootAmbient => "overshoot-ambient",
+            Solver::Overshoot => "overshoot",
+            Solver::Stochastic => "stochastic",
         }
     }
 
     /// The method called `name`, if any.
-    pub fn from_name(name: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.name() == name)
+    pub fn from_name(name: &str) -> Option<Solver> {
+        Solver::ALL.into_iter().find(|m| m.name() == name)
     }
 
     /// True for the methods that need every row of F before they start (gathering and
@@ -259,12 +201,12 @@ impl Method {
     pub fn needs_all_rows(self) -> bool {
         !matches!(
             self,
-            Method::Progressive | Method::OvershootAmbient | Method::Stochastic
+            Solver::Progressive | Solver::OvershootAmbient | Solver::Stochastic
         )
     }
 }
 
-impl std::fmt::Display for Method {
+impl std::fmt::Display for Solver {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
     }
@@ -301,12 +243,12 @@ impl Default for SolverParams {
 }
 
 /// A solution method in progress, advanced one iteration at a time.
-pub trait Solver {
+pub trait SolverState {
     /// The method.
-    fn method(&self) -> Method;
+    fn method(&self) -> Solver;
     /// One iteration (one row or column of F, or one photon). Returns false when there is
     /// nothing left to do (the residual is exactly zero, or a direct method has finished).
-    fn step(&mut self, source: &mut dyn RowSource) -> bool;
+    fn step(&mut self, source: &mut dyn Operator) -> bool;
     /// The method's current estimate of B, written into `out` (resized to N).
     fn radiosity(&self, out: &mut Vec<Rgb>);
     /// For shooting methods whose output already includes it, the unshot radiosity per patch
@@ -316,65 +258,64 @@ pub trait Solver {
     }
     /// Unshot energy Σ |r_i| A_i over the emitted energy. Methods that keep the residual give
     /// it exactly; others may return a value computed a few iterations ago unless `exact`.
-    fn unshot_fraction(&mut self, source: &mut dyn RowSource, exact: bool) -> f64;
+    fn unshot_fraction(&mut self, source: &mut dyn Operator, exact: bool) -> f64;
     /// Iterations done.
     fn iterations(&self) -> u64;
     /// The energy bookkeeping of the current state.
-    fn info(&mut self, source: &mut dyn RowSource) -> Info;
+    fn info(&mut self, source: &mut dyn Operator) -> Info;
 }
 
 /// Start `method` on `system` (whose rows of F `source` provides).
 pub fn start<'s>(
-    method: Method,
-    system: System<'s>,
-    source: &mut dyn RowSource,
+    method: Solver,
+    system: &'s System,
+    source: &mut dyn Operator,
     params: &SolverParams,
-) -> Result<Box<dyn Solver + 's>, SolveError> {
+) -> Result<Box<dyn SolverState + 's>, SolveError> {
     system.validate()?;
-    if source.len() != system.len() {
-        return Err(SolveError::Invalid(format!(
-            "the form-factor matrix has {} rows but the system {} patches",
-            source.len(),
-            system.len()
-        )));
-    }
+    system.check_operator(source)?;
     Ok(match method {
-        Method::Gauss => Box::new(gauss::Gauss::new(system, params)?),
-        Method::Jacobi => Box::new(jacobi::Jacobi::new(system, source)),
-        Method::GaussSeidel0 => Box::new(gauss_seidel::GaussSeidel::new(
+        Solver::Gauss => Box::new(gauss::Gauss::new(system, params)?),
+        Solver::Jacobi => Box::new(jacobi::Jacobi::new(system, source)),
+        Solver::GaussSeidel0 => Box::new(gauss_seidel::GaussSeidel::new(
             system,
             source,
             gauss_seidel::Variant::Zero,
         )),
-        Method::GaussSeidel => Box::new(gauss_seidel::GaussSeidel::new(
+        Solver::GaussSeidel => Box::new(gauss_seidel::GaussSeidel::new(
             system,
             source,
             gauss_seidel::Variant::Emission,
         )),
-        Method::GaussSeidelJacobi => Box::new(gauss_seidel::GaussSeidel::new(
+        Solver::GaussSeidelJacobi => Box::new(gauss_seidel::GaussSeidel::new(
             system,
             source,
             gauss_seidel::Variant::ZeroPlusResidual,
         )),
-        Method::Sor => Box::new(sor::Sor::new(system, source, params.omega)?),
-        Method::Southwell => Box::new(southwell::Southwell::new(system)),
-        Method::Progressive => Box::new(progressive::Progressive::new(system)),
-        Method::OvershootAmbient => Box::new(overshoot_ambient::OvershootAmbient::new(system)),
-        Method::Overshoot => Box::new(overshoot::Overshoot::new(system, source, params)?),
-        Method::Stochastic => Box::new(stochastic::Stochastic::new(system, params)?),
+        Solver::Sor => Box::new(sor::Sor::new(system, source, params.omega)?),
+        Solver::Southwell => Box::new(southwell::Southwell::new(system)),
+        Solver::Progressive => Box::new(progressive::Progressive::new(system)),
+        Solver::OvershootAmbient => Box::new(overshoot_ambient::OvershootAmbient::new(system)),
+        Solver::Overshoot => Box::new(overshoot::Overshoot::new(system, source, params)?),
+        Solver::Stochastic => {
+            if source.photons().is_none() {
+                return Err(SolveError::NoPhotons { solver: method });
+            }
+            Box::new(stochastic::Stochastic::new(system, params)?)
+        }
     })
 }
 
 /// Drive `solver` until the unshot energy is at most `params.tolerance` of the emitted energy,
 /// or `params.max_iterations`. `observer` sees the status and the solver before the first
 /// iteration and after each; with `exact_status` every status is exact (see
-/// [`Solver::unshot_fraction`]), which costs `overshoot` a pass over F per iteration.
+/// [`SolverState::unshot_fraction`]), which costs `overshoot` a pass over F per iteration.
 pub fn run(
-    solver: &mut dyn Solver,
-    source: &mut dyn RowSource,
+    solver: &mut dyn SolverState,
+    source: &mut dyn Operator,
     params: &SolverParams,
     exact_status: bool,
-    observer: &mut dyn FnMut(&Status, &dyn Solver),
+    observer: &mut dyn FnMut(&Status, &dyn SolverState),
 ) -> Info {
     let mut seconds = 0.0;
     loop {
@@ -414,9 +355,9 @@ pub fn run(
 
 /// Solve `system` by `method` to `params`; returns B and the report.
 pub fn solve(
-    method: Method,
-    system: System,
-    source: &mut dyn RowSource,
+    method: Solver,
+    system: &System,
+    source: &mut dyn Operator,
     params: &SolverParams,
 ) -> Result<(Vec<Rgb>, Info), SolveError> {
     let mut solver = start(method, system, source, params)?;
@@ -426,7 +367,7 @@ pub fn solve(
     Ok((b, info))
 }
 
-/// The error of eq. 22 of 003_6556f2e3d50166bb.txt: Σ_i (B*_i − B_i) / Σ_i (B*_i − E_i), the
+/// The error of eq. 22 of Gortler, Cohen & Slusallek (1993): Σ_i (B*_i − B_i) / Σ_i (B*_i − E_i), the
 /// share of the reflected radiosity not yet accounted for (channels summed).
 pub fn relative_error(exact: &[Rgb], emission: &[Rgb], b: &[Rgb]) -> f64 {
     let mut num = 0.0;
@@ -439,7 +380,7 @@ pub fn relative_error(exact: &[Rgb], emission: &[Rgb], b: &[Rgb]) -> f64 {
 }
 
 /// The ambient term of Cohen, Chen, Wallace and Greenberg (1988), quoted as eq. 2 of
-/// 003_6556f2e3d50166bb.txt: the area-weighted mean unshot radiosity times the geometric series
+/// Gortler, Cohen & Slusallek (1993): the area-weighted mean unshot radiosity times the geometric series
 /// of the area-weighted mean reflectance, `ΔB̄ / (1 − ρ̄)`. Added as `ρ_i · ambient` to each patch
 /// for display only, it stands for the light not yet shot.
 pub fn ambient_term(system: &System, unshot: &[Rgb]) -> Rgb {

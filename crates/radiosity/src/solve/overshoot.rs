@@ -1,4 +1,4 @@
-//! Overshooting by SuperShootGather (003_6556f2e3d50166bb.txt section 2.2.2 and appendix C).
+//! Overshooting by SuperShootGather (Gortler, Cohen & Slusallek (1993) section 2.2.2 and appendix C).
 //!
 //! When patch i is chosen, its row and its column of F are both known (reciprocity, eq. 3),
 //! so it can shoot, gather, shoot again and so on *ad infinitum* in closed form. That solves
@@ -24,17 +24,17 @@
 //! (F_ii = 0, true of planar patches). The residual is not kept: it is recomputed from every
 //! row of F, every N/8 steps for the stopping test, and at every step when a trace asks.
 
-use super::matrix::balance;
-use super::{Info, Method, RowSource, SolveError, Solver, SolverParams, System};
+use super::{Info, Operator, SolveError, Solver, SolverParams, SolverState, System};
 use crate::color::Rgb;
-use crate::formfactor::Entry;
+use crate::system::balance;
+use crate::system::Entry;
 
 const NONE: u32 = u32::MAX;
 
 /// SuperShootGather in progress.
 #[derive(Clone, Debug)]
 pub struct Overshoot<'s> {
-    system: System<'s>,
+    system: &'s System,
     b: Vec<Rgb>,
     /// B_i when i was last chosen (zero before).
     last: Vec<Rgb>,
@@ -57,8 +57,8 @@ impl<'s> Overshoot<'s> {
     /// Start from B = E (nothing shot). Refuses systems with F_ii ≠ 0, and systems whose shot
     /// matrix could outgrow `params.memory_limit`.
     pub fn new(
-        system: System<'s>,
-        source: &mut dyn RowSource,
+        system: &'s System,
+        source: &mut dyn Operator,
         params: &SolverParams,
     ) -> Result<Self, SolveError> {
         let n = system.len();
@@ -68,12 +68,10 @@ impl<'s> Overshoot<'s> {
                 .iter()
                 .find(|e| e.0 as usize == i && e.1 != 0.0)
             {
-                return Err(SolveError::Unsupported {
-                    method: "overshoot",
-                    message: format!(
-                        "patch {i} sees itself (F_ii = {}); SuperShootGather needs F_ii = 0; use progressive",
-                        e.1
-                    ),
+                return Err(SolveError::SelfFactor {
+                    solver: Solver::Overshoot,
+                    patch: i,
+                    value: e.1,
                 });
             }
         }
@@ -81,12 +79,12 @@ impl<'s> Overshoot<'s> {
         let needed = most_chosen * n as u64 * 2 * std::mem::size_of::<Rgb>() as u64;
         if needed > params.memory_limit {
             return Err(SolveError::TooLarge {
-                method: "overshoot",
+                solver: Solver::Overshoot,
                 n,
                 needed,
                 limit: params.memory_limit,
                 alternative:
-                    "progressive or overshoot-ambient (O(N) memory), or fewer --max-iterations",
+                    "progressive or overshoot-ambient need O(N) memory, or allow fewer iterations",
             });
         }
         Ok(Self {
@@ -163,12 +161,12 @@ impl<'s> Overshoot<'s> {
     }
 }
 
-impl Solver for Overshoot<'_> {
-    fn method(&self) -> Method {
-        Method::Overshoot
+impl SolverState for Overshoot<'_> {
+    fn method(&self) -> Solver {
+        Solver::Overshoot
     }
 
-    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+    fn step(&mut self, source: &mut dyn Operator) -> bool {
         let sys = self.system;
         let (mut i, mut best) = (0, 0.0);
         for k in 0..self.b.len() {
@@ -239,7 +237,7 @@ impl Solver for Overshoot<'_> {
         out.extend_from_slice(&self.b);
     }
 
-    fn unshot_fraction(&mut self, source: &mut dyn RowSource, exact: bool) -> f64 {
+    fn unshot_fraction(&mut self, source: &mut dyn Operator, exact: bool) -> f64 {
         let interval = (self.b.len() as u64 / 8).max(1);
         if exact || self.checked_at == u64::MAX || self.iterations >= self.checked_at + interval {
             let (_, _, _, abs) = balance(&self.system, source, &self.b);
@@ -253,7 +251,7 @@ impl Solver for Overshoot<'_> {
         self.iterations
     }
 
-    fn info(&mut self, source: &mut dyn RowSource) -> Info {
+    fn info(&mut self, source: &mut dyn Operator) -> Info {
         let (absorbed, escaped, unshot, abs) = balance(&self.system, source, &self.b);
         Info {
             iterations: self.iterations,

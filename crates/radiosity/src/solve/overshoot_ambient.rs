@@ -1,4 +1,4 @@
-//! Overshooting with the ambient term (Feda 1992, as given in 003_6556f2e3d50166bb.txt
+//! Overshooting with the ambient term (Feda 1992, as given in Gortler, Cohen & Slusallek (1993)
 //! section 2.2.1): progressive refinement that shoots its unshot radiosity plus an estimate of
 //! what will still arrive, `ΔB̂_i = ρ_i · ambient`, where the ambient term (eq. 2) is the
 //! area-weighted mean unshot radiosity times `1/(1 − ρ̄)`. After the shot the patch's unshot
@@ -7,7 +7,7 @@
 //! `|ΔB_i + ΔB̂_i|·A_i`. Output: B = x + r, as progressive refinement.
 
 use super::relaxation::Relaxation;
-use super::{Method, RowSource, Solver, System};
+use super::{Operator, Solver, SolverState, System};
 use crate::color::Rgb;
 
 /// Overshooting with the ambient term in progress.
@@ -20,12 +20,12 @@ pub struct OvershootAmbient<'s> {
 
 impl<'s> OvershootAmbient<'s> {
     /// Start: B = ΔB = E.
-    pub fn new(system: System<'s>) -> Self {
+    pub fn new(system: &'s System) -> Self {
         let total_area: f64 = system.area.iter().sum();
         let mean_reflectance = system
             .reflectance
             .iter()
-            .zip(system.area)
+            .zip(&system.area)
             .map(|(r, a)| *r * *a)
             .sum::<Rgb>()
             / total_area;
@@ -55,12 +55,12 @@ impl OvershootAmbient<'_> {
     }
 }
 
-impl Solver for OvershootAmbient<'_> {
-    fn method(&self) -> Method {
-        Method::OvershootAmbient
+impl SolverState for OvershootAmbient<'_> {
+    fn method(&self) -> Solver {
+        Solver::OvershootAmbient
     }
 
-    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+    fn step(&mut self, source: &mut dyn Operator) -> bool {
         let ambient = self.ambient();
         let sys = self.core.system;
         let r = &self.core.r;

@@ -1,9 +1,9 @@
 //! Progressive refinement radiosity (Cohen, Chen, Wallace, Greenberg 1988), as given in
-//! 003_6556f2e3d50166bb.txt section 2.1 and 000_59d10e371b5f300d.txt eq. 23–28.
+//! Gortler, Cohen & Slusallek (1993) section 2.1 and Szirmay-Kalos & Márton (1995) eq. 23–28.
 //!
 //! Each patch holds its radiosity `B_i` and unshot radiosity `ΔB_i`, both starting at `E_i`.
 //! An iteration picks the shooter `i` with the most unshot energy `ΔB_i·A_i` and shoots with
-//! column i of F (from a row by reciprocity, 000_… eq. 24, `F_ji = F_ij A_i / A_j`, when the
+//! column i of F (from a row by reciprocity, Szirmay-Kalos & Márton eq. 24, `F_ji = F_ij A_i / A_j`, when the
 //! source estimates rows):
 //!
 //! ```text
@@ -11,13 +11,13 @@
 //! ```
 //!
 //! All three channels in one pass. In the terms of [`super::relaxation`] this is Southwell
-//! relaxation on the energy system (003_… section 5.1: the unknowns are the shot radiosity
+//! relaxation on the energy system (Gortler et al. section 5.1: the unknowns are the shot radiosity
 //! ∇B, the residuals the unshot ΔB), and the output `B = ∇B + ΔB` adds one free Jacobi sweep
-//! (003_… section 4). The unshot energy never increases, and by eq. 25 it falls by at least the
+//! (Gortler et al. section 4). The unshot energy never increases, and by eq. 25 it falls by at least the
 //! factor `1 − (1 − q)/N` per shot, where `q = max_i Σ_j ρ_j F_ij`.
 
 use super::relaxation::Relaxation;
-use super::{Method, RowSource, Solver, System};
+use super::{Operator, Solver, SolverState, System};
 use crate::color::Rgb;
 
 /// Progressive refinement in progress.
@@ -28,7 +28,7 @@ pub struct Progressive<'s> {
 
 impl<'s> Progressive<'s> {
     /// Start: B = ΔB = E.
-    pub fn new(system: System<'s>) -> Self {
+    pub fn new(system: &'s System) -> Self {
         Self {
             core: Relaxation::from_zero(system),
         }
@@ -41,7 +41,7 @@ impl<'s> Progressive<'s> {
     }
 
     /// Shoot from patch `i`.
-    pub fn shoot(&mut self, i: usize, source: &mut dyn RowSource) {
+    pub fn shoot(&mut self, i: usize, source: &mut dyn Operator) {
         self.core.relax(i, 1.0, source);
     }
 
@@ -58,12 +58,12 @@ impl Progressive<'_> {
     }
 }
 
-impl Solver for Progressive<'_> {
-    fn method(&self) -> Method {
-        Method::Progressive
+impl SolverState for Progressive<'_> {
+    fn method(&self) -> Solver {
+        Solver::Progressive
     }
 
-    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+    fn step(&mut self, source: &mut dyn Operator) -> bool {
         let (i, best) = self.shooter();
         if best <= 0.0 {
             return false;
@@ -82,8 +82,8 @@ impl Solver for Progressive<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solve::matrix::SparseMatrix;
     use crate::solve::{solve, SolverParams};
+    use crate::system::SparseMatrix;
 
     #[test]
     fn three_patches_match_the_direct_solution() {
@@ -119,9 +119,9 @@ mod tests {
         let refl: Vec<Rgb> = rho.iter().map(|&r| Rgb::splat(r)).collect();
         let emis: Vec<Rgb> = e.iter().map(|&x| Rgb::splat(x)).collect();
         let sys = System {
-            area: &area,
-            reflectance: &refl,
-            emission: &emis,
+            area: area.to_vec(),
+            reflectance: refl.to_vec(),
+            emission: emis.to_vec(),
         };
         sys.validate().unwrap();
         let mut src = SparseMatrix::from_rows(
@@ -139,7 +139,7 @@ mod tests {
             tolerance: 1e-12,
             ..Default::default()
         };
-        let (b, info) = solve(Method::Progressive, sys, &mut src, &params).unwrap();
+        let (b, info) = solve(Solver::Progressive, &sys, &mut src, &params).unwrap();
         assert!(info.converged);
         for i in 0..3 {
             assert!(
@@ -152,8 +152,8 @@ mod tests {
         // Energy: emitted = absorbed + escaped + unshot.
         let balance = info.emitted - info.absorbed - info.escaped - info.unshot;
         assert!(balance.max_abs_diff(Rgb::BLACK) < 1e-9);
-        // Unshot energy never increases (Southwell on the energy system, 003_… appendix B).
-        let mut pr = Progressive::new(sys);
+        // Unshot energy never increases (Southwell on the energy system, Gortler et al. appendix B).
+        let mut pr = Progressive::new(&sys);
         let mut last = pr.unshot_fraction(&mut src, true);
         for _ in 0..20 {
             pr.step(&mut src);

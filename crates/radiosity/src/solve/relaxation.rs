@@ -1,7 +1,7 @@
-//! What the relaxation methods share (003_6556f2e3d50166bb.txt section 3): the unknowns `x`,
+//! What the relaxation methods share (Gortler, Cohen & Slusallek (1993) section 3): the unknowns `x`,
 //! the exact residual `r = b − M x = E + ρ F x − x`, and the energy bookkeeping.
 //!
-//! Changing one unknown `x_i` by `δ` changes the residuals by column `i` of M (003_… eq. 14,
+//! Changing one unknown `x_i` by `δ` changes the residuals by column `i` of M (Gortler et al. eq. 14,
 //! 16): `r_i −= δ`, then `r_j += ρ_j F_ji δ` for every j. Relaxing `x_i` is the change
 //! `δ = ω r_i / M_ii` with `M_ii = 1 − ρ_i F_ii` (eq. 12, 18); ω = 1 zeroes `r_i`. Every step
 //! costs one column of F, so the residual stays exact and Σ |r_i| A_i, the unshot energy, is
@@ -12,11 +12,11 @@
 //! and `1 − ρ_j` is absorbed; the rest escapes. Then emitted = absorbed + escaped + Σ r_i A_i
 //! holds exactly at every step (the terms cancel in pairs), also for negative δ.
 
-use super::{Info, RowSource, System};
+use super::{Info, Operator, System};
 use crate::color::Rgb;
-use crate::formfactor::Entry;
+use crate::system::Entry;
 
-/// The [`super::Solver`] methods that every relaxation method implements the same way from its
+/// The [`super::SolverState`] methods that every relaxation method implements the same way from its
 /// `core: Relaxation` field: the output (x, or x + r when the type's `plus_residual()` says so),
 /// the unshot fraction, the iteration count and the bookkeeping.
 macro_rules! relaxation_accessors {
@@ -25,7 +25,7 @@ macro_rules! relaxation_accessors {
             self.core.output(self.plus_residual(), out);
         }
 
-        fn unshot_fraction(&mut self, _: &mut dyn crate::solve::RowSource, _: bool) -> f64 {
+        fn unshot_fraction(&mut self, _: &mut dyn crate::solve::Operator, _: bool) -> f64 {
             self.core.unshot_fraction()
         }
 
@@ -33,7 +33,7 @@ macro_rules! relaxation_accessors {
             self.core.iterations
         }
 
-        fn info(&mut self, _: &mut dyn crate::solve::RowSource) -> crate::solve::Info {
+        fn info(&mut self, _: &mut dyn crate::solve::Operator) -> crate::solve::Info {
             self.core.info()
         }
     };
@@ -44,7 +44,7 @@ pub(crate) use relaxation_accessors;
 #[derive(Clone, Debug)]
 pub struct Relaxation<'s> {
     /// The system.
-    pub system: System<'s>,
+    pub system: &'s System,
     /// The unknowns x.
     pub x: Vec<Rgb>,
     /// The residuals r = E + ρ F x − x.
@@ -69,7 +69,7 @@ fn abs_sum(c: Rgb) -> f64 {
 
 impl<'s> Relaxation<'s> {
     /// Start from x = 0 (so r = E).
-    pub fn from_zero(system: System<'s>) -> Self {
+    pub fn from_zero(system: &'s System) -> Self {
         let n = system.len();
         let emitted = system.emitted_power();
         let r = system.emission.to_vec();
@@ -91,11 +91,11 @@ impl<'s> Relaxation<'s> {
     }
 
     /// Start from x = E: the residual and the energy of that start come from every row of F.
-    pub fn from_emission(system: System<'s>, source: &mut dyn RowSource) -> Self {
+    pub fn from_emission(system: &'s System, source: &mut dyn Operator) -> Self {
         let mut s = Self::from_zero(system);
         s.x = system.emission.to_vec();
-        let (absorbed, escaped, _, _) = super::matrix::balance(&system, source, &s.x);
-        s.r = super::matrix::residual(&system, source, &s.x);
+        let (absorbed, escaped, _, _) = crate::system::balance(&system, source, &s.x);
+        s.r = crate::system::residual(&system, source, &s.x);
         s.absorbed = absorbed;
         s.escaped = escaped;
         s.resum();
@@ -104,7 +104,7 @@ impl<'s> Relaxation<'s> {
 
     /// Recompute the sums from the residuals (against rounding drift).
     pub fn resum(&mut self) {
-        let a = self.system.area;
+        let a = &self.system.area;
         for i in 0..self.r.len() {
             self.energy[i] = abs_sum(self.r[i]) * a[i];
         }
@@ -155,7 +155,7 @@ impl<'s> Relaxation<'s> {
     }
 
     /// Relax `x_i` with factor ω: `x_i += ω r_i / M_ii`. Returns false if `r_i` was zero.
-    pub fn relax(&mut self, i: usize, omega: f64, source: &mut dyn RowSource) -> bool {
+    pub fn relax(&mut self, i: usize, omega: f64, source: &mut dyn Operator) -> bool {
         let r = self.r[i];
         if r == Rgb::BLACK {
             self.iterations += 1;

@@ -1,10 +1,10 @@
-//! Successive over-relaxation (000_59d10e371b5f300d.txt eq. 21; 003_6556f2e3d50166bb.txt
+//! Successive over-relaxation (Szirmay-Kalos & Márton (1995) eq. 21; Gortler, Cohen & Slusallek (1993)
 //! section 3.3): Gauss-Seidel from B = E whose every change is scaled by ω,
 //! `x_i += ω r_i / M_ii`, leaving `r_i = (1 − ω) r_i` (eq. 18–19). Cohen et al. suggest
 //! ω ≈ 1.1 for radiosity; it converges for 0 < ω < 2 on these diagonally dominant systems.
 
 use super::relaxation::Relaxation;
-use super::{Method, RowSource, SolveError, Solver, System};
+use super::{Operator, SolveError, Solver, SolverState, System};
 
 /// Over-relaxation in progress.
 #[derive(Clone, Debug)]
@@ -17,14 +17,16 @@ pub struct Sor<'s> {
 impl<'s> Sor<'s> {
     /// Start from B = E with factor `omega` in (0, 2).
     pub fn new(
-        system: System<'s>,
-        source: &mut dyn RowSource,
+        system: &'s System,
+        source: &mut dyn Operator,
         omega: f64,
     ) -> Result<Self, SolveError> {
         if !(omega > 0.0 && omega < 2.0) {
-            return Err(SolveError::Invalid(format!(
-                "relaxation factor ω = {omega} is outside (0, 2)"
-            )));
+            return Err(SolveError::Parameter {
+                parameter: super::Parameter::Omega,
+                value: omega,
+                range: "(0, 2)",
+            });
         }
         Ok(Self {
             core: Relaxation::from_emission(system, source),
@@ -41,12 +43,12 @@ impl Sor<'_> {
     }
 }
 
-impl Solver for Sor<'_> {
-    fn method(&self) -> Method {
-        Method::Sor
+impl SolverState for Sor<'_> {
+    fn method(&self) -> Solver {
+        Solver::Sor
     }
 
-    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+    fn step(&mut self, source: &mut dyn Operator) -> bool {
         if self.core.unshot_fraction() == 0.0 {
             return false;
         }

@@ -1,10 +1,10 @@
-//! Southwell relaxation (003_6556f2e3d50166bb.txt section 3.1 and appendix A): start at x = 0,
+//! Southwell relaxation (Gortler, Cohen & Slusallek (1993) section 3.1 and appendix A): start at x = 0,
 //! r = E, and relax the unknown with the largest residual (channels summed), updating the
 //! residuals through one column of F (eq. 16). Outputs the unknowns x. Converges for
 //! radiosity matrices, which are row diagonally dominant (appendix A).
 
 use super::relaxation::Relaxation;
-use super::{Method, RowSource, Solver, System};
+use super::{Operator, Solver, SolverState, System};
 
 /// Southwell relaxation in progress.
 #[derive(Clone, Debug)]
@@ -14,7 +14,7 @@ pub struct Southwell<'s> {
 
 impl<'s> Southwell<'s> {
     /// Start from x = 0.
-    pub fn new(system: System<'s>) -> Self {
+    pub fn new(system: &'s System) -> Self {
         Self {
             core: Relaxation::from_zero(system),
         }
@@ -28,13 +28,13 @@ impl Southwell<'_> {
     }
 }
 
-impl Solver for Southwell<'_> {
-    fn method(&self) -> Method {
-        Method::Southwell
+impl SolverState for Southwell<'_> {
+    fn method(&self) -> Solver {
+        Solver::Southwell
     }
 
-    fn step(&mut self, source: &mut dyn RowSource) -> bool {
-        let area = self.core.system.area;
+    fn step(&mut self, source: &mut dyn Operator) -> bool {
+        let area = &self.core.system.area;
         let energy = &self.core.energy;
         let (i, best) = self.core.argmax(|i| energy[i] / area[i]);
         if best <= 0.0 {

@@ -1,13 +1,13 @@
-//! Probabilistic progressive refinement (000_59d10e371b5f300d.txt, "Probabilistic progressive
+//! Probabilistic progressive refinement (Szirmay-Kalos & Márton (1995), "Probabilistic progressive
 //! refinement"): B and the unshot radiosity U start at E. Each iteration takes the patch j with
 //! the most unshot energy `U_j A_j` and sends one photon carrying `1/n` of that power: it leaves
 //! from a uniform point of j in a cosine-distributed direction, i.e. it lands on patch k with
-//! probability `F_jk` ([`RowSource::sample`]: a ray on a scene, a draw from row j of a stored
+//! probability `F_jk` ([`Operator::sample`]: a ray on a scene, a draw from row j of a stored
 //! matrix). Patch k keeps `ρ_k` of the power as new unshot and total radiosity; `U_j` loses
 //! `U_j/n`. No form factor is stored. The result is unbiased; its variance falls as n grows.
 //! Shooters are found in O(log N) with a max-tree over the unshot energies.
 
-use super::{Info, Method, RowSource, SolveError, Solver, SolverParams, System};
+use super::{Info, Operator, SolveError, Solver, SolverParams, SolverState, System};
 use crate::color::Rgb;
 use crate::sampling::{stream, Rng64};
 
@@ -58,7 +58,7 @@ impl MaxTree {
 /// Photon shooting in progress.
 #[derive(Clone, Debug)]
 pub struct Stochastic<'s> {
-    system: System<'s>,
+    system: &'s System,
     b: Vec<Rgb>,
     u: Vec<Rgb>,
     tree: MaxTree,
@@ -80,11 +80,13 @@ fn energy(u: Rgb, a: f64) -> f64 {
 
 impl<'s> Stochastic<'s> {
     /// Start: B = U = E; photons carry `1/params.photons` of the shooter's unshot power.
-    pub fn new(system: System<'s>, params: &SolverParams) -> Result<Self, SolveError> {
+    pub fn new(system: &'s System, params: &SolverParams) -> Result<Self, SolveError> {
         if params.photons == 0 {
-            return Err(SolveError::Invalid(
-                "photons per shot must be at least 1".into(),
-            ));
+            return Err(SolveError::Parameter {
+                parameter: super::Parameter::Photons,
+                value: 0.0,
+                range: "[1, 2³²)",
+            });
         }
         let keys: Vec<f64> = (0..system.len())
             .map(|i| energy(system.emission[i], system.area[i]))
@@ -109,18 +111,18 @@ impl<'s> Stochastic<'s> {
     fn unshot_power(&self) -> Rgb {
         self.u
             .iter()
-            .zip(self.system.area)
+            .zip(&self.system.area)
             .map(|(u, a)| *u * *a)
             .sum()
     }
 }
 
-impl Solver for Stochastic<'_> {
-    fn method(&self) -> Method {
-        Method::Stochastic
+impl SolverState for Stochastic<'_> {
+    fn method(&self) -> Solver {
+        Solver::Stochastic
     }
 
-    fn step(&mut self, source: &mut dyn RowSource) -> bool {
+    fn step(&mut self, source: &mut dyn Operator) -> bool {
         let (key, j) = self.tree.max();
         if key <= 0.0 {
             return false;
@@ -131,7 +133,11 @@ impl Solver for Stochastic<'_> {
         self.u[j] = uj - uj / self.photons;
         self.tree.set(j, energy(self.u[j], sys.area[j]));
         self.unshot_running -= power;
-        match source.sample(j, &mut self.rng) {
+        match source
+            .photons()
+            .expect("checked by solve::start")
+            .sample(j, &mut self.rng)
+        {
             Some(k) => {
                 let k = k as usize;
                 let rho = sys.reflectance[k];
@@ -157,7 +163,7 @@ impl Solver for Stochastic<'_> {
         Some(&self.u)
     }
 
-    fn unshot_fraction(&mut self, _: &mut dyn RowSource, exact: bool) -> f64 {
+    fn unshot_fraction(&mut self, _: &mut dyn Operator, exact: bool) -> f64 {
         if exact {
             self.unshot_running = self.unshot_power();
         }
@@ -168,7 +174,7 @@ impl Solver for Stochastic<'_> {
         self.iterations
     }
 
-    fn info(&mut self, _: &mut dyn RowSource) -> Info {
+    fn info(&mut self, _: &mut dyn Operator) -> Info {
         let unshot = self.unshot_power();
         Info {
             iterations: self.iterations,

@@ -2,9 +2,7 @@
 //! per-row cumulative sums for sampling photons. Never allocated as N × N: memory is
 //! proportional to the number of non-zero entries.
 
-use super::{RowSource, System};
-use crate::color::Rgb;
-use crate::formfactor::Entry;
+use super::{Entry, Operator, PhotonSampler};
 use crate::sampling::{uniform, Rng64};
 
 /// A sparse N × N form-factor matrix.
@@ -121,7 +119,7 @@ impl SparseMatrix {
     }
 }
 
-impl RowSource for SparseMatrix {
+impl Operator for SparseMatrix {
     fn len(&self) -> usize {
         self.n
     }
@@ -134,6 +132,13 @@ impl RowSource for SparseMatrix {
         self.column_entries(i)
     }
 
+    fn photons(&mut self) -> Option<&mut dyn PhotonSampler> {
+        Some(self)
+    }
+}
+
+/// A draw from the stored row by its cumulative sums.
+impl PhotonSampler for SparseMatrix {
     fn sample(&mut self, i: usize, rng: &mut Rng64) -> Option<u32> {
         let (a, b) = (self.row_ptr[i], self.row_ptr[i + 1]);
         if a == b {
@@ -147,43 +152,4 @@ impl RowSource for SparseMatrix {
         let k = cum.partition_point(|&c| c <= u);
         Some(self.rows[a + k.min(b - a - 1)].0)
     }
-}
-
-/// The residual `r = E + ρ F B − B` of `b`, from rows of F.
-pub fn residual(system: &System, source: &mut dyn RowSource, b: &[Rgb]) -> Vec<Rgb> {
-    (0..system.len())
-        .map(|i| {
-            let g: Rgb = source
-                .row(i, 0.0)
-                .iter()
-                .map(|e| b[e.0 as usize] * e.1 as f64)
-                .sum();
-            system.emission[i] + system.reflectance[i] * g - b[i]
-        })
-        .collect()
-}
-
-/// The energy bookkeeping of radiosities `b` that are taken to have been shot once each:
-/// `(absorbed, escaped, unshot)` with unshot = Σ r_i A_i (signed) and Σ |r_i| A_i over
-/// channels, so that emitted = absorbed + escaped + unshot exactly (see
-/// [`super::relaxation`]).
-pub fn balance(system: &System, source: &mut dyn RowSource, b: &[Rgb]) -> (Rgb, Rgb, Rgb, f64) {
-    let (mut absorbed, mut escaped, mut unshot, mut abs) =
-        (Rgb::BLACK, Rgb::BLACK, Rgb::BLACK, 0.0);
-    for i in 0..system.len() {
-        let a = system.area[i];
-        let rho = system.reflectance[i];
-        let g: Rgb = source
-            .row(i, 0.0)
-            .iter()
-            .map(|e| b[e.0 as usize] * e.1 as f64)
-            .sum();
-        // Under reciprocity, g A_i is the power arriving at i.
-        absorbed += (Rgb::splat(1.0) - rho) * g * a;
-        escaped += b[i] * a - g * a;
-        let r = system.emission[i] + rho * g - b[i];
-        unshot += r * a;
-        abs += r.map(f64::abs).sum() * a;
-    }
-    (absorbed, escaped, unshot, abs)
 }

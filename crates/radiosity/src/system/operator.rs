@@ -1,0 +1,72 @@
+//! F as an operator, and the separate photon-drawing interface.
+
+use super::Entry;
+use crate::color::Rgb;
+use crate::sampling::Rng64;
+use std::ops::Range;
+
+/// The form-factor matrix F as the solvers see it: rows and columns on demand, blocks of rows,
+/// and the products `F x` and `Fᵀ x`. A stored [`super::SparseMatrix`] implements it, and so do
+/// estimators that compute rows when asked (`formfactor::OnDemandRows`), so solvers never
+/// depend on how F was obtained. Methods take `&mut self` because an estimator may compute and
+/// cache what it hands out.
+pub trait Operator {
+    /// Number of rows (= columns = patches).
+    fn len(&self) -> usize;
+
+    /// True when there are no rows.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Row `i` of F: `(j, F_ij)` for the non-zero entries, sorted by `j`. `share` is the fraction
+    /// of the scene's emitted power the caller is about to shoot from `i`; estimators may use
+    /// it to choose their effort, stored matrices ignore it.
+    fn row(&mut self, i: usize, share: f64) -> &[Entry];
+
+    /// Column `i` of F: `(j, F_ji)` for the non-zero entries, sorted by `j`: where the energy
+    /// shot from `i` lands, as fractions of each receiver's own exitance (shooting needs it,
+    /// Szirmay-Kalos & Márton 1995, eq. 23–24). `share` as for [`Operator::row`].
+    fn column(&mut self, i: usize, share: f64) -> &[Entry];
+
+    /// Rows `range`, in order, each handed to `each` with its index: the unit of work that
+    /// distributed or blocked methods share out.
+    fn rows(&mut self, range: Range<usize>, each: &mut dyn FnMut(usize, &[Entry])) {
+        for i in range {
+            each(i, self.row(i, 0.0));
+        }
+    }
+
+    /// `y = F x` (`y` has one value per row).
+    fn apply(&mut self, x: &[Rgb], y: &mut [Rgb]) {
+        let n = self.len();
+        self.rows(0..n, &mut |i, row| {
+            y[i] = row.iter().map(|&(j, f)| x[j as usize] * f as f64).sum();
+        });
+    }
+
+    /// `y = Fᵀ x`.
+    fn apply_transpose(&mut self, x: &[Rgb], y: &mut [Rgb]) {
+        y.iter_mut().for_each(|v| *v = Rgb::BLACK);
+        let n = self.len();
+        self.rows(0..n, &mut |i, row| {
+            for &(j, f) in row {
+                y[j as usize] += x[i] * f as f64;
+            }
+        });
+    }
+
+    /// The photon sampler that goes with this operator, if it has one (the photon-shooting
+    /// solver needs it).
+    fn photons(&mut self) -> Option<&mut dyn PhotonSampler> {
+        None
+    }
+}
+
+/// Where a photon leaving patch `i` first arrives: patch `j` with probability `F_ij`, `None`
+/// (lost) with probability `1 − Σ_j F_ij`. A stored matrix draws from its row; a scene casts a
+/// ray.
+pub trait PhotonSampler {
+    /// One draw, from the random stream `rng`.
+    fn sample(&mut self, i: usize, rng: &mut Rng64) -> Option<u32>;
+}
