@@ -1,36 +1,186 @@
-//! Command-line syntax (clap).
+//! Command-line syntax (clap): the only place that knows the flags. Method names come from the
+//! library's enums, so `--help` lists exactly what the library implements and a misspelt
+//! method gets clap's "did you mean".
 
-use clap::{Args, Parser, Subcommand};
+use clap::builder::PossibleValue;
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use radiosity::formfactor::{FormFactorMethod, Storage};
+use radiosity::pipeline::Rows;
+use radiosity::solve::Solver;
 use std::path::PathBuf;
 
-/// Diffuse global illumination by the radiosity method.
+/// A solver named on the command line (`--solver`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SolverArg(pub Solver);
+
+const fn wrap_solvers<const N: usize>(all: [Solver; N]) -> [SolverArg; N] {
+    let mut out = [SolverArg(Solver::Gauss); N];
+    let mut i = 0;
+    while i < N {
+        out[i] = SolverArg(all[i]);
+        i += 1;
+    }
+    out
+}
+
+static SOLVERS: [SolverArg; Solver::ALL.len()] = wrap_solvers(Solver::ALL);
+
+impl ValueEnum for SolverArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        &SOLVERS
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.0.name()).help(self.0.summary()))
+    }
+}
+
+/// A form-factor method named on the command line (`--form-factor-method`, `--method`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FormFactorArg(pub FormFactorMethod);
+
+const fn wrap_methods<const N: usize>(all: [FormFactorMethod; N]) -> [FormFactorArg; N] {
+    let mut out = [FormFactorArg(FormFactorMethod::MonteCarlo); N];
+    let mut i = 0;
+    while i < N {
+        out[i] = FormFactorArg(all[i]);
+        i += 1;
+    }
+    out
+}
+
+static METHODS: [FormFactorArg; FormFactorMethod::ALL.len()] = wrap_methods(FormFactorMethod::ALL);
+
+impl ValueEnum for FormFactorArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        &METHODS
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.0.name()).help(self.0.summary()))
+    }
+}
+
+/// Whether rows of F are stored or computed on demand (`--rows`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RowsArg {
+    /// On demand for shooting solvers with monte-carlo; stored otherwise.
+    Auto,
+    /// Every row computed and stored before the solver starts.
+    Stored,
+    /// Rows computed when the solver asks, for any method (O(N) memory plus a bounded cache).
+    OnDemand,
+}
+
+impl From<RowsArg> for Rows {
+    fn from(r: RowsArg) -> Self {
+        match r {
+            RowsArg::Auto => Rows::Auto,
+            RowsArg::Stored => Rows::Stored,
+            RowsArg::OnDemand => Rows::OnDemand,
+        }
+    }
+}
+
+/// Matrix storage while computing (`form-factors --storage`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum StorageArg {
+    /// Dense up to 4,096 patches, sparse beyond.
+    Auto,
+    /// N × N values.
+    Dense,
+    /// Sparse rows: never N² zeros.
+    Sparse,
+}
+
+impl From<StorageArg> for Storage {
+    fn from(s: StorageArg) -> Self {
+        match s {
+            StorageArg::Auto => Storage::Auto,
+            StorageArg::Dense => Storage::Dense,
+            StorageArg::Sparse => Storage::Sparse,
+        }
+    }
+}
+
+const SCENE: &str = "Scene";
+const MESHING: &str = "Meshing";
+const FORM_FACTORS: &str = "Form factors";
+const SOLVER: &str = "Solver";
+const OUTPUT: &str = "Output";
+const CAMERA: &str = "Camera";
+const RUN: &str = "Run";
+
+/// Diffuse global illumination by the radiosity method: baked light, view factors and heat
+/// transfer, and every classic solver side by side.
 #[derive(Debug, Parser)]
-#[command(name = "radiosity", version, about, long_about = None)]
+#[command(name = "radiosity", version, about, long_about = None, after_help = EXAMPLES_TOP)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
 }
 
+const EXAMPLES_TOP: &str = "Examples:
+  radiosity render                                   the built-in Cornell box → cornell.png
+  radiosity solve office.obj --out office.glb        bake light into vertex colours
+  radiosity form-factors room.obj --faces -o F.mtx   view factors between faces
+  radiosity experiment convergence --quick           the papers' solvers side by side";
+
+const EXAMPLES_RENDER: &str = "Examples:
+  radiosity render cornell --patches 4000 -o cornell.png
+  radiosity render hosp.mgf --one-sided --solver overshoot-ambient --width 1024 --height 768";
+
+const EXAMPLES_SOLVE: &str = "Examples:
+  radiosity solve cornell -o cornell.csv
+  radiosity solve room.gltf --patches 20000 --out baked.glb --exposure 0.5";
+
+const EXAMPLES_VIEW: &str = "Examples:
+  radiosity view baked.glb
+  radiosity view baked.glb --eye 0,1.6,3 --target 0,1,0 -o shot.png";
+
+const EXAMPLES_BENCH: &str = "Examples:
+  radiosity bench --patches 10000 --runs 5
+  radiosity bench --solvers 500,1000,2000";
+
+const EXAMPLES_SOLVE_SYSTEM: &str = "Examples:
+  radiosity solve-system --matrix F.mtx --patches patches.csv -o B.csv
+  radiosity solve-system --matrix F.mtx --patches patches.csv --solver southwell --trace t.csv -o B.csv";
+
+const EXAMPLES_FORM_FACTORS: &str = "Examples:
+  radiosity form-factors room.obj --faces --rays 1000000 -o F.mtx --patches-out faces.csv
+  radiosity form-factors cube-dim --method hemicube --resolution 256 --symmetrize -o F.mtx";
+
+const EXAMPLES_EXPERIMENT: &str = "Examples:
+  radiosity experiment convergence --out docs/experiments
+  radiosity experiment complexity --quick --sizes 100,200,400";
+
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Solve a scene and render a picture (PNG, or linear HDR as .exr / .pfm).
+    #[command(after_help = EXAMPLES_RENDER)]
     Render(RenderArgs),
     /// Solve a scene and write one CSV row per patch, or bake the radiosity into a mesh's vertex
     /// colours (.glb, .gltf, .ply).
+    #[command(after_help = EXAMPLES_SOLVE)]
     Solve(SolveCmdArgs),
     /// Show a baked glTF as a glTF viewer does (unlit, COLOR_0 as is), without solving.
+    #[command(after_help = EXAMPLES_VIEW)]
     View(ViewArgs),
     /// Measure ray-casting speed and the time to converge the Cornell box.
+    #[command(after_help = EXAMPLES_BENCH)]
     Bench(BenchArgs),
     /// Solve a given linear system: a form-factor matrix (Matrix Market) and a patches CSV.
+    #[command(after_help = EXAMPLES_SOLVE_SYSTEM)]
     SolveSystem(SolveSystemArgs),
     /// Compute a view-factor (form-factor) matrix and write it as Matrix Market.
+    #[command(visible_alias = "view-factors", after_help = EXAMPLES_FORM_FACTORS)]
     FormFactors(FormFactorsArgs),
-    /// Reproduce the papers' experiments: `convergence` (Gortler et al. section 6, figures 3–8) or
-    /// `complexity` (Szirmay-Kalos & Márton's claims as N grows). Writes CSVs, plots (SVG and PNG) and a
-    /// Markdown summary.
+    /// Reproduce the papers' experiments: `convergence` (Gortler, Cohen & Slusallek 1993,
+    /// section 6, figures 3–8) or `complexity` (Szirmay-Kalos & Márton 1995, their claims as N
+    /// grows). Writes CSVs, plots (SVG and PNG) and a Markdown summary.
+    #[command(after_help = EXAMPLES_EXPERIMENT)]
     Experiment(ExperimentArgs),
 }
 
@@ -52,74 +202,74 @@ pub struct ExperimentArgs {
     #[arg(value_enum)]
     pub kind: ExperimentKind,
     /// Folder for the results (created if missing).
-    #[arg(long, value_name = "DIR", default_value = "experiments")]
+    #[arg(long, value_name = "DIR", default_value = "experiments", help_heading = OUTPUT)]
     pub out: PathBuf,
     /// Small sizes that run in seconds.
-    #[arg(long)]
+    #[arg(long, help_heading = RUN)]
     pub quick: bool,
     /// Worker threads (default: one per core).
-    #[arg(long, value_name = "T")]
+    #[arg(long, value_name = "T", help_heading = RUN)]
     pub threads: Option<usize>,
     /// Seed of the random systems, Monte Carlo and photons.
-    #[arg(long, value_name = "S", default_value_t = 1)]
+    #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]
     pub seed: u64,
     /// convergence: iterations per method, in sweeps (multiples of N).
-    #[arg(long, value_name = "K", default_value_t = 3.0)]
+    #[arg(long, value_name = "K", default_value_t = 3.0, help_heading = SOLVER)]
     pub sweeps: f64,
     /// complexity: patch counts (default 250,500,1000,2000,4000; with --quick 40,…,640).
-    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1..)]
+    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1.., help_heading = MESHING)]
     pub sizes: Option<Vec<usize>>,
 }
 
 /// `radiosity form-factors`.
 #[derive(Debug, Args)]
 pub struct FormFactorsArgs {
-    /// A built-in scene or an .obj or .mgf file.
+    /// A built-in scene or a scene file (.obj, .mgf, .gltf, .glb, .ply).
     pub scene: String,
-    /// Method: hemicube, hemisphere, tetrahedron, monte-carlo, analytic (unoccluded).
-    #[arg(long, value_name = "M", default_value = "monte-carlo")]
-    pub method: String,
+    /// The form-factor method.
+    #[arg(long, value_name = "M", value_enum, default_value = "monte-carlo", help_heading = FORM_FACTORS)]
+    pub method: FormFactorArg,
     /// P: pixels along a hemicube/tetrahedron face, cells across the hemisphere's disc.
-    #[arg(long, value_name = "P", default_value_t = 128)]
+    #[arg(long, value_name = "P", default_value_t = 128, help_heading = FORM_FACTORS)]
     pub resolution: u32,
     /// Points over each patch for the projection methods (rounded up to a square).
-    #[arg(long, value_name = "K", default_value_t = 16)]
+    #[arg(long, value_name = "K", default_value_t = 16, help_heading = FORM_FACTORS)]
     pub samples: u32,
     /// Monte Carlo rays per row (standard deviation of each entry ≤ 1/(2√N)).
-    #[arg(long, value_name = "N", default_value_t = 1_000_000)]
+    #[arg(long, value_name = "N", default_value_t = 1_000_000, help_heading = FORM_FACTORS)]
     pub rays: u32,
     /// Seed of Monte Carlo.
-    #[arg(long, value_name = "S", default_value_t = 1)]
+    #[arg(long, value_name = "S", default_value_t = 1, help_heading = FORM_FACTORS)]
     pub seed: u64,
     /// One row per input face (no subdivision): face-to-face view factors.
-    #[arg(long, conflicts_with_all = ["patches", "max_edge"])]
+    #[arg(long, conflicts_with_all = ["patches", "max_edge"], help_heading = MESHING)]
     pub faces: bool,
     /// Approximate number of patches.
-    #[arg(long, value_name = "N", conflicts_with = "max_edge")]
+    #[arg(long, value_name = "N", conflicts_with = "max_edge", help_heading = MESHING)]
     pub patches: Option<usize>,
     /// Largest patch edge, scene units.
-    #[arg(long, value_name = "L")]
+    #[arg(long, value_name = "L", help_heading = MESHING)]
     pub max_edge: Option<f32>,
-    /// Storage while computing: auto (dense up to 4,096 patches), dense or sparse.
-    #[arg(long, value_name = "S", default_value = "auto")]
-    pub storage: String,
+    /// Storage while computing.
+    #[arg(long, value_name = "S", value_enum, default_value = "auto", help_heading = FORM_FACTORS)]
+    pub storage: StorageArg,
     /// Drop negative entries (F ≥ 0).
-    #[arg(long)]
+    #[arg(long, help_heading = FORM_FACTORS)]
     pub clamp: bool,
     /// Rescale every row to sum to 1 (closed enclosures only).
-    #[arg(long)]
+    #[arg(long, help_heading = FORM_FACTORS)]
     pub normalize_rows: bool,
     /// Make A_i F_ij = A_j F_ji keeping row sums (symmetric matrix scaling, Knight 2008).
-    #[arg(long)]
+    #[arg(long, help_heading = FORM_FACTORS)]
     pub symmetrize: bool,
     /// Output matrix (Matrix Market, coordinate real general, 1-based).
-    #[arg(long, short, value_name = "F.mtx")]
+    #[arg(long, short, value_name = "F.mtx", help_heading = OUTPUT)]
     pub out: PathBuf,
     /// Also write the rows' patches (or faces) as CSV.
-    #[arg(long, value_name = "patches.csv")]
+    #[arg(long, value_name = "patches.csv", help_heading = OUTPUT)]
     pub patches_out: Option<PathBuf>,
     /// Worker threads (default: one per core). Results do not depend on it.
-    #[arg(long, value_name = "T")]
+    #[arg(long, value_name = "T", help_heading = RUN)]
     pub threads: Option<usize>,
 }
 
@@ -127,96 +277,97 @@ pub struct FormFactorsArgs {
 #[derive(Debug, Args)]
 pub struct SolveSystemArgs {
     /// Form factors F_ij: Matrix Market, coordinate real general, 1-based indices.
-    #[arg(long, value_name = "F.mtx")]
-    pub form_factors: PathBuf,
+    #[arg(long, visible_alias = "form-factors", value_name = "F.mtx", help_heading = SCENE)]
+    pub matrix: PathBuf,
     /// Patches: CSV with a header; columns `area` and either `reflectance`,`emission` or
     /// `reflectance_r`,`reflectance_g`,`reflectance_b`,`emission_r`,`emission_g`,`emission_b`.
-    #[arg(long, value_name = "patches.csv")]
+    #[arg(long, value_name = "patches.csv", help_heading = SCENE)]
     pub patches: PathBuf,
-    /// Solution method (see `radiosity solve --help`).
-    #[arg(long, value_name = "M", default_value = "progressive")]
-    pub solver: String,
+    /// The solution method.
+    #[arg(long, value_name = "M", value_enum, default_value = "progressive", help_heading = SOLVER)]
+    pub solver: SolverArg,
     /// Output: one radiosity row per patch.
-    #[arg(long, short, value_name = "B.csv")]
+    #[arg(long, short, value_name = "B.csv", help_heading = OUTPUT)]
     pub out: PathBuf,
     /// Write the convergence trace (iteration,seconds,error,unshot) to this CSV.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
     pub trace: Option<PathBuf>,
     /// Stop after this many iterations at the latest.
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", help_heading = SOLVER)]
     pub max_iterations: Option<u64>,
     /// Stop when the unshot energy is at most this fraction of the emitted energy.
-    #[arg(long, value_name = "T", default_value_t = 0.01)]
+    #[arg(long, value_name = "T", default_value_t = 0.01, help_heading = SOLVER)]
     pub tolerance: f64,
     /// Relaxation factor ω of `sor`.
-    #[arg(long, value_name = "W", default_value_t = 1.1)]
+    #[arg(long, value_name = "W", default_value_t = 1.1, help_heading = SOLVER)]
     pub omega: f64,
     /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
-    #[arg(long, value_name = "N", default_value_t = 1000)]
+    #[arg(long, value_name = "N", default_value_t = 1000, help_heading = SOLVER)]
     pub photons: u32,
     /// Seed of `stochastic`.
-    #[arg(long, value_name = "S", default_value_t = 1)]
+    #[arg(long, value_name = "S", default_value_t = 1, help_heading = SOLVER)]
     pub seed: u64,
 }
 
 /// Options shared by every command that solves a scene.
 #[derive(Debug, Args)]
 pub struct SolveArgs {
-    /// A built-in scene (cornell, cube-dim, cube-bright, furnace, office, …) or a path to an .obj
-    /// or .mgf file.
+    /// A built-in scene (cornell, cube-dim, cube-bright, furnace, office, city) or a scene file
+    /// (.obj, .mgf, .gltf, .glb, .ply).
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// MGF and glTF scenes: keep every surface one-sided, ignoring MGF's `sides 2` (RenderPark's
     /// -force-onesided) and glTF's `doubleSided`. By default a two-sided surface is two polygons
     /// back to back.
-    #[arg(long)]
+    #[arg(long, help_heading = SCENE)]
     pub one_sided: bool,
-    /// Approximate total number of patches.
-    #[arg(long, value_name = "N", conflicts_with = "max_edge")]
+    /// Approximate total number of patches [default: 10000].
+    #[arg(long, value_name = "N", conflicts_with = "max_edge", help_heading = MESHING)]
     pub patches: Option<usize>,
     /// Largest patch edge, in scene units (instead of --patches).
-    #[arg(long, value_name = "L")]
+    #[arg(long, value_name = "L", help_heading = MESHING)]
     pub max_edge: Option<f32>,
+    /// The form-factor method (`--form-factors` is the older name).
+    #[arg(long = "form-factor-method", visible_alias = "form-factors", value_name = "M", value_enum, default_value = "monte-carlo", help_heading = FORM_FACTORS)]
+    pub form_factors: FormFactorArg,
     /// Monte Carlo rays per form-factor row for a patch shooting an average share of the power
     /// (emitters get proportionally more).
-    #[arg(long, value_name = "N", default_value_t = 256)]
+    #[arg(long, value_name = "N", default_value_t = 256, help_heading = FORM_FACTORS)]
     pub rays: u32,
-    /// Seed of every random stream.
-    #[arg(long, value_name = "S", default_value_t = 1)]
-    pub seed: u64,
-    /// Worker threads (default: one per core). Results do not depend on it.
-    #[arg(long, value_name = "T")]
-    pub threads: Option<usize>,
-    /// Stop when the unshot energy is at most this fraction of the emitted energy.
-    #[arg(long, value_name = "F", default_value_t = 0.01)]
-    pub tolerance: f64,
-    /// Stop after this many iterations (shots, rows, photons) at the latest.
-    #[arg(long, value_name = "K")]
-    pub max_iterations: Option<u64>,
-    /// Solution method: gauss, jacobi, gauss-seidel-0, gauss-seidel, gauss-seidel-jacobi, sor,
-    /// southwell, progressive, overshoot-ambient, overshoot, stochastic.
-    #[arg(long, value_name = "M", default_value = "progressive")]
-    pub solver: String,
-    /// Relaxation factor ω of `sor`.
-    #[arg(long, value_name = "W", default_value_t = 1.1)]
-    pub omega: f64,
-    /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
-    #[arg(long, value_name = "N", default_value_t = 1000)]
-    pub photons: u32,
-    /// Form-factor method: monte-carlo (rows on demand for shooting solvers), or hemicube,
-    /// hemisphere, tetrahedron, analytic (unoccluded), whose full matrix is computed first.
-    #[arg(long, value_name = "M", default_value = "monte-carlo")]
-    pub form_factors: String,
     /// P for the hemicube, tetrahedron and hemisphere.
-    #[arg(long, value_name = "P", default_value_t = 128)]
+    #[arg(long, value_name = "P", default_value_t = 128, help_heading = FORM_FACTORS)]
     pub resolution: u32,
     /// Points per patch for the hemicube, tetrahedron and hemisphere.
-    #[arg(long, value_name = "K", default_value_t = 16)]
+    #[arg(long, value_name = "K", default_value_t = 16, help_heading = FORM_FACTORS)]
     pub samples: u32,
+    /// Rows of F stored before solving, or computed when the solver asks.
+    #[arg(long, value_name = "R", value_enum, default_value = "auto", help_heading = FORM_FACTORS)]
+    pub rows: RowsArg,
+    /// The solution method.
+    #[arg(long, value_name = "M", value_enum, default_value = "progressive", help_heading = SOLVER)]
+    pub solver: SolverArg,
+    /// Stop when the unshot energy is at most this fraction of the emitted energy.
+    #[arg(long, value_name = "F", default_value_t = 0.01, help_heading = SOLVER)]
+    pub tolerance: f64,
+    /// Stop after this many iterations (shots, rows, photons) at the latest.
+    #[arg(long, value_name = "K", help_heading = SOLVER)]
+    pub max_iterations: Option<u64>,
+    /// Relaxation factor ω of `sor`.
+    #[arg(long, value_name = "W", default_value_t = 1.1, help_heading = SOLVER)]
+    pub omega: f64,
+    /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
+    #[arg(long, value_name = "N", default_value_t = 1000, help_heading = SOLVER)]
+    pub photons: u32,
+    /// Seed of every random stream.
+    #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]
+    pub seed: u64,
+    /// Worker threads (default: one per core). Results do not depend on it.
+    #[arg(long, value_name = "T", help_heading = RUN)]
+    pub threads: Option<usize>,
     /// Write the convergence trace (iteration,seconds,error,unshot) to this CSV. The form
     /// factors are then estimated and stored in full first, and the error is measured against
     /// their LU solution (N ≤ 5,000).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
     pub trace: Option<PathBuf>,
 }
 
@@ -224,16 +375,16 @@ pub struct SolveArgs {
 #[derive(Debug, Args)]
 pub struct CameraArgs {
     /// Eye point x,y,z.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, help_heading = CAMERA)]
     pub eye: Option<String>,
     /// Point looked at x,y,z.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, help_heading = CAMERA)]
     pub target: Option<String>,
     /// Up direction x,y,z.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, help_heading = CAMERA)]
     pub up: Option<String>,
     /// Vertical field of view, degrees.
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", help_heading = CAMERA)]
     pub fov: Option<f32>,
 }
 
@@ -245,7 +396,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub camera: CameraArgs,
     /// Output image: .png (tone-mapped sRGB), .exr or .pfm (linear radiance). Default SCENE.png.
-    #[arg(long, short, value_name = "FILE")]
+    #[arg(long, short, value_name = "FILE", help_heading = OUTPUT)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
     pub image: ImageArgs,
@@ -254,7 +405,8 @@ pub struct RenderArgs {
         long,
         value_name = "EV",
         default_value_t = 0.0,
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        help_heading = OUTPUT
     )]
     pub exposure: f32,
 }
@@ -267,7 +419,7 @@ pub struct SolveCmdArgs {
     /// Output: .csv (one row per patch: geometry, material, radiosity), or a baked mesh with the
     /// radiosity at its vertices: .glb / .gltf (glTF 2.0: COLOR_0 display colours, unlit
     /// materials, _RADIOSITY linear values) or .ply (vertex colours plus float radiosity).
-    #[arg(long, short, value_name = "FILE")]
+    #[arg(long, short, value_name = "FILE", help_heading = OUTPUT)]
     pub out: PathBuf,
     /// Baked meshes: exposure adjustment in stops, relative to automatic exposure (which maps
     /// the 97th percentile of patch luminance, by area, to 0.9). COLOR_0 = min(1, B · scale).
@@ -275,7 +427,8 @@ pub struct SolveCmdArgs {
         long,
         value_name = "EV",
         default_value_t = 0.0,
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        help_heading = OUTPUT
     )]
     pub exposure: f32,
 }
@@ -284,28 +437,29 @@ pub struct SolveCmdArgs {
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     /// Patches of the Cornell box.
-    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    #[arg(long, value_name = "N", default_value_t = 10_000, help_heading = MESHING)]
     pub patches: usize,
     /// Rays per ray-casting measurement.
-    #[arg(long, value_name = "N", default_value_t = 2_000_000)]
+    #[arg(long, value_name = "N", default_value_t = 2_000_000, help_heading = RUN)]
     pub rays: usize,
     /// Repetitions of each measurement (the median is reported).
-    #[arg(long, value_name = "K", default_value_t = 5)]
+    #[arg(long, value_name = "K", default_value_t = 5, help_heading = RUN)]
     pub runs: usize,
     /// Worker threads (default: one per core).
-    #[arg(long, value_name = "T")]
+    #[arg(long, value_name = "T", help_heading = RUN)]
     pub threads: Option<usize>,
     /// Instead: time per iteration of every solver on the Cornell box's stored form factors
     /// at these patch counts.
-    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1..)]
+    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1.., help_heading = SOLVER)]
     pub solvers: Option<Vec<usize>>,
     /// Instead: every form-factor method's error against Howell's closed forms at three
-    /// resolutions, and its time per row on the Cornell box at 1,000, 4,000 and 16,000 patches.
-    #[arg(long)]
+    /// resolutions, and its time per row on the Cornell box at 1,000, 4,000 and 16,000 patches
+    /// (`--form-factors` is the older name).
+    #[arg(long = "form-factor-accuracy", visible_alias = "form-factors", help_heading = FORM_FACTORS)]
     pub form_factors: bool,
     /// Instead: the full face-to-face view-factor matrix of the built-in `city` (19,847 facets)
     /// by monte-carlo and by hemicube, with time and peak memory.
-    #[arg(long)]
+    #[arg(long, help_heading = FORM_FACTORS)]
     pub city: bool,
 }
 
@@ -319,7 +473,7 @@ pub struct ViewArgs {
     pub camera: CameraArgs,
     /// Output image: .png (COLOR_0 sRGB-encoded), .exr or .pfm (COLOR_0 linear). Default
     /// FILE.png.
-    #[arg(long, short, value_name = "FILE")]
+    #[arg(long, short, value_name = "FILE", help_heading = OUTPUT)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
     pub image: ImageArgs,
@@ -329,12 +483,12 @@ pub struct ViewArgs {
 #[derive(Debug, Args)]
 pub struct ImageArgs {
     /// Image width in pixels.
-    #[arg(long, value_name = "W", default_value_t = 512)]
+    #[arg(long, value_name = "W", default_value_t = 512, help_heading = OUTPUT)]
     pub width: u32,
     /// Image height in pixels.
-    #[arg(long, value_name = "H", default_value_t = 512)]
+    #[arg(long, value_name = "H", default_value_t = 512, help_heading = OUTPUT)]
     pub height: u32,
     /// Camera rays per pixel.
-    #[arg(long, value_name = "N", default_value_t = 4)]
+    #[arg(long, value_name = "N", default_value_t = 4, help_heading = OUTPUT)]
     pub spp: u32,
 }

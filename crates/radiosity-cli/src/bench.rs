@@ -141,7 +141,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
     let mut last = None;
     for _ in 0..a.runs {
         let t = Instant::now();
-        let s = pipeline::solve(&scene, &settings, &mut |_| {})?;
+        let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent)?;
         times.push(t.elapsed().as_secs_f64());
         last = Some(s);
     }
@@ -163,7 +163,7 @@ fn ff_estimate(scene: &radiosity::scene::Scene, params: FfParams) -> Result<f64>
     let mesh = Mesh::build(scene, MeshParams::Faces)?;
     let bvh = Bvh::build(&mesh);
     let m = Estimator::new(&mesh, &bvh, params)?
-        .matrix(Storage::Sparse, &|_| {})
+        .matrix(Storage::Sparse, &radiosity::observe::Silent)
         .into_sparse();
     Ok(m.row_entries(0)
         .iter()
@@ -350,7 +350,7 @@ fn city() -> Result<()> {
         reset_peak();
         let t = Instant::now();
         let m = Estimator::new(&mesh, &bvh, params)?
-            .matrix(Storage::Sparse, &|_| {})
+            .matrix(Storage::Sparse, &radiosity::observe::Silent)
             .into_sparse();
         let s = t.elapsed().as_secs_f64();
         let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();

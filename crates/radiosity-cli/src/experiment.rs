@@ -4,51 +4,58 @@
 use crate::args::{ExperimentArgs, ExperimentKind};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use radiosity::experiment as exp;
 use radiosity::experiment::complexity::{self, Quantity, CASES};
 use radiosity::experiment::convergence::{self, paper_name, Case, Curve};
-use radiosity::experiment::{self as exp, Progress};
 use radiosity::export::plot::{write_plot, Mark, Plot, Series};
-use radiosity::export::write_atomic;
+use radiosity::observe::{Event, Observer};
 use radiosity::solve::Solver;
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::Path;
+use std::sync::Mutex;
 
 /// One indicatif bar per case (hidden when stderr is not a terminal); the case's summary is
 /// printed when it ends.
 struct Bars {
-    bar: Option<ProgressBar>,
+    bar: Mutex<Option<ProgressBar>>,
 }
 
-impl Progress for Bars {
-    fn begin(&mut self, label: &str, total: u64) {
-        let bar = ProgressBar::new(total.max(1));
-        bar.set_style(
-            ProgressStyle::with_template("{msg:<42} [{bar:30}] {pos}/{len} {elapsed_precise}")
-                .expect("valid template")
-                .progress_chars("=> "),
-        );
-        bar.set_message(label.to_string());
-        self.bar = Some(bar);
-    }
-
-    fn advance(&mut self, done: u64) {
-        if let Some(b) = &self.bar {
-            b.set_position(done);
-        }
-    }
-
-    fn end(&mut self, summary: &str) {
-        if let Some(b) = self.bar.take() {
-            let label = b.message();
-            b.finish_and_clear();
-            println!("{label}: {summary} ({:.1} s)", b.elapsed().as_secs_f64());
+impl Observer for Bars {
+    fn event(&self, e: Event<'_>) {
+        let mut bar = self.bar.lock().expect("no panic while holding the bar");
+        match e {
+            Event::Case { label, total } => {
+                let b = ProgressBar::new(total.max(1));
+                b.set_style(
+                    ProgressStyle::with_template(
+                        "{msg:<42} [{bar:30}] {pos}/{len} {elapsed_precise}",
+                    )
+                    .expect("valid template")
+                    .progress_chars("=> "),
+                );
+                b.set_message(label.to_string());
+                *bar = Some(b);
+            }
+            Event::Progress { done, .. } => {
+                if let Some(b) = bar.as_ref() {
+                    b.set_position(done);
+                }
+            }
+            Event::CaseEnd { summary } => {
+                if let Some(b) = bar.take() {
+                    let label = b.message();
+                    b.finish_and_clear();
+                    println!("{label}: {summary} ({:.1} s)", b.elapsed().as_secs_f64());
+                }
+            }
+            Event::Warning(w) => eprintln!("radiosity: warning: {w}"),
+            _ => {}
         }
     }
 }
 
 fn write_text(path: &Path, text: &str) -> Result<()> {
-    write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+    radiosity::export::write_text(path, text)?;
     Ok(())
 }
 
@@ -68,7 +75,9 @@ pub fn run(a: ExperimentArgs) -> Result<()> {
     }
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("{}: cannot create the folder", a.out.display()))?;
-    let mut bars = Bars { bar: None };
+    let bars = Bars {
+        bar: Mutex::new(None),
+    };
     match a.kind {
         ExperimentKind::Convergence => {
             let params = convergence::Params {
@@ -77,7 +86,7 @@ pub fn run(a: ExperimentArgs) -> Result<()> {
                 seed: a.seed,
                 ..Default::default()
             };
-            convergence_experiment(&params, &a.out, &mut bars)
+            convergence_experiment(&params, &a.out, &bars)
         }
         ExperimentKind::Complexity => {
             let mut params = if a.quick {
@@ -89,7 +98,7 @@ pub fn run(a: ExperimentArgs) -> Result<()> {
                 params.sizes = s.clone();
             }
             params.seed = a.seed;
-            complexity_experiment(&params, &a.out, &mut bars)
+            complexity_experiment(&params, &a.out, &bars)
         }
     }
 }
@@ -101,7 +110,7 @@ fn label(m: Solver) -> String {
     }
 }
 
-fn convergence_experiment(params: &convergence::Params, out: &Path, bars: &mut Bars) -> Result<()> {
+fn convergence_experiment(params: &convergence::Params, out: &Path, bars: &Bars) -> Result<()> {
     let mut cases = convergence::cases(params, bars)?;
     let mut summary = String::from(
         "case,patches,method,error_at_quarter_n,error_at_half_n,error_at_n,error_at_2n,iterations_to_1e-3,seconds_to_1e-3\n",
@@ -248,7 +257,7 @@ fn write_case(case: &Case, curves: &[Curve], out: &Path) -> Result<()> {
     Ok(())
 }
 
-fn complexity_experiment(params: &complexity::Params, out: &Path, bars: &mut Bars) -> Result<()> {
+fn complexity_experiment(params: &complexity::Params, out: &Path, bars: &Bars) -> Result<()> {
     let probe = crate::alloc::Probe;
     let ms = complexity::run_all(params, Some(&probe), bars)?;
     let opt = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());

@@ -11,20 +11,29 @@ mod view_factors;
 use anyhow::{Context, Result};
 use args::{Cli, Command, RenderArgs, SolveArgs, SolveCmdArgs, SolveSystemArgs, ViewArgs};
 use clap::Parser;
-use radiosity::export::bake::{self, Bake, BakeFormat};
-use radiosity::export::{write_image, write_patches_csv, write_radiosity_csv, ImageFormat, Trace};
-use radiosity::pipeline::{self, Event, Solution};
+use radiosity::export::bake::{self, Bake};
+use radiosity::export::{
+    write_image, write_patches_csv, write_radiosity_csv, write_text, ImageFormat,
+};
+use radiosity::io::FileFormat;
+use radiosity::observe::Silent;
+use radiosity::pipeline::{self, Solution};
 use radiosity::render::auto_exposure;
+use radiosity::render::baked::BakedView;
 use radiosity::scene::{self, Scene};
-use radiosity::solve::gauss::{bytes_needed, dense_solve_matrix};
-use radiosity::solve::System;
-use radiosity::system::SparseMatrix;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if e.use_stderr() => {
+            eprintln!("radiosity: error: {}", usage_error(&e));
+            return ExitCode::from(2);
+        }
+        Err(e) => e.exit(),
+    };
     let result = match cli.command {
         Command::Render(a) => render(a),
         Command::Solve(a) => solve(a),
@@ -37,10 +46,57 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("radiosity: error: {e:#}");
+            // The chain once: each error's text says what went wrong at its level, and a
+            // library error about a parameter is given the option's name.
+            let flag = e.chain().find_map(settings::flag_of);
+            match flag {
+                Some(flag) if !format!("{e:#}").contains(flag) => {
+                    eprintln!("radiosity: error: {flag}: {e:#}")
+                }
+                _ => eprintln!("radiosity: error: {e:#}"),
+            }
             ExitCode::FAILURE
         }
     }
+}
+
+/// A command-line error on one line: for a value that is not one of a flag's possible values,
+/// `--flag value: unknown value (possible: …; did you mean 'x'?)`; otherwise clap's message and
+/// its tips.
+fn usage_error(e: &clap::Error) -> String {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    let text = |kind| match e.get(kind) {
+        Some(ContextValue::String(s)) => Some(s.clone()),
+        Some(ContextValue::Strings(v)) => Some(v.join(", ")),
+        _ => None,
+    };
+    if e.kind() == ErrorKind::InvalidValue {
+        if let (Some(arg), Some(value)) = (
+            text(ContextKind::InvalidArg),
+            text(ContextKind::InvalidValue),
+        ) {
+            let flag = arg.split_whitespace().next().unwrap_or(&arg).to_string();
+            let mut line = format!("{flag} {value}: unknown value");
+            if let Some(valid) = text(ContextKind::ValidValue) {
+                line += &format!(" (possible: {valid}");
+                if let Some(s) = text(ContextKind::SuggestedValue) {
+                    line += &format!("; did you mean '{s}'?");
+                }
+                line += ")";
+            }
+            return line;
+        }
+    }
+    let rendered = e.render().to_string();
+    rendered
+        .lines()
+        .map(str::trim)
+        .filter(|l| {
+            !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information")
+        })
+        .map(|l| l.strip_prefix("error: ").unwrap_or(l))
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// Load the scene named on the command line and print its warnings.
@@ -52,65 +108,26 @@ pub(crate) fn load_scene(name: &str, one_sided: bool) -> Result<Scene> {
     Ok(scene)
 }
 
-/// Largest system whose trace measures the error against an LU solution.
-const TRACE_EXACT_MAX: usize = 5000;
-
-/// The exact solution for a trace's error column, when the system is small enough.
-fn trace_reference(system: &System, m: &SparseMatrix) -> Option<Vec<radiosity::Rgb>> {
-    let n = system.len();
-    let limit = pipeline::available_memory().unwrap_or(u64::MAX) / 2;
-    if n > TRACE_EXACT_MAX || bytes_needed(n) > limit {
-        eprintln!("radiosity: warning: {n} patches: the trace's error column is left empty (LU reference only up to {TRACE_EXACT_MAX} patches)");
-        return None;
-    }
-    match dense_solve_matrix(system, m, limit) {
-        Ok(b) => Some(b),
-        Err(e) => {
-            eprintln!("radiosity: warning: no reference solution for the trace: {e}");
-            None
-        }
-    }
-}
-
 /// Load and solve, with a progress bar (and the trace, if asked).
 fn solve_scene(a: &SolveArgs) -> Result<(Scene, Solution)> {
     let settings = settings::settings(a)?;
     let scene = load_scene(&a.scene, a.one_sided)?;
-    let mut progress = report::Progress::new(settings.params.tolerance);
-    let mut trace: Option<Trace> = None;
-    let tracing = a.trace.is_some();
-    let solution = pipeline::solve(&scene, &settings, &mut |e| {
-        match e {
-            Event::Matrix(m, system) if tracing => {
-                trace = Some(Trace::new(trace_reference(system, m), &system.emission));
-            }
-            Event::Solve(status, solver) => {
-                if let Some(t) = trace.as_mut() {
-                    t.record(status, solver);
-                }
-            }
-            _ => {}
-        }
-        progress.event(e)
-    })?;
+    let progress = report::Progress::new(settings.params.tolerance);
+    let solution = pipeline::solve(&scene, &settings, &progress);
     progress.finish();
-    if let (Some(path), Some(t)) = (&a.trace, &trace) {
-        t.write(path).context("writing the trace")?;
+    let solution = solution?;
+    if let (Some(path), Some(t)) = (&a.trace, &solution.trace) {
+        write_text(path, t.csv()).context("writing the trace")?;
         println!("trace       {} ({} rows)", path.display(), t.len());
     }
     Ok((scene, solution))
 }
 
 fn solve_system(a: SolveSystemArgs) -> Result<()> {
-    let method = settings::method(&a.solver)?;
+    let solver = a.solver.0;
     let params =
         settings::solver_params(a.tolerance, a.max_iterations, a.omega, a.photons, a.seed)?;
-    let ext = a
-        .out
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
-    if ext.as_deref() != Some("csv") {
+    if FileFormat::from_path(&a.out) != Some(FileFormat::Csv) {
         anyhow::bail!("{}: unsupported output format (use .csv)", a.out.display());
     }
     settings::check_output(&a.out)?;
@@ -118,48 +135,32 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
         settings::check_output(t)?;
     }
     let patches = radiosity::io::patches_csv::read(&a.patches)?;
-    let mut matrix = radiosity::io::matrix_market::read(&a.form_factors)?;
-    if matrix.n() != patches.area.len() {
+    let mut matrix = radiosity::io::matrix_market::read(&a.matrix)?;
+    if matrix.n() != patches.system.len() {
         anyhow::bail!(
             "{}: {} patches, but {} is {} × {}",
             a.patches.display(),
-            patches.area.len(),
-            a.form_factors.display(),
+            patches.system.len(),
+            a.matrix.display(),
             matrix.n(),
             matrix.n()
         );
     }
-    let system = System {
-        area: patches.area.to_vec(),
-        reflectance: patches.reflectance.to_vec(),
-        emission: patches.emission.to_vec(),
-    };
-    let mut params = params;
-    params.memory_limit = pipeline::available_memory().unwrap_or(u64::MAX) / 2;
-    let mut trace = a
-        .trace
-        .as_ref()
-        .map(|_| Trace::new(trace_reference(&system, &matrix), &system.emission));
-    let mut progress = report::Progress::new(params.tolerance);
-    let mut solver = radiosity::solve::start(method, &system, &mut matrix, &params)?;
-    let info = radiosity::solve::run(
-        &mut *solver,
+    let progress = report::Progress::new(params.tolerance);
+    let solved = pipeline::solve_system(
+        &patches.system,
         &mut matrix,
+        solver,
         &params,
-        trace.is_some(),
-        &mut |status, sv| {
-            if let Some(t) = trace.as_mut() {
-                t.record(status, sv);
-            }
-            progress.event(Event::Solve(status, sv));
-        },
+        a.trace.is_some(),
+        &progress,
     );
     progress.finish();
-    let mut b = Vec::new();
-    solver.radiosity(&mut b);
-    write_radiosity_csv(&a.out, &b, patches.single_channel)?;
-    if let (Some(path), Some(t)) = (&a.trace, &trace) {
-        t.write(path).context("writing the trace")?;
+    let solved = solved?;
+    let info = &solved.info;
+    write_radiosity_csv(&a.out, &solved.radiosity, patches.single_channel)?;
+    if let (Some(path), Some(t)) = (&a.trace, &solved.trace) {
+        write_text(path, t.csv()).context("writing the trace")?;
         println!("trace       {} ({} rows)", path.display(), t.len());
     }
     let e = info.emitted.sum();
@@ -171,7 +172,7 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
     println!(
         "iterations  {} by {} ({}; unshot energy left {:.3e} of emitted) in {:.3} s",
         info.iterations,
-        method,
+        solver,
         if info.converged {
             "converged"
         } else {
@@ -201,7 +202,7 @@ fn render(a: RenderArgs) -> Result<()> {
     if let Some(t) = &a.solve.trace {
         settings::check_output(t)?;
     }
-    settings::settings(&a.solve)?;
+    let settings = settings::settings(&a.solve)?;
     let params = settings::image(&a.image, a.solve.seed)?;
     if !a.exposure.is_finite() {
         anyhow::bail!(
@@ -213,9 +214,9 @@ fn render(a: RenderArgs) -> Result<()> {
     let (scene, solution) = solve_scene(&a.solve)?;
     let camera = settings::camera(solution.default_camera(&scene), &a.camera)?;
     let t = Instant::now();
-    let bar = report::rows_bar(params.height);
-    let image = solution.render(&camera, &params, &|rows| bar.set_position(rows as u64));
-    bar.finish_and_clear();
+    let progress = report::Progress::new(settings.params.tolerance);
+    let image = solution.render(&camera, &params, &progress);
+    progress.finish();
     let render_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let scale = auto_exposure(&image) * 2f32.powf(a.exposure);
@@ -233,13 +234,9 @@ fn render(a: RenderArgs) -> Result<()> {
 }
 
 fn solve(a: SolveCmdArgs) -> Result<()> {
-    let ext = a
-        .out
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
-    let baked = BakeFormat::from_path(&a.out).is_some();
-    if ext.as_deref() != Some("csv") && !baked {
+    let format = FileFormat::from_path(&a.out);
+    let baked = format.is_some_and(FileFormat::is_baked_mesh);
+    if format != Some(FileFormat::Csv) && !baked {
         anyhow::bail!(
             "{}: unsupported output format (use .csv, .glb, .gltf or .ply)",
             a.out.display()
@@ -285,7 +282,6 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
 /// Show a baked glTF's vertex colours from its camera (or `--eye`/`--target`), as an unlit
 /// glTF viewer would: no solving, PNG pixels are the sRGB encoding of COLOR_0.
 fn view(a: ViewArgs) -> Result<()> {
-    use radiosity::mesh::{Mesh, MeshParams};
     let out = a
         .out
         .clone()
@@ -293,47 +289,28 @@ fn view(a: ViewArgs) -> Result<()> {
     ImageFormat::from_path(&out)?;
     settings::check_output(&out)?;
     let params = settings::image(&a.image, 1)?;
-    let ext = a
-        .file
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
-    if !matches!(ext.as_deref(), Some("glb" | "gltf")) {
+    if !matches!(
+        FileFormat::from_path(&a.file),
+        Some(FileFormat::Glb | FileFormat::Gltf)
+    ) {
         anyhow::bail!(
             "{}: view shows baked glTF files (.glb or .gltf)",
             a.file.display()
         );
     }
-    let (scene, colours) = scene::gltf::load_vertex_colours(&a.file)?;
-    for w in &scene.warnings {
+    let baked = BakedView::load(&a.file)?;
+    for w in &baked.scene.warnings {
         eprintln!("radiosity: warning: {w}");
     }
-    scene.validate_geometry()?;
-    let mesh = Mesh::build(&scene, MeshParams::Faces)?;
-    // Each triangle is one patch; give its vertices the colours of the polygon's corners.
-    let mut values = vec![radiosity::Rgb::BLACK; mesh.vertices.len()];
-    for p in &mesh.patches {
-        let poly = &scene.polygons[p.surface as usize];
-        for &v in &p.vertices[..3] {
-            let at = mesh.vertices[v as usize];
-            let j = poly.vertices.iter().position(|q| *q == at).unwrap_or(0);
-            // The renderer shows radiance B/π; scale by π so that pixels are COLOR_0.
-            values[v as usize] = colours[p.surface as usize][j] * std::f64::consts::PI;
-        }
-    }
-    let bvh = radiosity::accel::Bvh::build(&mesh);
-    let own = scene.camera.unwrap_or_else(|| {
-        radiosity::render::camera::default_camera(&bvh, radiosity::geom::Vec3::Y)
-    });
-    let camera = settings::camera(own, &a.camera)?;
-    let image = radiosity::render::render(&mesh, &bvh, &values, &camera, &params, &|_| {});
+    let camera = settings::camera(baked.default_camera(), &a.camera)?;
+    let image = baked.render(&camera, &params, &Silent);
     write_image(&out, &image, 1.0).context("writing the image")?;
     println!(
         "wrote       {} ({}×{}, {} triangles shown with their COLOR_0)",
         out.display(),
         params.width,
         params.height,
-        mesh.patches.len()
+        baked.mesh.patches.len()
     );
     Ok(())
 }

@@ -1,47 +1,69 @@
 //! Progress bars (only on a terminal) and the end-of-run summary.
 
 use indicatif::{ProgressBar, ProgressStyle};
-use radiosity::pipeline::{Event, Solution, Stage};
+use radiosity::observe::{Event, Observer, Stage};
+use radiosity::pipeline::Solution;
 use radiosity::scene::Scene;
+use std::sync::atomic::{AtomicU64, Ordering};
 
-/// The progress bar of a solve: stage messages, then the unshot energy falling towards the
-/// tolerance (position on a log scale).
+/// The progress bar of a run: stage messages, rows of F and of the image, then the unshot
+/// energy falling towards the tolerance (position on a log scale); warnings are printed. An
+/// [`Observer`] for every stage.
 pub struct Progress {
     bar: ProgressBar,
     log_tol: f64,
-    last: u64,
+    last: AtomicU64,
+}
+
+fn style(template: &str) -> ProgressStyle {
+    ProgressStyle::with_template(template)
+        .expect("valid template")
+        .progress_chars("=> ")
 }
 
 impl Progress {
-    /// A bar for a solve to `tolerance`.
+    /// A bar for a run that solves to `tolerance`.
     pub fn new(tolerance: f64) -> Self {
         let bar = ProgressBar::new(1000);
-        bar.set_style(
-            ProgressStyle::with_template("{spinner} {msg:<40} [{bar:30}] {elapsed_precise}")
-                .expect("valid template")
-                .progress_chars("=> "),
-        );
+        bar.set_style(style("{spinner} {msg:<40} [{bar:30}] {elapsed_precise}"));
         Self {
             bar,
             log_tol: tolerance.ln(),
-            last: 0,
+            last: AtomicU64::new(0),
         }
     }
 
-    /// Follow a pipeline event.
-    pub fn event(&mut self, e: Event) {
+    /// Remove the bar.
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+impl Observer for Progress {
+    fn event(&self, e: Event<'_>) {
         match e {
-            Event::Stage(s) => self.bar.set_message(match s {
-                Stage::Mesh => "meshing".to_string(),
-                Stage::Bvh => "building the hierarchy".to_string(),
-                Stage::Solve => "form factors".to_string(),
-                Stage::Render => "rendering".to_string(),
-            }),
-            Event::Matrix(..) => self.bar.set_message("solving".to_string()),
+            Event::Stage(s) => {
+                let message = match s {
+                    Stage::Mesh => "meshing",
+                    Stage::Bvh => "building the hierarchy",
+                    Stage::FormFactors => "form factors",
+                    Stage::Solve => "solving",
+                    Stage::Render => "rendering",
+                    Stage::Experiment => "experiment",
+                };
+                self.bar.set_message(message);
+                self.bar.set_position(0);
+            }
+            Event::Progress { stage, done, total } => {
+                if matches!(stage, Stage::FormFactors | Stage::Render) && total > 0 {
+                    self.bar.set_position(1000 * done / total);
+                }
+            }
             Event::Solve(s, _) => {
                 // Update about every 64 iterations: cheap, and smooth enough.
-                if s.iterations - self.last >= 64 || s.iterations == 0 {
-                    self.last = s.iterations;
+                let last = self.last.load(Ordering::Relaxed);
+                if s.iterations.wrapping_sub(last) >= 64 || s.iterations == 0 {
+                    self.last.store(s.iterations, Ordering::Relaxed);
                     let f = s.unshot_fraction.max(1e-300);
                     let pos = (f.ln() / self.log_tol).clamp(0.0, 1.0);
                     self.bar.set_position((pos * 1000.0) as u64);
@@ -52,26 +74,10 @@ impl Progress {
                     ));
                 }
             }
+            Event::Warning(w) => self.bar.suspend(|| eprintln!("radiosity: warning: {w}")),
+            Event::Matrix(..) | Event::Case { .. } | Event::CaseEnd { .. } => {}
         }
     }
-
-    /// Remove the bar.
-    pub fn finish(self) {
-        self.bar.finish_and_clear();
-    }
-}
-
-/// A bar counting image rows.
-pub fn rows_bar(rows: u32) -> ProgressBar {
-    let bar = ProgressBar::new(rows as u64);
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} rendering {pos}/{len} rows [{bar:30}] {elapsed_precise}",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
-    );
-    bar
 }
 
 /// Print what was done: patches, rays, iterations, energy, time per stage.

@@ -2,11 +2,12 @@
 
 use crate::args::{CameraArgs, ImageArgs, SolveArgs};
 use anyhow::{bail, Context, Result};
+use radiosity::formfactor::{FormFactorError, Parameter, Params as FormFactorParams};
 use radiosity::geom::Vec3;
 use radiosity::mesh::MeshParams;
 use radiosity::pipeline::Settings;
 use radiosity::scene::Camera;
-use radiosity::solve::{Solver, SolverParams};
+use radiosity::solve::{Parameter as SolverParameter, SolveError, SolverParams};
 use std::path::Path;
 
 /// Library settings from the shared solve options.
@@ -26,18 +27,6 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
     if a.threads == Some(0) {
         bail!("--threads 0: at least one thread is needed");
     }
-    let ff =
-        radiosity::formfactor::FormFactorMethod::from_name(&a.form_factors).with_context(|| {
-            let names: Vec<&str> = radiosity::formfactor::FormFactorMethod::ALL
-                .iter()
-                .map(|m| m.name())
-                .collect();
-            format!(
-                "--form-factors {}: unknown method (known: {})",
-                a.form_factors,
-                names.join(", ")
-            )
-        })?;
     if a.resolution < 2 {
         bail!(
             "--resolution {}: at least 2 pixels along a face are needed",
@@ -47,37 +36,51 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
     if a.samples == 0 {
         bail!("--samples 0: at least one point per patch is needed");
     }
-    let form_factors = radiosity::formfactor::Params {
-        method: ff,
+    let form_factors = FormFactorParams {
+        method: a.form_factors.0,
         resolution: a.resolution,
         samples: a.samples,
         rays: a.rays,
         seed: a.seed,
-        ..radiosity::formfactor::Params::shooting()
+        ..FormFactorParams::shooting()
     };
+    form_factors.validate().map_err(flag_error)?;
     Ok(Settings {
         mesh,
         form_factors,
-        rows: if a.trace.is_some() {
-            radiosity::pipeline::Rows::Stored
-        } else {
-            radiosity::pipeline::Rows::Auto
-        },
-        solver: method(&a.solver)?,
+        rows: a.rows.into(),
+        solver: a.solver.0,
         params: solver_params(a.tolerance, a.max_iterations, a.omega, a.photons, a.seed)?,
         memory_limit: 0,
+        trace: a.trace.is_some(),
     })
 }
 
-/// The method named by `--solver`.
-pub fn method(name: &str) -> Result<Solver> {
-    Solver::from_name(name).with_context(|| {
-        let names: Vec<&str> = Solver::ALL.iter().map(|m| m.name()).collect();
-        format!(
-            "--solver {name}: unknown method (known: {})",
-            names.join(", ")
-        )
-    })
+/// The option a library parameter error is about, for messages that name it.
+pub fn flag_of(e: &(dyn std::error::Error + 'static)) -> Option<&'static str> {
+    if let Some(FormFactorError::Parameter { parameter, .. }) = e.downcast_ref() {
+        return Some(match parameter {
+            Parameter::Resolution => "--resolution",
+            Parameter::Samples => "--samples",
+            Parameter::Rays => "--rays",
+        });
+    }
+    if let Some(SolveError::Parameter { parameter, .. }) = e.downcast_ref() {
+        return Some(match parameter {
+            SolverParameter::Tolerance => "--tolerance",
+            SolverParameter::Omega => "--omega",
+            SolverParameter::Photons => "--photons",
+        });
+    }
+    None
+}
+
+/// A library parameter error, prefixed with the option it is about.
+fn flag_error(e: FormFactorError) -> anyhow::Error {
+    match flag_of(&e) {
+        Some(flag) => anyhow::anyhow!("{flag}: {e}"),
+        None => e.into(),
+    }
 }
 
 /// Solver parameters from the flags, checked.

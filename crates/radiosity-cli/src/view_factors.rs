@@ -1,35 +1,24 @@
 //! `radiosity form-factors`: a view-factor matrix for a scene, for radiative heat transfer.
 
 use crate::args::FormFactorsArgs;
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use radiosity::accel::Bvh;
 use radiosity::export::{write_patch_table, PatchRow};
-use radiosity::formfactor::{
-    aggregate, enforce, summary, Enforce, Estimator, FormFactorMethod, Params, Storage,
-};
+use radiosity::formfactor::{aggregate, enforce, summary, Enforce, Estimator, Params, Storage};
 use radiosity::geom::Vec3;
-use radiosity::io::matrix_market;
+use radiosity::io::{matrix_market, FileFormat};
 use radiosity::mesh::{check_planar, Mesh, MeshParams};
+use radiosity::observe::Event;
 use radiosity::scene::vector_area;
 use std::time::Instant;
 
-fn ext_is(path: &std::path::Path, ext: &str) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.eq_ignore_ascii_case(ext))
-        == Some(true)
+fn ext_is(path: &std::path::Path, format: FileFormat) -> bool {
+    FileFormat::from_path(path) == Some(format)
 }
 
 /// Run the command.
 pub fn run(a: FormFactorsArgs) -> Result<()> {
-    let method = FormFactorMethod::from_name(&a.method).with_context(|| {
-        let names: Vec<&str> = FormFactorMethod::ALL.iter().map(|m| m.name()).collect();
-        format!(
-            "--method {}: unknown method (known: {})",
-            a.method,
-            names.join(", ")
-        )
-    })?;
+    let method = a.method.0;
     if a.resolution < 2 {
         bail!(
             "--resolution {}: at least 2 pixels along a face are needed",
@@ -42,13 +31,8 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     if a.rays == 0 {
         bail!("--rays 0: at least one ray per row is needed");
     }
-    let storage = match a.storage.as_str() {
-        "auto" => Storage::Auto,
-        "dense" => Storage::Dense,
-        "sparse" => Storage::Sparse,
-        s => bail!("--storage {s}: use auto, dense or sparse"),
-    };
-    if !ext_is(&a.out, "mtx") {
+    let storage: Storage = a.storage.into();
+    if !ext_is(&a.out, FileFormat::MatrixMarket) {
         bail!(
             "{}: unsupported output format (use .mtx, Matrix Market)",
             a.out.display()
@@ -56,7 +40,7 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     }
     crate::settings::check_output(&a.out)?;
     if let Some(p) = &a.patches_out {
-        if !ext_is(p, "csv") {
+        if !ext_is(p, FileFormat::Csv) {
             bail!("{}: unsupported output format (use .csv)", p.display());
         }
         crate::settings::check_output(p)?;
@@ -99,7 +83,11 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         .progress_chars("=> "),
     );
     let matrix = estimator
-        .matrix(storage, &|done| bar.set_position(done as u64))
+        .matrix(storage, &|e: Event<'_>| {
+            if let Event::Progress { done, .. } = e {
+                bar.set_position(done)
+            }
+        })
         .into_sparse();
     bar.finish_and_clear();
     let compute_s = t.elapsed().as_secs_f64();

@@ -859,7 +859,19 @@ fn form_factors_rejects_bad_input() {
                 "--out",
                 "x.csv",
             ],
-            vec!["--form-factors radar"],
+            // `--form-factors` is the older name of `--form-factor-method`.
+            vec!["--form-factor-method radar", "monte-carlo"],
+        ),
+        (
+            vec![
+                "solve",
+                "furnace",
+                "--solver",
+                "progresive",
+                "--out",
+                "x.csv",
+            ],
+            vec!["--solver progresive", "did you mean 'progressive'"],
         ),
     ] {
         let out = run(&args, &dir);

@@ -11,7 +11,7 @@
 //!
 //! let scene = builtin::furnace();
 //! let settings = pipeline::Settings { mesh: MeshParams::Patches(200), ..Default::default() };
-//! let solution = pipeline::solve(&scene, &settings, &mut |_| {}).unwrap();
+//! let solution = pipeline::solve(&scene, &settings, &radiosity::observe::Silent).unwrap();
 //! // Closed furnace: every patch's radiosity is near E/(1 − ρ) = 2 in the green channel.
 //! let mean: f64 = solution.radiosity.iter().map(|b| b.g).sum::<f64>() / solution.radiosity.len() as f64;
 //! assert!((mean - 2.0).abs() < 0.1);
@@ -26,7 +26,9 @@ pub mod export;
 pub mod formfactor;
 pub mod geom;
 pub mod io;
+pub mod loc;
 pub mod mesh;
+pub mod observe;
 pub mod pipeline;
 pub mod render;
 pub mod sampling;

@@ -14,6 +14,8 @@ pub enum Item {
     Face(usize),
     /// A material, by name.
     Material(String),
+    /// A byte offset in a binary file.
+    Byte(usize),
 }
 
 impl fmt::Display for Item {
@@ -22,6 +24,7 @@ impl fmt::Display for Item {
             Item::Polygon(i) => write!(f, "polygon {i}"),
             Item::Face(i) => write!(f, "face {i}"),
             Item::Material(name) => write!(f, "material '{name}'"),
+            Item::Byte(offset) => write!(f, "byte {offset}"),
         }
     }
 }

@@ -5,11 +5,13 @@
 
 use crate::accel::Bvh;
 use crate::color::Rgb;
-use crate::formfactor::{Estimator, FormFactorMethod, FormFactorStats, OnDemandRows};
+use crate::formfactor::{Estimator, FormFactorMethod, FormFactorStats, OnDemandRows, Storage};
 use crate::mesh::{Mesh, MeshParams};
+pub use crate::observe::{Event, Observer, Stage};
 use crate::render::{render, vertex_radiosity, Image, RenderParams};
 use crate::scene::{Camera, Scene};
-use crate::solve::{ambient_term, Info, Solver, SolverParams, SolverState, Status};
+use crate::solve::trace::Trace;
+use crate::solve::{ambient_term, Info, Solver, SolverParams};
 use crate::system::{Operator, SparseMatrix, System};
 use crate::Error;
 use std::time::Instant;
@@ -45,6 +47,9 @@ pub struct Settings {
     /// Refuse jobs whose estimated memory exceeds this many bytes (0: the machine's available
     /// memory).
     pub memory_limit: u64,
+    /// Record a convergence trace ([`Solution::trace`]); every row of F is then stored first,
+    /// so that the error can be measured against the LU solution of the very matrix solved.
+    pub trace: bool,
 }
 
 impl Default for Settings {
@@ -56,6 +61,7 @@ impl Default for Settings {
             solver: Solver::Progressive,
             params: SolverParams::default(),
             memory_limit: 0,
+            trace: false,
         }
     }
 }
@@ -63,37 +69,14 @@ impl Default for Settings {
 impl Settings {
     /// True when every row of F is computed and stored before the solver starts.
     pub fn stores_rows(&self) -> bool {
-        self.solver.needs_all_rows()
+        self.trace
+            || self.solver.needs_all_rows()
             || match self.rows {
                 Rows::Auto => self.form_factors.method != FormFactorMethod::MonteCarlo,
                 Rows::Stored => true,
                 Rows::OnDemand => false,
             }
     }
-}
-
-/// The stages, as reported to observers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Stage {
-    /// Cutting surfaces into patches.
-    Mesh,
-    /// Building the hierarchy.
-    Bvh,
-    /// Form factors and progressive refinement.
-    Solve,
-    /// Rendering the picture.
-    Render,
-}
-
-/// Progress reports.
-#[derive(Clone, Copy)]
-pub enum Event<'a> {
-    /// A stage begins.
-    Stage(Stage),
-    /// Every row of F has been estimated and stored: the system to be solved.
-    Matrix(&'a SparseMatrix, &'a System),
-    /// The solver's status before each iteration, and the solver (whose current B can be read).
-    Solve(&'a Status, &'a dyn SolverState),
 }
 
 /// Wall-clock seconds per stage.
@@ -130,6 +113,8 @@ pub struct Solution {
     pub form_factors: FormFactorStats,
     /// Time per stage.
     pub timings: Timings,
+    /// The convergence trace, when [`Settings::trace`] asked for one.
+    pub trace: Option<Trace>,
 }
 
 impl Solution {
@@ -166,14 +151,9 @@ impl Solution {
     }
 
     /// Render the display radiosity, Gouraud-interpolated within surfaces.
-    pub fn render(
-        &self,
-        camera: &Camera,
-        params: &RenderParams,
-        progress: &(dyn Fn(u32) + Sync),
-    ) -> Image {
+    pub fn render(&self, camera: &Camera, params: &RenderParams, observer: &dyn Observer) -> Image {
         let vertex = vertex_radiosity(&self.mesh, &self.display_radiosity());
-        render(&self.mesh, &self.bvh, &vertex, camera, params, progress)
+        render(&self.mesh, &self.bvh, &vertex, camera, params, observer)
     }
 }
 
@@ -208,10 +188,10 @@ pub fn available_memory() -> Option<u64> {
 pub fn solve(
     scene: &Scene,
     settings: &Settings,
-    observer: &mut dyn FnMut(Event),
+    observer: &dyn Observer,
 ) -> Result<Solution, Error> {
     scene.validate()?;
-    observer(Event::Stage(Stage::Mesh));
+    observer.event(Event::Stage(Stage::Mesh));
     let t = Instant::now();
     let mesh = Mesh::build(scene, settings.mesh)?;
     let mesh_s = t.elapsed().as_secs_f64();
@@ -257,35 +237,45 @@ pub fn solve(
     let mut params = settings.params;
     params.memory_limit = params.memory_limit.min(limit - needed);
 
-    observer(Event::Stage(Stage::Bvh));
+    observer.event(Event::Stage(Stage::Bvh));
     let t = Instant::now();
     let bvh = Bvh::build(&mesh);
     let bvh_s = t.elapsed().as_secs_f64();
 
-    observer(Event::Stage(Stage::Solve));
     let system = patch_system(scene, &mesh);
     system.validate().map_err(crate::solve::SolveError::from)?;
 
     let estimator = Estimator::new(&mesh, &bvh, ff)?;
     let mut stored;
+    let mut trace = None;
     let mut form_factors = FormFactorStats::default();
     let mut on_demand = None;
     let source: &mut dyn Operator = if store {
         let t = Instant::now();
-        stored = estimator.sparse_matrix();
+        stored = estimator.matrix(Storage::Sparse, observer).into_sparse();
         if ff.method == FormFactorMethod::MonteCarlo {
             form_factors.rays = mesh.len() as u64 * ff.rays as u64;
         }
         form_factors.rows = mesh.len() as u64;
         form_factors.seconds = t.elapsed().as_secs_f64();
-        observer(Event::Matrix(&stored, &system));
+        observer.event(Event::Matrix(&stored, &system));
+        if settings.trace {
+            trace = Some(Trace::new(
+                trace_reference(&system, &stored, observer),
+                &system.emission,
+            ));
+        }
         &mut stored
     } else {
         on_demand.insert(OnDemandRows::new(estimator))
     };
+    observer.event(Event::Stage(Stage::Solve));
     let mut solver = crate::solve::start(settings.solver, &system, source, &params)?;
     let info = crate::solve::run(&mut *solver, source, &params, false, &mut |s, sv| {
-        observer(Event::Solve(s, sv))
+        if let Some(t) = trace.as_mut() {
+            t.record(s, sv);
+        }
+        observer.event(Event::Solve(s, sv))
     });
     let mut radiosity = Vec::new();
     solver.radiosity(&mut radiosity);
@@ -312,5 +302,83 @@ pub fn solve(
         method: settings.solver,
         info,
         form_factors,
+        trace,
+    })
+}
+
+/// Largest system whose trace measures the error against an LU solution.
+pub const TRACE_EXACT_MAX: usize = 5000;
+
+/// The exact solution a trace's error column is measured against: the LU solution of the
+/// stored matrix `f`, when the system has at most [`TRACE_EXACT_MAX`] patches and the dense
+/// matrix fits in half the available memory; otherwise `None`, with a warning to `observer`.
+pub fn trace_reference(
+    system: &System,
+    f: &SparseMatrix,
+    observer: &dyn Observer,
+) -> Option<Vec<Rgb>> {
+    let n = system.len();
+    let limit = available_memory().unwrap_or(u64::MAX) / 2;
+    if n > TRACE_EXACT_MAX || crate::solve::gauss::bytes_needed(n) > limit {
+        observer.event(Event::Warning(&format!(
+            "{n} patches: the trace's error column is left empty (LU reference only up to {TRACE_EXACT_MAX} patches)"
+        )));
+        return None;
+    }
+    match crate::solve::gauss::dense_solve_matrix(system, f, limit) {
+        Ok(b) => Some(b),
+        Err(e) => {
+            observer.event(Event::Warning(&format!(
+                "no reference solution for the trace: {e}"
+            )));
+            None
+        }
+    }
+}
+
+/// A given linear system, solved.
+#[derive(Debug)]
+pub struct SystemSolution {
+    /// Radiosity per patch.
+    pub radiosity: Vec<Rgb>,
+    /// The solver's report.
+    pub info: Info,
+    /// The convergence trace, when asked for.
+    pub trace: Option<Trace>,
+}
+
+/// Solve a given system (areas, reflectances, emissions and a stored F, e.g. read from files)
+/// by `solver`; with `trace`, record the convergence of every iteration, each status exact
+/// ([`crate::solve::run`]). The solver may use half the available memory.
+pub fn solve_system(
+    system: &System,
+    f: &mut SparseMatrix,
+    solver: Solver,
+    params: &SolverParams,
+    trace: bool,
+    observer: &dyn Observer,
+) -> Result<SystemSolution, Error> {
+    let mut params = *params;
+    params.memory_limit = available_memory().unwrap_or(u64::MAX) / 2;
+    system.validate().map_err(crate::solve::SolveError::from)?;
+    system
+        .check_operator(f)
+        .map_err(crate::solve::SolveError::from)?;
+    let mut trace =
+        trace.then(|| Trace::new(trace_reference(system, f, observer), &system.emission));
+    observer.event(Event::Stage(Stage::Solve));
+    let mut state = crate::solve::start(solver, system, f, &params)?;
+    let info = crate::solve::run(&mut *state, f, &params, trace.is_some(), &mut |s, sv| {
+        if let Some(t) = trace.as_mut() {
+            t.record(s, sv);
+        }
+        observer.event(Event::Solve(s, sv));
+    });
+    let mut radiosity = Vec::new();
+    state.radiosity(&mut radiosity);
+    Ok(SystemSolution {
+        radiosity,
+        info,
+        trace,
     })
 }

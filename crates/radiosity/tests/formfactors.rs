@@ -61,7 +61,9 @@ pub fn face_factor(scene: &Scene, params: Params) -> f64 {
     let mesh = Mesh::build(scene, MeshParams::Faces).unwrap();
     let bvh = Bvh::build(&mesh);
     let est = Estimator::new(&mesh, &bvh, params).unwrap();
-    let m = est.matrix(Storage::Sparse, &|_| {}).into_sparse();
+    let m = est
+        .matrix(Storage::Sparse, &radiosity::observe::Silent)
+        .into_sparse();
     let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
     let group: Vec<u32> = mesh.patches.iter().map(|p| p.surface).collect();
     let (g, _) = aggregate(&m, &area, &group, scene.polygons.len());
@@ -261,7 +263,7 @@ fn rows_sum_to_one_in_closed_scenes() {
         };
         let m = Estimator::new(&mesh, &bvh, params)
             .unwrap()
-            .matrix(Storage::Auto, &|_| {})
+            .matrix(Storage::Auto, &radiosity::observe::Silent)
             .into_sparse();
         let worst = (0..m.n())
             .map(|i| (m.row_sum(i) - 1.0).abs())
@@ -321,7 +323,7 @@ fn methods_agree_on_an_occluded_scene() {
         },
     )
     .unwrap()
-    .matrix(Storage::Dense, &|_| {})
+    .matrix(Storage::Dense, &radiosity::observe::Silent)
     .into_sparse();
     for method in [
         FormFactorMethod::Hemisphere,
@@ -337,7 +339,7 @@ fn methods_agree_on_an_occluded_scene() {
             },
         )
         .unwrap()
-        .matrix(Storage::Sparse, &|_| {})
+        .matrix(Storage::Sparse, &radiosity::observe::Silent)
         .into_sparse();
         let mut worst: f64 = 0.0;
         for i in 0..mesh.len() {

@@ -175,7 +175,7 @@ fn settings(mesh: MeshParams, seed: u64) -> Settings {
 }
 
 fn solve(scene: &Scene, settings: &Settings) -> Solution {
-    pipeline::solve(scene, settings, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"))
+    pipeline::solve(scene, settings, &radiosity::observe::Silent).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn rms(a: &[Rgb], b: &[Rgb], area: &[f64]) -> f64 {

@@ -138,7 +138,7 @@ fn furnace_solution(rays: u32, patches: usize) -> pipeline::Solution {
         },
         ..Default::default()
     };
-    pipeline::solve(&builtin::furnace(), &settings, &mut |_| {}).unwrap()
+    pipeline::solve(&builtin::furnace(), &settings, &radiosity::observe::Silent).unwrap()
 }
 
 /// The white furnace: uniform ρ and E in a closed enclosure give B = E/(1 − ρ) everywhere.
@@ -204,7 +204,7 @@ fn energy_balance_in_the_cornell_box() {
         mesh: MeshParams::Patches(1500),
         ..Default::default()
     };
-    let s = pipeline::solve(&builtin::cornell(), &settings, &mut |_| {}).unwrap();
+    let s = pipeline::solve(&builtin::cornell(), &settings, &radiosity::observe::Silent).unwrap();
     let i = s.info;
     assert!(i.converged && i.unshot_fraction <= 0.01);
     let balance = i.emitted - i.absorbed - i.escaped - i.unshot;
@@ -254,14 +254,14 @@ fn results_do_not_depend_on_the_thread_count() {
                 ..Default::default()
             };
             let scene = builtin::cornell();
-            let s = pipeline::solve(&scene, &settings, &mut |_| {}).unwrap();
+            let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent).unwrap();
             let params = radiosity::render::RenderParams {
                 width: 48,
                 height: 48,
                 samples_per_pixel: 2,
                 seed: 9,
             };
-            let img = s.render(&scene.camera.unwrap(), &params, &|_| {});
+            let img = s.render(&scene.camera.unwrap(), &params, &radiosity::observe::Silent);
             (s.radiosity, img.pixels)
         })
     };

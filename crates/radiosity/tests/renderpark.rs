@@ -1,22 +1,19 @@
 //! RenderPark's own scenes (`../shared/scenes/renderpark/`, MGF): each loads, with the polygon
-//! count and emitted power recorded here, and meshes. Skipped, with a message, where the shared
-//! folder is absent (a clone outside the workspace).
+//! count and emitted power recorded here, and meshes. The scenes live in the workspace's shared
+//! folder beside the repository; without it these tests fail, naming the folder.
 
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::scene::{load_with, LoadOptions, Scene};
 use std::path::PathBuf;
 
-fn folder() -> Option<PathBuf> {
+fn folder() -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/renderpark");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "skipped: {} is absent (RenderPark's scenes live beside the repository)",
-            dir.display()
-        );
-        None
-    }
+    assert!(
+        dir.is_dir(),
+        "{} is absent: RenderPark's scenes live in the shared folder beside the repository",
+        dir.display()
+    );
+    dir
 }
 
 fn load(dir: &std::path::Path, name: &str, one_sided: bool) -> Scene {
@@ -41,7 +38,7 @@ const SCENES: &[(&str, usize, usize, f64)] = &[
 
 #[test]
 fn every_renderpark_scene_loads_with_its_counts_and_power() {
-    let Some(dir) = folder() else { return };
+    let dir = folder();
     let mut seen = Vec::new();
     for (name, one, two, power) in SCENES {
         let s1 = load(&dir, name, true);
@@ -89,7 +86,7 @@ fn every_renderpark_scene_loads_with_its_counts_and_power() {
 /// the slight warmth moves the channels.
 #[test]
 fn counts_and_power_match_the_files_by_hand() {
-    let Some(dir) = folder() else { return };
+    let dir = folder();
     assert_eq!(
         load(&dir, "office1/graz.mgf", true).polygons.len(),
         13_780 + 16

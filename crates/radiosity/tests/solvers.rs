@@ -22,7 +22,7 @@ fn max_rel_diff(a: &[Rgb], b: &[Rgb]) -> f64 {
 }
 
 fn check_all_methods(sys: &System, f: &mut SparseMatrix, what: &str) {
-    let exact = dense_solve(&sys, f, 1 << 32).unwrap();
+    let exact = dense_solve(sys, f, 1 << 32).unwrap();
     let params = SolverParams {
         tolerance: 1e-10,
         max_iterations: 50_000_000,
@@ -82,7 +82,7 @@ fn every_method_matches_lu_on_builtin_scenes() {
 fn stochastic_is_unbiased_and_error_shrinks_with_photons() {
     let mut r = reciprocal(40, 0.5, 0.9, (0.3, 0.7), 4, 11);
     let (sys, f) = r.parts();
-    let exact = dense_solve(&sys, f, 1 << 30).unwrap();
+    let exact = dense_solve(sys, f, 1 << 30).unwrap();
     let rms = |b: &[Rgb]| {
         let s: f64 = b
             .iter()
@@ -126,7 +126,7 @@ fn stochastic_is_unbiased_and_error_shrinks_with_photons() {
 
 fn error_after(m: Solver, r: &mut Random, iterations: u64) -> f64 {
     let (sys, f) = r.parts();
-    let exact = dense_solve(&sys, f, 1 << 30).unwrap();
+    let exact = dense_solve(sys, f, 1 << 30).unwrap();
     let params = SolverParams {
         tolerance: 0.0,
         max_iterations: iterations,

@@ -15,11 +15,12 @@
 //! shots or photons. Memory is the peak of the heap above what was allocated before the case
 //! (so the stored F that Jacobi and Gauss-Seidel read is not theirs; it is the matrix cases').
 
-use super::{fit_exponent, measure, ExperimentError, MemoryProbe, Progress};
+use super::{fit_exponent, measure, CaseProgress, ExperimentError, MemoryProbe};
 use crate::accel::Bvh;
 use crate::formfactor::OnDemandRows;
 use crate::formfactor::{Estimator, FormFactorMethod, Params as FfParams, Storage};
 use crate::mesh::{Mesh, MeshParams};
+use crate::observe::Observer;
 use crate::pipeline::patch_system;
 use crate::scene::builtin;
 use crate::solve::gauss::dense_solve;
@@ -296,7 +297,7 @@ struct Size {
 pub fn run_all(
     params: &Params,
     probe: Option<&dyn MemoryProbe>,
-    progress: &mut dyn Progress,
+    progress: &dyn Observer,
 ) -> Result<Vec<Measurement>, ExperimentError> {
     if params.sizes.len() < 2 || params.sizes.contains(&0) {
         return Err(ExperimentError::Invalid(
@@ -327,7 +328,7 @@ pub fn run_all(
     };
     let mut out = Vec::new();
     for case in CASES {
-        progress.begin(case, sizes.len() as u64);
+        let case_progress = CaseProgress::begin(progress, case, sizes.len() as u64);
         for (k, s) in sizes.iter_mut().enumerate() {
             let n = s.mesh.len();
             let mut m = Measurement {
@@ -360,8 +361,10 @@ pub fn run_all(
                         }
                     };
                     let est = Estimator::new(&s.mesh, &s.bvh, ff)?;
-                    let (f, seconds, peak) =
-                        measure(probe, || est.matrix(Storage::Sparse, &|_| {}).into_sparse());
+                    let (f, seconds, peak) = measure(probe, || {
+                        est.matrix(Storage::Sparse, &crate::observe::Silent)
+                            .into_sparse()
+                    });
                     m.seconds = seconds;
                     m.peak_bytes = peak;
                     m.nnz = Some(f.nnz() as u64);
@@ -425,9 +428,9 @@ pub fn run_all(
                 _ => unreachable!(),
             }
             out.push(m);
-            progress.advance(k as u64 + 1);
+            case_progress.advance(k as u64 + 1);
         }
-        progress.end(case);
+        case_progress.end(case);
     }
     Ok(out)
 }

@@ -18,10 +18,11 @@
 //! row-diagonally-dominant systems, dim and bright, with few and with all patches emitting.
 
 use super::random::section6;
-use super::{ExperimentError, Progress, StoredSystem};
+use super::{CaseProgress, ExperimentError, StoredSystem};
 use crate::accel::Bvh;
 use crate::formfactor::{Estimator, FormFactorMethod, Params as FfParams, Storage};
 use crate::mesh::{Mesh, MeshParams};
+use crate::observe::Observer;
 use crate::pipeline::patch_system;
 use crate::scene::builtin;
 use crate::solve::gauss::dense_solve;
@@ -153,23 +154,23 @@ fn scene_system(
 fn hemicube_matrix(
     mesh: &Mesh,
     params: FfParams,
-    progress: &mut dyn Progress,
+    progress: &dyn Observer,
     label: &str,
 ) -> Result<(crate::system::SparseMatrix, f64), ExperimentError> {
     let bvh = Bvh::build(mesh);
-    progress.begin(label, mesh.len() as u64);
+    let case_progress = CaseProgress::begin(progress, label, mesh.len() as u64);
     let t = Instant::now();
     let f = Estimator::new(mesh, &bvh, params)?
-        .matrix(Storage::Sparse, &|_| {})
+        .matrix(Storage::Sparse, &crate::observe::Silent)
         .into_sparse();
     let s = t.elapsed().as_secs_f64();
-    progress.advance(mesh.len() as u64);
-    progress.end(&format!("{} rows in {s:.1} s", mesh.len()));
+    case_progress.advance(mesh.len() as u64);
+    case_progress.end(&format!("{} rows in {s:.1} s", mesh.len()));
     Ok((f, s))
 }
 
 /// Build the cases: office, dim and bright cube, four random systems.
-pub fn cases(params: &Params, progress: &mut dyn Progress) -> Result<Vec<Case>, ExperimentError> {
+pub fn cases(params: &Params, progress: &dyn Observer) -> Result<Vec<Case>, ExperimentError> {
     let ff = FfParams {
         method: FormFactorMethod::Hemicube,
         resolution: if params.quick { 32 } else { 128 },
@@ -248,13 +249,14 @@ pub fn cases(params: &Params, progress: &mut dyn Progress) -> Result<Vec<Case>, 
 pub fn run_case(
     case: &mut Case,
     params: &Params,
-    progress: &mut dyn Progress,
+    progress: &dyn Observer,
 ) -> Result<Vec<Curve>, ExperimentError> {
     let n = case.system.len();
     let (sys, f) = case.system.parts();
-    let exact = dense_solve(&sys, f, 1 << 34)?;
+    let exact = dense_solve(sys, f, 1 << 34)?;
     let max_iterations = (params.sweeps * n as f64).ceil().max(1.0) as u64;
-    progress.begin(
+    let case_progress = CaseProgress::begin(
+        progress,
         &format!("{}: {} methods", case.name, METHODS.len()),
         METHODS.len() as u64 * max_iterations,
     );
@@ -300,7 +302,7 @@ pub fn run_case(
                     seconds,
                     error,
                 });
-                progress.advance(k as u64 * max_iterations + done / unit);
+                case_progress.advance(k as u64 * max_iterations + done / unit);
                 if !more || done >= budget || error.abs() < 1e-9 {
                     break;
                 }
@@ -315,7 +317,7 @@ pub fn run_case(
             .and_then(|c| c.error_at(n as f64 / 2.0))
             .unwrap_or(f64::NAN)
     };
-    progress.end(&format!(
+    case_progress.end(&format!(
         "after N/2 iterations: overshoot {:.2e}, progressive {:.2e}, gauss-seidel-0 {:.2e}",
         last(Solver::Overshoot),
         last(Solver::Progressive),

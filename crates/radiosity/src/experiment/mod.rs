@@ -7,13 +7,14 @@
 //!   form-factor methods and the solvers as N grows, with fitted exponents beside the paper's.
 //!
 //! [`random`] makes the random systems. Memory is measured through a [`MemoryProbe`] that the
-//! program provides (a library cannot own the global allocator); progress is reported to a
-//! [`Progress`].
+//! program provides (a library cannot own the global allocator); progress is reported to an
+//! [`Observer`].
 
 pub mod complexity;
 pub mod convergence;
 pub mod random;
 
+use crate::observe::{Event, Observer, Stage};
 use crate::system::SparseMatrix;
 use crate::system::System;
 
@@ -56,24 +57,33 @@ pub trait MemoryProbe: Sync {
     fn peak(&self) -> u64;
 }
 
-/// Where an experiment reports progress (one bar per case).
-pub trait Progress {
-    /// A case of `total` steps begins.
-    fn begin(&mut self, label: &str, total: u64);
-    /// `done` of the case's steps are done.
-    fn advance(&mut self, done: u64);
-    /// The case is over; `summary` says what it found.
-    fn end(&mut self, summary: &str);
+/// The progress of one case of an experiment, reported to an [`Observer`] as
+/// [`Event::Case`], [`Event::Progress`] of [`Stage::Experiment`] and [`Event::CaseEnd`].
+pub(crate) struct CaseProgress<'a> {
+    observer: &'a dyn Observer,
+    total: u64,
 }
 
-/// Progress that goes nowhere.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Silent;
+impl<'a> CaseProgress<'a> {
+    /// A case of `total` steps begins.
+    pub(crate) fn begin(observer: &'a dyn Observer, label: &str, total: u64) -> Self {
+        observer.event(Event::Case { label, total });
+        Self { observer, total }
+    }
 
-impl Progress for Silent {
-    fn begin(&mut self, _: &str, _: u64) {}
-    fn advance(&mut self, _: u64) {}
-    fn end(&mut self, _: &str) {}
+    /// `done` of the case's steps are done.
+    pub(crate) fn advance(&self, done: u64) {
+        self.observer.event(Event::Progress {
+            stage: Stage::Experiment,
+            done,
+            total: self.total,
+        });
+    }
+
+    /// The case is over; `summary` says what it found.
+    pub(crate) fn end(self, summary: &str) {
+        self.observer.event(Event::CaseEnd { summary });
+    }
 }
 
 /// Run `f` and measure its wall-clock seconds and, with a probe, the peak of the heap above

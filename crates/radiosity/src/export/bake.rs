@@ -28,7 +28,7 @@
 //! `vertex_indices` (list uchar uint, 3 or 4: quad patches stay quads), `reflectance_red …` and
 //! `emission_red …` (float), the names [`crate::scene::ply`] reads.
 
-use super::{write_atomic, ExportError};
+use super::{write_atomic, ExportError, OutputError};
 use crate::color::Rgb;
 use crate::mesh::{Mesh, Patch};
 use crate::render::srgb_encode;
@@ -72,11 +72,10 @@ pub enum BakeFormat {
 impl BakeFormat {
     /// The format `path`'s extension names, if it is one.
     pub fn from_path(path: &Path) -> Option<Self> {
-        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-        match ext.as_str() {
-            "glb" => Some(Self::Glb),
-            "gltf" => Some(Self::Gltf),
-            "ply" => Some(Self::Ply),
+        match crate::io::FileFormat::from_path(path)? {
+            crate::io::FileFormat::Glb => Some(Self::Glb),
+            crate::io::FileFormat::Gltf => Some(Self::Gltf),
+            crate::io::FileFormat::Ply => Some(Self::Ply),
             _ => None,
         }
     }
@@ -287,7 +286,7 @@ pub fn write_gltf(path: &Path, bake: &Bake, binary: bool) -> Result<(), ExportEr
     if !cameras.is_empty() {
         root["cameras"] = json!(cameras);
     }
-    let text = serde_json::to_string(&root).map_err(|e| ExportError::Io {
+    let text = serde_json::to_string(&root).map_err(|e| OutputError {
         path: path.to_path_buf(),
         source: std::io::Error::other(e),
     })?;

@@ -7,25 +7,20 @@ pub mod bake;
 pub mod plot;
 
 use crate::color::Rgb;
+use crate::io::FileFormat;
+pub use crate::io::{write_atomic, OutputError};
 use crate::mesh::Mesh;
 use crate::render::{to_srgb8, Image};
 use crate::scene::Scene;
-use crate::solve::{relative_error, SolverState, Status};
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Why a file could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
-    /// The operating system refused.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The destination.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
+    /// The file could not be written.
+    #[error(transparent)]
+    Output(#[from] OutputError),
     /// The file name's extension names no supported format.
     #[error("{}: unsupported {what} format (use {supported})", path.display())]
     Format {
@@ -52,14 +47,10 @@ pub enum ImageFormat {
 impl ImageFormat {
     /// The format named by `path`'s extension (`.png`, `.exr`, `.pfm`).
     pub fn from_path(path: &Path) -> Result<Self, ExportError> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase());
-        match ext.as_deref() {
-            Some("png") => Ok(Self::Png),
-            Some("exr") => Ok(Self::Exr),
-            Some("pfm") => Ok(Self::Pfm),
+        match FileFormat::from_path(path) {
+            Some(FileFormat::Png) => Ok(Self::Png),
+            Some(FileFormat::Exr) => Ok(Self::Exr),
+            Some(FileFormat::Pfm) => Ok(Self::Pfm),
             _ => Err(ExportError::Format {
                 path: path.to_path_buf(),
                 what: "image",
@@ -67,34 +58,6 @@ impl ImageFormat {
             }),
         }
     }
-}
-
-/// Write through `body` into a temporary file beside `path`, then rename it to `path`.
-pub fn write_atomic(
-    path: &Path,
-    body: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
-) -> Result<(), ExportError> {
-    let io = |source| ExportError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let tmp = path.with_file_name(format!(".{name}.tmp{}", std::process::id()));
-    let result = (|| {
-        let mut w = BufWriter::new(File::create(&tmp)?);
-        body(&mut w)?;
-        let f = w.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        drop(f);
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(io)
 }
 
 /// Write `image` to `path` in the format its extension names. PNG applies `scale` (the
@@ -219,62 +182,9 @@ pub fn write_patch_table(path: &Path, rows: &[PatchRow]) -> Result<(), ExportErr
     })
 }
 
-/// The header of convergence traces.
-pub const TRACE_HEADER: &str = "iteration,seconds,error,unshot";
-
-/// A convergence trace, one row per iteration: iteration, seconds in the solver, the error of
-/// eq. 22 of Gortler, Cohen & Slusallek (1993) against an exact solution (empty without one), and the
-/// unshot energy as a fraction of the emitted energy.
-#[derive(Clone, Debug, Default)]
-pub struct Trace {
-    text: String,
-    exact: Option<Vec<Rgb>>,
-    emission: Vec<Rgb>,
-    buf: Vec<Rgb>,
-}
-
-impl Trace {
-    /// A trace measuring the error against `exact` (if given) of a system with `emission`.
-    pub fn new(exact: Option<Vec<Rgb>>, emission: &[Rgb]) -> Self {
-        Self {
-            text: format!("{TRACE_HEADER}\n"),
-            exact,
-            emission: emission.to_vec(),
-            buf: Vec::new(),
-        }
-    }
-
-    /// Record the solver's state.
-    pub fn record(&mut self, status: &Status, solver: &dyn SolverState) {
-        use std::fmt::Write as _;
-        let error = match &self.exact {
-            Some(exact) => {
-                solver.radiosity(&mut self.buf);
-                relative_error(exact, &self.emission, &self.buf).to_string()
-            }
-            None => String::new(),
-        };
-        let _ = writeln!(
-            self.text,
-            "{},{},{},{}",
-            status.iterations, status.seconds, error, status.unshot_fraction
-        );
-    }
-
-    /// Rows recorded.
-    pub fn len(&self) -> usize {
-        self.text.lines().count() - 1
-    }
-
-    /// True when nothing was recorded.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Write the trace.
-    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
-        write_atomic(path, |out| out.write_all(self.text.as_bytes()))
-    }
+/// Write `text` to `path` as it is (a trace's CSV, a Markdown summary).
+pub fn write_text(path: &Path, text: &str) -> Result<(), ExportError> {
+    write_atomic(path, |out| out.write_all(text.as_bytes()))
 }
 
 /// One radiosity row per patch: header `radiosity` (one channel, the red one) or

@@ -5,7 +5,7 @@
 //! binary (crate `dejavu`), so no system font or fontconfig is needed; the SVG names the
 //! `sans-serif` family and leaves the font to the viewer.
 
-use super::{write_atomic, ExportError};
+use super::{write_atomic, ExportError, OutputError};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -215,10 +215,10 @@ where
 }
 
 fn plot_error(path: &Path, e: impl std::fmt::Display) -> ExportError {
-    ExportError::Io {
+    ExportError::Output(OutputError {
         path: path.to_path_buf(),
         source: std::io::Error::other(format!("drawing the plot: {e}")),
-    }
+    })
 }
 
 /// Write `plot` as `<stem>.svg` and `<stem>.png`; returns the two paths.
@@ -231,7 +231,7 @@ pub fn write_plot(stem: &Path, plot: &Plot) -> Result<[PathBuf; 2], ExportError>
         let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
         draw(plot, &root).map_err(|e| plot_error(&svg_path, e))?;
     }
-    write_atomic(&svg_path, |w| std::io::Write::write_all(w, svg.as_bytes()))?;
+    write_atomic::<ExportError>(&svg_path, |w| std::io::Write::write_all(w, svg.as_bytes()))?;
     let (w, h) = SIZE;
     let mut rgb = vec![0u8; (w * h * 3) as usize];
     {
@@ -239,7 +239,7 @@ pub fn write_plot(stem: &Path, plot: &Plot) -> Result<[PathBuf; 2], ExportError>
         draw(plot, &root).map_err(|e| plot_error(&png_path, e))?;
     }
     let img = image::RgbImage::from_raw(w, h, rgb).expect("buffer of the right size");
-    write_atomic(&png_path, |out| {
+    write_atomic::<ExportError>(&png_path, |out| {
         img.write_to(out, image::ImageFormat::Png)
             .map_err(std::io::Error::other)
     })?;

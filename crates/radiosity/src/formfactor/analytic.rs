@@ -237,6 +237,40 @@ pub fn polygon_factor(
     (sum / (2.0 * std::f64::consts::PI * area_i)).max(0.0)
 }
 
+fn polygon(mesh: &crate::mesh::Mesh, k: usize, out: &mut Vec<DVec3>) {
+    out.clear();
+    let p = &mesh.patches[k];
+    let n = if p.is_triangle() { 3 } else { 4 };
+    out.extend(
+        p.vertices[..n]
+            .iter()
+            .map(|&v| mesh.vertices[v as usize].as_dvec3()),
+    );
+}
+
+/// Row `i` of F: the exact unoccluded factor from patch i to every other patch.
+pub(super) fn row(est: &super::Estimator, i: usize, scratch: &mut super::Scratch) {
+    let mesh = est.mesh;
+    let mut pi = std::mem::take(&mut scratch.poly_i);
+    let mut pj = std::mem::take(&mut scratch.poly_j);
+    polygon(mesh, i, &mut pi);
+    let p = &mesh.patches[i];
+    let (ni, ai) = (p.normal.as_dvec3(), p.area as f64);
+    for j in 0..mesh.len() {
+        if j == i {
+            continue;
+        }
+        polygon(mesh, j, &mut pj);
+        let nj = mesh.patches[j].normal.as_dvec3();
+        let f = polygon_factor(&pi, ni, ai, &pj, nj, &mut scratch.analytic);
+        if f > 0.0 {
+            scratch.add(j as u32, f);
+        }
+    }
+    scratch.poly_i = pi;
+    scratch.poly_j = pj;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -291,38 +325,4 @@ mod tests {
         );
         assert_eq!(g, 0.0);
     }
-}
-
-fn polygon(mesh: &crate::mesh::Mesh, k: usize, out: &mut Vec<DVec3>) {
-    out.clear();
-    let p = &mesh.patches[k];
-    let n = if p.is_triangle() { 3 } else { 4 };
-    out.extend(
-        p.vertices[..n]
-            .iter()
-            .map(|&v| mesh.vertices[v as usize].as_dvec3()),
-    );
-}
-
-/// Row `i` of F: the exact unoccluded factor from patch i to every other patch.
-pub(super) fn row(est: &super::Estimator, i: usize, scratch: &mut super::Scratch) {
-    let mesh = est.mesh;
-    let mut pi = std::mem::take(&mut scratch.poly_i);
-    let mut pj = std::mem::take(&mut scratch.poly_j);
-    polygon(mesh, i, &mut pi);
-    let p = &mesh.patches[i];
-    let (ni, ai) = (p.normal.as_dvec3(), p.area as f64);
-    for j in 0..mesh.len() {
-        if j == i {
-            continue;
-        }
-        polygon(mesh, j, &mut pj);
-        let nj = mesh.patches[j].normal.as_dvec3();
-        let f = polygon_factor(&pi, ni, ai, &pj, nj, &mut scratch.analytic);
-        if f > 0.0 {
-            scratch.add(j as u32, f);
-        }
-    }
-    scratch.poly_i = pi;
-    scratch.poly_j = pj;
 }

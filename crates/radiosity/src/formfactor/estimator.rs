@@ -9,6 +9,7 @@ use super::{
 use crate::accel::Bvh;
 use crate::geom::Vec3;
 use crate::mesh::Mesh;
+use crate::observe::{Event, Observer, Silent, Stage};
 use crate::system::{Entry, SparseMatrix};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -146,11 +147,19 @@ impl<'a> Estimator<'a> {
         }
     }
 
-    /// Every row, in parallel (deterministic), stored as asked. `progress` is called with the
-    /// number of rows done (from worker threads).
-    pub fn matrix(&self, storage: Storage, progress: &(dyn Fn(usize) + Sync)) -> Matrix {
+    /// Every row, in parallel (deterministic), stored as asked. `observer` hears of
+    /// [`Stage::FormFactors`] and of each row done (from worker threads).
+    pub fn matrix(&self, storage: Storage, observer: &dyn Observer) -> Matrix {
         let n = self.mesh.len();
-        let done = std::sync::atomic::AtomicUsize::new(0);
+        observer.event(Event::Stage(Stage::FormFactors));
+        let done = std::sync::atomic::AtomicU64::new(0);
+        let progress = |done: u64| {
+            observer.event(Event::Progress {
+                stage: Stage::FormFactors,
+                done,
+                total: n as u64,
+            })
+        };
         let dense = match storage {
             Storage::Dense => true,
             Storage::Sparse => false,
@@ -185,6 +194,6 @@ impl<'a> Estimator<'a> {
 
     /// Every row, stored sparse: the matrix the solvers that need all rows take.
     pub fn sparse_matrix(&self) -> SparseMatrix {
-        self.matrix(Storage::Sparse, &|_| {}).into_sparse()
+        self.matrix(Storage::Sparse, &Silent).into_sparse()
     }
 }

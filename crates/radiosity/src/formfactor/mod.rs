@@ -11,8 +11,8 @@
 //! One [`Params`] serves them all. [`Estimator`] computes rows with any of them, and whole
 //! matrices in parallel, dense or sparse; [`OnDemandRows`] hands rows to the solvers when they
 //! ask (an [`crate::system::Operator`]), cached under a budget. Whether rows are stored or
-//! computed on demand is decided in one place, the pipeline. [`enforce`] optionally makes a
-//! matrix physical, [`summary`] describes one, [`quadrature`] spreads points over a patch.
+//! computed on demand is decided in one place, the pipeline. [`enforce()`] optionally makes a
+//! matrix physical, [`summary()`] describes one, [`quadrature`] spreads points over a patch.
 //! This module produces linear systems and knows nothing of the solvers.
 
 pub mod analytic;
@@ -85,6 +85,21 @@ impl FormFactorMethod {
             FormFactorMethod::Tetrahedron => "tetrahedron",
             FormFactorMethod::MonteCarlo => "monte-carlo",
             FormFactorMethod::Analytic => "analytic",
+        }
+    }
+
+    /// One line on what the method is, with its source.
+    pub fn summary(self) -> &'static str {
+        match self {
+            FormFactorMethod::Hemicube => "hemicube z-buffer (Cohen & Greenberg 1985)",
+            FormFactorMethod::Hemisphere => "Nusselt's hemisphere, one ray per disc cell",
+            FormFactorMethod::Tetrahedron => {
+                "cubic tetrahedron z-buffer (Beran-Koehn & Pavicic 1991)"
+            }
+            FormFactorMethod::MonteCarlo => {
+                "ray shooting (Szirmay-Kalos & Márton 1995, eq. 7); rows on demand for shooting"
+            }
+            FormFactorMethod::Analytic => "exact contour integral, ignoring occlusion",
         }
     }
 

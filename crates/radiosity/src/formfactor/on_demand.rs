@@ -203,7 +203,7 @@ mod tests {
         };
         let mut stored = Estimator::new(&mesh, &bvh, params)
             .unwrap()
-            .matrix(Storage::Sparse, &|_| {})
+            .matrix(Storage::Sparse, &crate::observe::Silent)
             .into_sparse();
         let mut rows = OnDemandRows::new(Estimator::new(&mesh, &bvh, params).unwrap());
         for i in [0, 7, mesh.len() - 1] {

@@ -356,39 +356,6 @@ fn raster_triangle(
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn deltas_sum_to_one_and_raw_sums_converge() {
-        for p in [16usize, 64, 256] {
-            for (name, s) in [
-                ("hemicube", Solid::hemicube(p)),
-                ("tetrahedron", Solid::tetrahedron(p)),
-            ] {
-                let sum: f64 = s
-                    .faces
-                    .iter()
-                    .flat_map(|f| f.delta.iter())
-                    .map(|&d| d as f64)
-                    .sum();
-                assert!(
-                    (sum - 1.0).abs() < 1e-5,
-                    "{name} P={p}: normalised sum {sum}"
-                );
-                // Midpoint rule: the raw sum approaches 1 as O(1/P²).
-                let err = (s.raw_sum() - 1.0).abs();
-                assert!(
-                    err < 2.0 / (p * p) as f64 + 2e-6,
-                    "{name} P={p}: raw sum {}",
-                    s.raw_sum()
-                );
-            }
-        }
-    }
-}
-
 /// Row `i` through the projection solid `solid`: at each quadrature point of patch i every
 /// other patch's triangles are projected onto the solid's faces, and each pixel adds its delta
 /// form factor to the patch it shows (if it shows its front). The shared row algorithm of the
@@ -428,4 +395,37 @@ pub(super) fn row(est: &Estimator, solid: &Solid, i: usize, scratch: &mut Scratc
         }
     }
     scratch.points = points;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn deltas_sum_to_one_and_raw_sums_converge() {
+        for p in [16usize, 64, 256] {
+            for (name, s) in [
+                ("hemicube", Solid::hemicube(p)),
+                ("tetrahedron", Solid::tetrahedron(p)),
+            ] {
+                let sum: f64 = s
+                    .faces
+                    .iter()
+                    .flat_map(|f| f.delta.iter())
+                    .map(|&d| d as f64)
+                    .sum();
+                assert!(
+                    (sum - 1.0).abs() < 1e-5,
+                    "{name} P={p}: normalised sum {sum}"
+                );
+                // Midpoint rule: the raw sum approaches 1 as O(1/P²).
+                let err = (s.raw_sum() - 1.0).abs();
+                assert!(
+                    err < 2.0 / (p * p) as f64 + 2e-6,
+                    "{name} P={p}: raw sum {}",
+                    s.raw_sum()
+                );
+            }
+        }
+    }
 }

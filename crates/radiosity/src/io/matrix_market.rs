@@ -5,7 +5,7 @@
 //! 1 + 1e-3 (a patch cannot send out more than all of its energy). Duplicate entries are summed.
 
 use super::{at, read_text, InputError};
-use crate::export::{write_atomic, ExportError};
+use super::{write_atomic, OutputError};
 use crate::system::SparseMatrix;
 use std::io::Write;
 use std::path::Path;
@@ -159,7 +159,7 @@ pub fn read(path: &Path) -> Result<SparseMatrix, InputError> {
 
 /// Write `m` as `coordinate real general`, 1-based, rows in order; `comment` lines (without
 /// the `%`) go after the header.
-pub fn write(path: &Path, m: &SparseMatrix, comment: &[String]) -> Result<(), ExportError> {
+pub fn write(path: &Path, m: &SparseMatrix, comment: &[String]) -> Result<(), OutputError> {
     write_atomic(path, |out| {
         writeln!(out, "%%MatrixMarket matrix coordinate real general")?;
         for c in comment {

@@ -1,17 +1,25 @@
 //! Linear systems in and out of files: form-factor matrices in Matrix Market
-//! ([`matrix_market`]) and per-patch data in CSV ([`patches_csv`]). Readers check what the
-//! solvers rely on and report problems as `file:line: problem`.
+//! ([`matrix_market`]) and per-patch data in CSV ([`patches_csv`]); files written whole or not
+//! at all ([`write_atomic`]); the one place that tells file formats by extension
+//! ([`FileFormat`]). Readers check what the solvers rely on and report problems as
+//! `file:line: problem`.
 
+mod format;
 pub mod matrix_market;
+mod output;
 pub mod patches_csv;
 
+pub use format::FileFormat;
+pub use output::{write_atomic, OutputError};
+
+use crate::loc::FileLoc;
 use std::path::{Path, PathBuf};
 
 /// A problem with an input file.
 #[derive(Debug, thiserror::Error)]
 pub enum InputError {
-    /// The file could not be read.
-    #[error("{}: {source}", path.display())]
+    /// The file could not be read (the operating system's reason is the source).
+    #[error("cannot read {}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -19,10 +27,10 @@ pub enum InputError {
         source: std::io::Error,
     },
     /// A problem at a place in the file.
-    #[error("{place}: {message}")]
+    #[error("{at}: {message}")]
     Invalid {
-        /// `file:line`, or the file.
-        place: String,
+        /// Where.
+        at: FileLoc,
         /// What is wrong.
         message: String,
     },
@@ -30,11 +38,7 @@ pub enum InputError {
 
 pub(crate) fn at(path: &Path, line: usize, message: impl Into<String>) -> InputError {
     InputError::Invalid {
-        place: if line > 0 {
-            format!("{}:{}", path.display(), line)
-        } else {
-            path.display().to_string()
-        },
+        at: FileLoc::line(path, line),
         message: message.into(),
     }
 }

@@ -6,17 +6,14 @@
 
 use super::{at, read_text, InputError};
 use crate::color::Rgb;
+use crate::system::System;
 use std::path::Path;
 
 /// The patches of a system as read from CSV.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Patches {
-    /// Areas.
-    pub area: Vec<f64>,
-    /// Reflectances (one channel is spread to all three).
-    pub reflectance: Vec<Rgb>,
-    /// Emissions.
-    pub emission: Vec<Rgb>,
+    /// Areas, reflectances (one channel is spread to all three) and emissions.
+    pub system: System,
     /// True when the file gave one channel.
     pub single_channel: bool,
 }
@@ -56,9 +53,7 @@ pub fn read(path: &Path) -> Result<Patches, InputError> {
         ));
         };
     let mut out = Patches {
-        area: Vec::new(),
-        reflectance: Vec::new(),
-        emission: Vec::new(),
+        system: System::default(),
         single_channel: single,
     };
     for (line, raw) in lines {
@@ -101,11 +96,11 @@ pub fn read(path: &Path) -> Result<Patches, InputError> {
         if e.min_channel() < 0.0 {
             return Err(at(path, line, format!("emission {e} is negative")));
         }
-        out.area.push(a);
-        out.reflectance.push(rho);
-        out.emission.push(e);
+        out.system.area.push(a);
+        out.system.reflectance.push(rho);
+        out.system.emission.push(e);
     }
-    if out.area.is_empty() {
+    if out.system.is_empty() {
         return Err(at(path, 0, "no patches after the header"));
     }
     Ok(out)

@@ -166,7 +166,7 @@ fn ear_clip(v: &[Vec3], n: Vec3) -> Option<Vec<[Vec3; 3]>> {
 fn pieces(scene: &Scene, i: usize) -> Result<Vec<Piece>, SceneError> {
     let v = &scene.polygons[i].vertices;
     let bad = |message: String| SceneError::Invalid {
-        place: scene.place_of(i),
+        at: scene.place_of(i),
         message,
     };
     if v.len() == 3 {
@@ -218,7 +218,7 @@ pub fn check_planar(scene: &Scene) -> Result<(), SceneError> {
             let (dev, diam) = plane_deviation(&p.vertices);
             if dev > PLANARITY_TOLERANCE * diam {
                 return Err(SceneError::Invalid {
-                    place: scene.place_of(i),
+                    at: scene.place_of(i),
                     message: format!(
                         "face is not planar (a vertex lies {:.3}% of its size off its plane); one patch per face needs planar faces: split it into triangles",
                         100.0 * dev / diam

@@ -10,10 +10,12 @@ use crate::accel::Bvh;
 use crate::color::Rgb;
 use crate::geom::{Ray, Vec3};
 use crate::mesh::Mesh;
+use crate::observe::{Event, Observer, Stage};
 use crate::sampling::{stream, uniform};
 use crate::scene::Camera;
 use rayon::prelude::*;
 
+pub mod baked;
 pub mod camera;
 
 /// Image size and sampling.
@@ -146,15 +148,16 @@ fn frame(c: &Camera) -> (Vec3, Vec3, Vec3) {
 }
 
 /// Render the radiosity given at mesh vertices (`vertex_values`, e.g. from
-/// [`vertex_radiosity`]). `progress` is called with the number of rows finished so far.
+/// [`vertex_radiosity`]). `observer` hears of [`Stage::Render`] and of each row finished.
 pub fn render(
     mesh: &Mesh,
     bvh: &Bvh,
     vertex_values: &[Rgb],
     camera: &Camera,
     params: &RenderParams,
-    progress: &(dyn Fn(u32) + Sync),
+    observer: &dyn Observer,
 ) -> Image {
+    observer.event(Event::Stage(Stage::Render));
     let (w, h) = (params.width.max(1), params.height.max(1));
     let spp = params.samples_per_pixel.max(1);
     let (forward, right, up) = frame(camera);
@@ -194,7 +197,11 @@ pub fn render(
                 let l = acc * (inv_pi / spp as f64);
                 *px = [l.r as f32, l.g as f32, l.b as f32];
             }
-            progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+            observer.event(Event::Progress {
+                stage: Stage::Render,
+                done: done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) as u64 + 1,
+                total: h as u64,
+            });
         });
     Image {
         width: w,

@@ -23,7 +23,7 @@
 //!
 //! **Baked files.** A material whose `extras` hold `{"radiosity": {"reflectance": [r, g, b],
 //! "emission": [r, g, b]}}` takes ρ and E from there. The baked files this engine writes
-//! ([`crate::export::gltf`]) carry them, because their visible material is unlit white (the light
+//! ([`crate::export::bake`]) carry them, because their visible material is unlit white (the light
 //! is in the vertex colours): so a baked file can be read back and solved again.
 //!
 //! **Camera.** The first node of the scene (depth first, in document order) that carries a
@@ -59,7 +59,7 @@ const SUPPORTED_REQUIRED: &[&str] = &[
 
 fn invalid(path: &Path, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
-        place: path.display().to_string(),
+        at: crate::loc::FileLoc::file(path),
         message: message.into(),
     }
 }

@@ -251,7 +251,7 @@ struct Reader {
 
 fn invalid(path: &Path, line: usize, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
-        place: format!("{}:{}", path.display(), line),
+        at: crate::loc::FileLoc::line(path, line),
         message: message.into(),
     }
 }
@@ -1471,7 +1471,11 @@ mod tests {
         let s = load_with(&dir.join("top.mgf"), true).unwrap();
         assert_eq!(s.polygons.len(), 2);
         assert_eq!(s.polygons[1].vertices[0], Vec3::new(1.0, 0.0, 3.0));
-        assert!(s.place_of(1).contains("part.mgf:12"), "{}", s.place_of(1));
+        assert!(
+            s.place_of(1).to_string().contains("part.mgf:12"),
+            "{}",
+            s.place_of(1)
+        );
     }
 
     #[test]

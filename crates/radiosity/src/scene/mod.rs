@@ -17,6 +17,8 @@ pub mod spectrum;
 
 use crate::color::Rgb;
 use crate::geom::{Aabb, Vec3};
+use crate::io::FileFormat;
+use crate::loc::{FileLoc, Item};
 use std::path::{Path, PathBuf};
 
 /// A diffuse material: reflectance and emission per colour channel.
@@ -154,8 +156,8 @@ pub struct Scene {
 /// Why a scene could not be loaded or is not fit to solve.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// A file could not be read.
-    #[error("{}: {source}", path.display())]
+    /// A file could not be read (the operating system's reason is the error's source).
+    #[error("cannot read {}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -163,10 +165,10 @@ pub enum SceneError {
         source: std::io::Error,
     },
     /// A problem at a known place (`file:line`, or a polygon of a built-in scene).
-    #[error("{place}: {message}")]
+    #[error("{at}: {message}")]
     Invalid {
-        /// Where: `file:line` or `scene polygon N`.
-        place: String,
+        /// Where.
+        at: FileLoc,
         /// What is wrong.
         message: String,
     },
@@ -177,24 +179,24 @@ pub enum SceneError {
 
 impl Scene {
     /// Where polygon `i` came from, for messages: `file:line` or `scene 'name' polygon i`.
-    pub fn place_of(&self, i: usize) -> String {
+    pub fn place_of(&self, i: usize) -> FileLoc {
         let run = self.origins.partition_point(|(start, _)| *start <= i);
         let source = match run {
             0 => self.source.as_ref(),
             r => Some(&self.origins[r - 1].1),
         };
         match (source, self.polygons.get(i)) {
-            (Some(path), Some(p)) if p.line > 0 => format!("{}:{}", path.display(), p.line),
-            (Some(path), _) => format!("{} (polygon {})", path.display(), i),
-            (None, _) => format!("scene '{}' polygon {}", self.name, i),
+            (Some(path), Some(p)) if p.line > 0 => FileLoc::line(path, p.line as usize),
+            (Some(path), _) => FileLoc::file(path).with_item(Item::Polygon(i)),
+            (None, _) => FileLoc::scene(&self.name).with_item(Item::Polygon(i)),
         }
     }
 
     /// Where the scene as a whole came from.
-    pub fn place(&self) -> String {
+    pub fn place(&self) -> FileLoc {
         match &self.source {
-            Some(p) => p.display().to_string(),
-            None => format!("scene '{}'", self.name),
+            Some(p) => FileLoc::file(p),
+            None => FileLoc::scene(&self.name),
         }
     }
 
@@ -230,9 +232,9 @@ impl Scene {
     /// indices, a valid camera. Enough for view factors; solving also needs a light
     /// ([`Scene::validate`]).
     pub fn validate_geometry(&self) -> Result<(), SceneError> {
-        let bad = |place: String, message: String| SceneError::Invalid { place, message };
+        let bad = |at: FileLoc, message: String| SceneError::Invalid { at, message };
         for m in &self.materials {
-            let place = || format!("{} (material '{}')", self.place(), m.name);
+            let place = || self.place().with_item(Item::Material(m.name.clone()));
             let rho = m.reflectance;
             if !rho.is_finite() || rho.min_channel() < 0.0 || rho.max_channel() >= 1.0 {
                 return Err(bad(
@@ -293,7 +295,7 @@ impl Scene {
         self.validate_geometry()?;
         if self.emitted_power().max_channel() <= 0.0 {
             return Err(SceneError::Invalid {
-                place: self.place(),
+                at: self.place(),
                 message:
                     "the scene has no light source: no polygon has a material with emission > 0"
                         .into(),
@@ -350,18 +352,14 @@ pub fn load_with(name_or_path: &str, options: &LoadOptions) -> Result<Scene, Sce
         return Ok(s);
     }
     let path = Path::new(name_or_path);
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
-    match ext.as_deref() {
-        Some("obj") => obj::load(path),
-        Some("mgf") => mgf::load_with(path, options.one_sided),
-        Some("gltf" | "glb") => gltf::load_with(path, options.one_sided),
-        Some("ply") => ply::load(path),
+    match FileFormat::from_path(path) {
+        Some(FileFormat::Obj) => obj::load(path),
+        Some(FileFormat::Mgf) => mgf::load_with(path, options.one_sided),
+        Some(FileFormat::Gltf | FileFormat::Glb) => gltf::load_with(path, options.one_sided),
+        Some(FileFormat::Ply) => ply::load(path),
         _ if !path.exists() => Err(SceneError::Unknown(name_or_path.to_string())),
         _ => Err(SceneError::Invalid {
-            place: path.display().to_string(),
+            at: FileLoc::file(path),
             message:
                 "unsupported scene format (supported: .obj with .mtl, .mgf, .gltf, .glb, .ply)"
                     .into(),

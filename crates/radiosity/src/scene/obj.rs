@@ -13,6 +13,7 @@
 use super::{Material, Polygon, Scene, SceneError};
 use crate::color::Rgb;
 use crate::geom::Vec3;
+use crate::loc::FileLoc;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -21,7 +22,7 @@ pub const DEFAULT_REFLECTANCE: f64 = 0.5;
 
 fn invalid(path: &Path, line: usize, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
-        place: format!("{}:{}", path.display(), line),
+        at: FileLoc::line(path, line),
         message: message.into(),
     }
 }
@@ -33,7 +34,7 @@ pub(super) fn read(path: &Path) -> Result<String, SceneError> {
         source,
     })?;
     String::from_utf8(bytes).map_err(|e| SceneError::Invalid {
-        place: path.display().to_string(),
+        at: FileLoc::file(path),
         message: format!(
             "not UTF-8 text (invalid byte at offset {})",
             e.utf8_error().valid_up_to()

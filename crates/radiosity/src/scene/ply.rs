@@ -132,11 +132,11 @@ struct Cursor<'a> {
 
 impl<'a> Cursor<'a> {
     fn fail(&self, message: String) -> SceneError {
-        let place = match self.format {
-            Format::Ascii => format!("{}:{}", self.path.display(), self.line),
-            _ => format!("{} (byte {})", self.path.display(), self.pos),
+        let at = match self.format {
+            Format::Ascii => crate::loc::FileLoc::line(self.path, self.line),
+            _ => crate::loc::FileLoc::file(self.path).with_item(crate::loc::Item::Byte(self.pos)),
         };
-        SceneError::Invalid { place, message }
+        SceneError::Invalid { at, message }
     }
 
     /// The next ASCII token, moving to further lines as needed; `None` at the end of the data.
@@ -213,7 +213,7 @@ impl<'a> Cursor<'a> {
 
 fn invalid(path: &Path, line: usize, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
-        place: format!("{}:{line}", path.display()),
+        at: crate::loc::FileLoc::line(path, line),
         message: message.into(),
     }
 }
@@ -552,7 +552,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let place = |m: String| match format {
             Format::Ascii => invalid(path, line, m),
             _ => SceneError::Invalid {
-                place: format!("{} (face {i})", path.display()),
+                at: crate::loc::FileLoc::file(path).with_item(crate::loc::Item::Face(i)),
                 message: m,
             },
         };

@@ -124,7 +124,7 @@ impl SolverState for Gauss<'_> {
         if self.b.is_none() {
             // `new` checked the size, so only a singular matrix can fail here; then keep E.
             self.b = Some(
-                dense_solve(&self.system, source, self.limit)
+                dense_solve(self.system, source, self.limit)
                     .unwrap_or_else(|_| self.system.emission.to_vec()),
             );
         }
@@ -142,7 +142,7 @@ impl SolverState for Gauss<'_> {
     fn unshot_fraction(&mut self, source: &mut dyn Operator, _: bool) -> f64 {
         match &self.b {
             None => 1.0,
-            Some(b) => balance(&self.system, source, b).3 / self.system.emitted_power().sum(),
+            Some(b) => balance(self.system, source, b).3 / self.system.emitted_power().sum(),
         }
     }
 
@@ -153,7 +153,7 @@ impl SolverState for Gauss<'_> {
     fn info(&mut self, source: &mut dyn Operator) -> Info {
         let mut b = Vec::new();
         self.radiosity(&mut b);
-        let (absorbed, escaped, unshot, abs) = balance(&self.system, source, &b);
+        let (absorbed, escaped, unshot, abs) = balance(self.system, source, &b);
         let emitted = self.system.emitted_power();
         Info {
             iterations: self.iterations(),

@@ -19,6 +19,7 @@ pub mod relaxation;
 pub mod sor;
 pub mod southwell;
 pub mod stochastic;
+pub mod trace;
 
 pub use crate::system::{Operator, System, SystemError};
 
@@ -188,6 +189,33 @@ impl Solver {
             Solver::OvershootAmbient => "overshoot-ambient",
             Solver::Overshoot => "overshoot",
             Solver::Stochastic => "stochastic",
+        }
+    }
+
+    /// One line on what the method is, with its source.
+    pub fn summary(self) -> &'static str {
+        match self {
+            Solver::Gauss => "Gauss elimination, dense LU (Szirmay-Kalos & Márton 1995)",
+            Solver::Jacobi => "Jacobi iteration from B = E (Szirmay-Kalos & Márton eq. 8)",
+            Solver::GaussSeidel0 => "Gauss-Seidel from B = 0 (Gortler et al. 1993 §6)",
+            Solver::GaussSeidel => "Gauss-Seidel from B = E: gathering (Gortler et al. §2.1)",
+            Solver::GaussSeidelJacobi => {
+                "Gauss-Seidel from 0, output plus residuals (Gortler et al. §6)"
+            }
+            Solver::Sor => "successive over-relaxation, factor ω (Szirmay-Kalos & Márton eq. 21)",
+            Solver::Southwell => {
+                "Southwell relaxation, largest residual first (Gortler et al. §3.1)"
+            }
+            Solver::Progressive => {
+                "progressive refinement: Southwell plus a Jacobi sweep (Gortler et al. §2.1)"
+            }
+            Solver::OvershootAmbient => {
+                "overshooting with the ambient term (Feda; Gortler et al. §2.2.1)"
+            }
+            Solver::Overshoot => "SuperShootGather overshooting (Gortler et al. §2.2.2, app. C)",
+            Solver::Stochastic => {
+                "photon shooting, probabilistic progressive refinement (Szirmay-Kalos & Márton)"
+            }
         }
     }
 

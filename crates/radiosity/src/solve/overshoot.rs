@@ -240,7 +240,7 @@ impl SolverState for Overshoot<'_> {
     fn unshot_fraction(&mut self, source: &mut dyn Operator, exact: bool) -> f64 {
         let interval = (self.b.len() as u64 / 8).max(1);
         if exact || self.checked_at == u64::MAX || self.iterations >= self.checked_at + interval {
-            let (_, _, _, abs) = balance(&self.system, source, &self.b);
+            let (_, _, _, abs) = balance(self.system, source, &self.b);
             self.unshot = abs / self.emitted_total;
             self.checked_at = self.iterations;
         }
@@ -252,7 +252,7 @@ impl SolverState for Overshoot<'_> {
     }
 
     fn info(&mut self, source: &mut dyn Operator) -> Info {
-        let (absorbed, escaped, unshot, abs) = balance(&self.system, source, &self.b);
+        let (absorbed, escaped, unshot, abs) = balance(self.system, source, &self.b);
         Info {
             iterations: self.iterations,
             converged: false,

@@ -94,8 +94,8 @@ impl<'s> Relaxation<'s> {
     pub fn from_emission(system: &'s System, source: &mut dyn Operator) -> Self {
         let mut s = Self::from_zero(system);
         s.x = system.emission.to_vec();
-        let (absorbed, escaped, _, _) = crate::system::balance(&system, source, &s.x);
-        s.r = crate::system::residual(&system, source, &s.x);
+        let (absorbed, escaped, _, _) = crate::system::balance(system, source, &s.x);
+        s.r = crate::system::residual(system, source, &s.x);
         s.absorbed = absorbed;
         s.escaped = escaped;
         s.resum();

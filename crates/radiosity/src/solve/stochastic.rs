@@ -2,7 +2,7 @@
 //! refinement"): B and the unshot radiosity U start at E. Each iteration takes the patch j with
 //! the most unshot energy `U_j A_j` and sends one photon carrying `1/n` of that power: it leaves
 //! from a uniform point of j in a cosine-distributed direction, i.e. it lands on patch k with
-//! probability `F_jk` ([`Operator::sample`]: a ray on a scene, a draw from row j of a stored
+//! probability `F_jk` ([`crate::system::PhotonSampler::sample`]: a ray on a scene, a draw from row j of a stored
 //! matrix). Patch k keeps `ρ_k` of the power as new unshot and total radiosity; `U_j` loses
 //! `U_j/n`. No form factor is stored. The result is unbiased; its variance falls as n grows.
 //! Shooters are found in O(log N) with a max-tree over the unshot energies.
