@@ -49,11 +49,15 @@ fn main() -> ExitCode {
             // The chain once: each error's text says what went wrong at its level, and a
             // library error about a parameter is given the option's name.
             let flag = e.chain().find_map(settings::flag_of);
+            let hint = e
+                .chain()
+                .find_map(settings::hint_of)
+                .map_or(String::new(), |h| format!(" ({h})"));
             match flag {
                 Some(flag) if !format!("{e:#}").contains(flag) => {
-                    eprintln!("radiosity: error: {flag}: {e:#}")
+                    eprintln!("radiosity: error: {flag}: {e:#}{hint}")
                 }
-                _ => eprintln!("radiosity: error: {e:#}"),
+                _ => eprintln!("radiosity: error: {e:#}{hint}"),
             }
             ExitCode::FAILURE
         }

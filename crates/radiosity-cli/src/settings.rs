@@ -75,6 +75,17 @@ pub fn flag_of(e: &(dyn std::error::Error + 'static)) -> Option<&'static str> {
     None
 }
 
+/// The options that answer a library error about memory, for a hint after the message.
+pub fn hint_of(e: &(dyn std::error::Error + 'static)) -> Option<&'static str> {
+    match e.downcast_ref::<radiosity::Error>() {
+        Some(radiosity::Error::OutOfMemory {
+            stored_rows: true, ..
+        }) => Some("--solver progressive, --patches N or --rays N"),
+        Some(radiosity::Error::OutOfMemory { .. }) => Some("--patches N or --max-edge L"),
+        _ => None,
+    }
+}
+
 /// A library parameter error, prefixed with the option it is about.
 fn flag_error(e: FormFactorError) -> anyhow::Error {
     match flag_of(&e) {

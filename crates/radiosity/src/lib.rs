@@ -57,7 +57,16 @@ pub enum Error {
     #[error(transparent)]
     Input(#[from] io::InputError),
     /// The job would not fit in memory.
-    #[error("{what} would need about {} MiB but only {} MiB are available; use {alternative}", needed >> 20, limit >> 20)]
+    #[error(
+        "{what} would need about {} MiB but only {} MiB are available; use {}",
+        needed >> 20,
+        limit >> 20,
+        if *stored_rows {
+            "a shooting solver (progressive computes rows on demand), fewer patches or fewer rays per row"
+        } else {
+            "fewer patches (or a larger patch edge)"
+        }
+    )]
     OutOfMemory {
         /// What was asked for.
         what: String,
@@ -65,7 +74,7 @@ pub enum Error {
         needed: u64,
         /// Bytes available.
         limit: u64,
-        /// What to do instead.
-        alternative: String,
+        /// True when the estimate includes every form-factor row stored.
+        stored_rows: bool,
     },
 }

@@ -223,11 +223,7 @@ pub fn solve(
             ),
             needed,
             limit,
-            alternative: if store {
-                "a shooting method (--solver progressive, which computes rows on demand), fewer patches or fewer --rays".into()
-            } else {
-                "fewer patches (--patches N or a larger --max-edge)".into()
-            },
+            stored_rows: store,
         });
     }
     let mut ff = settings.form_factors;
