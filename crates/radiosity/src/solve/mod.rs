@@ -16,6 +16,7 @@ pub mod overshoot;
 pub mod overshoot_ambient;
 pub mod progressive;
 pub mod relaxation;
+pub mod select;
 pub mod sor;
 pub mod southwell;
 pub mod stochastic;

@@ -24,12 +24,19 @@
 //! (F_ii = 0, true of planar patches). The residual is not kept: it is recomputed from every
 //! row of F, every N/8 steps for the stopping test, and at every step when a trace asks.
 
+use super::select::MaxTree;
 use super::{Info, Operator, SolveError, Solver, SolverParams, SolverState, System};
 use crate::color::Rgb;
 use crate::system::balance;
 use crate::system::Entry;
 
 const NONE: u32 = u32::MAX;
+
+/// The shooter's key: radiosity received since the last shot, `|b − last|₁ · A`.
+fn key(b: Rgb, last: Rgb, area: f64) -> f64 {
+    let d = b - last;
+    (d.r.abs() + d.g.abs() + d.b.abs()) * area
+}
 
 /// SuperShootGather in progress.
 #[derive(Clone, Debug)]
@@ -38,6 +45,9 @@ pub struct Overshoot<'s> {
     b: Vec<Rgb>,
     /// B_i when i was last chosen (zero before).
     last: Vec<Rgb>,
+    /// `|B_k − last_k|₁ A_k`, the radiosity received since k last shot, as energy: the
+    /// shooter is its arg-max ([`super::select`]).
+    tree: MaxTree,
     slot: Vec<u32>,
     chosen: Vec<u32>,
     /// `shot_from[slot(c)][k] = ∇B_ck`.
@@ -90,6 +100,11 @@ impl<'s> Overshoot<'s> {
         Ok(Self {
             b: system.emission.to_vec(),
             last: vec![Rgb::BLACK; n],
+            tree: MaxTree::new(
+                &(0..n)
+                    .map(|k| key(system.emission[k], Rgb::BLACK, system.area[k]))
+                    .collect::<Vec<_>>(),
+            ),
             slot: vec![NONE; n],
             chosen: Vec::new(),
             shot_from: Vec::new(),
@@ -168,15 +183,7 @@ impl SolverState for Overshoot<'_> {
 
     fn step(&mut self, source: &mut dyn Operator) -> bool {
         let sys = self.system;
-        let (mut i, mut best) = (0, 0.0);
-        for k in 0..self.b.len() {
-            let d = self.b[k] - self.last[k];
-            let e = (d.r.abs() + d.g.abs() + d.b.abs()) * sys.area[k];
-            if e > best {
-                best = e;
-                i = k;
-            }
-        }
+        let (best, i) = self.tree.max();
         if best <= 0.0 || self.bytes() > self.limit {
             return false;
         }
@@ -228,6 +235,12 @@ impl SolverState for Overshoot<'_> {
         self.mark_shot_to(i, s);
         self.mark_shot_from(i, s);
         self.last[i] = self.b[i];
+        // Only i and the receivers in column i changed.
+        self.tree.set(i, key(self.b[i], self.last[i], sys.area[i]));
+        for &(j, _) in &self.column {
+            let j = j as usize;
+            self.tree.set(j, key(self.b[j], self.last[j], sys.area[j]));
+        }
         self.iterations += 1;
         true
     }

@@ -6,7 +6,7 @@
 //! negative, if the estimate was too high). The shooter is the patch with the largest
 //! `|ΔB_i + ΔB̂_i|·A_i`. Output: B = x + r, as progressive refinement.
 
-use super::relaxation::Relaxation;
+use super::relaxation::{Relaxation, SelectKind};
 use super::{Operator, Solver, SolverState, System};
 use crate::color::Rgb;
 
@@ -29,8 +29,10 @@ impl<'s> OvershootAmbient<'s> {
             .map(|(r, a)| *r * *a)
             .sum::<Rgb>()
             / total_area;
+        let mut core = Relaxation::from_zero(system);
+        core.select_by(SelectKind::Ambient);
         Self {
-            core: Relaxation::from_zero(system),
+            core,
             total_area,
             mean_reflectance,
         }
@@ -65,10 +67,7 @@ impl SolverState for OvershootAmbient<'_> {
         let sys = self.core.system;
         let r = &self.core.r;
         let amount = |i: usize| r[i] + sys.reflectance[i] * ambient;
-        let (i, best) = self.core.argmax(|i| {
-            let a = amount(i);
-            (a.r.abs() + a.g.abs() + a.b.abs()) * sys.area[i]
-        });
+        let (i, best) = self.core.shooter(ambient);
         if best <= 0.0 {
             return false;
         }

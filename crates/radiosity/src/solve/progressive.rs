@@ -16,7 +16,7 @@
 //! (Gortler et al. section 4). The unshot energy never increases, and by eq. 25 it falls by at least the
 //! factor `1 − (1 − q)/N` per shot, where `q = max_i Σ_j ρ_j F_ij`.
 
-use super::relaxation::Relaxation;
+use super::relaxation::{Relaxation, SelectKind};
 use super::{Operator, Solver, SolverState, System};
 use crate::color::Rgb;
 
@@ -29,15 +29,15 @@ pub struct Progressive<'s> {
 impl<'s> Progressive<'s> {
     /// Start: B = ΔB = E.
     pub fn new(system: &'s System) -> Self {
-        Self {
-            core: Relaxation::from_zero(system),
-        }
+        let mut core = Relaxation::from_zero(system);
+        core.select_by(SelectKind::Energy);
+        Self { core }
     }
 
-    /// The patch with the most unshot energy and that energy.
+    /// The patch with the most unshot energy and that energy (the lowest index on ties), in
+    /// O(1) from a max-tree kept up to date in O(log N) per changed residual.
     pub fn shooter(&self) -> (usize, f64) {
-        let energy = &self.core.energy;
-        self.core.argmax(|i| energy[i])
+        self.core.shooter(Rgb::BLACK)
     }
 
     /// Shoot from patch `i`.

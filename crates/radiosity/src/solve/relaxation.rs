@@ -12,6 +12,7 @@
 //! and `1 − ρ_j` is absorbed; the rest escapes. Then emitted = absorbed + escaped + Σ r_i A_i
 //! holds exactly at every step (the terms cancel in pairs), also for negative δ.
 
+use super::select::{AmbientTree, MaxTree};
 use super::{Info, Operator, System};
 use crate::color::Rgb;
 use crate::system::Entry;
@@ -61,6 +62,31 @@ pub struct Relaxation<'s> {
     /// Iterations done.
     pub iterations: u64,
     updates: u64,
+    select: Select,
+}
+
+/// Which patch a method shoots next.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SelectKind {
+    /// The largest unshot energy `|r_i|₁ A_i` (progressive refinement).
+    Energy,
+    /// The largest `|r_i|₁` (Southwell).
+    Residual,
+    /// The largest `|r_i + ρ_i · ambient|₁ A_i` (overshooting with the ambient term).
+    Ambient,
+}
+
+/// The shooter's structure, kept up to date as residuals change ([`super::select`]).
+#[derive(Clone, Debug)]
+enum Select {
+    /// None kept (the method sweeps in order).
+    None,
+    /// The largest unshot energy `|r_i|₁ A_i` (progressive refinement).
+    Energy(MaxTree),
+    /// The largest `|r_i|₁` (Southwell).
+    Residual(MaxTree),
+    /// The largest `|r_i + ρ_i · ambient|₁ A_i` (overshooting with the ambient term).
+    Ambient(AmbientTree),
 }
 
 fn abs_sum(c: Rgb) -> f64 {
@@ -86,6 +112,7 @@ impl<'s> Relaxation<'s> {
             escaped: Rgb::BLACK,
             iterations: 0,
             updates: 0,
+            select: Select::None,
             system,
         }
     }
@@ -102,12 +129,55 @@ impl<'s> Relaxation<'s> {
         s
     }
 
+    /// Keep the shooter of `kind` up to date from now on, in O(log N) per changed residual.
+    pub fn select_by(&mut self, kind: SelectKind) {
+        self.select = match kind {
+            SelectKind::Energy => Select::Energy(MaxTree::new(&[])),
+            SelectKind::Residual => Select::Residual(MaxTree::new(&[])),
+            SelectKind::Ambient => Select::Ambient(AmbientTree::new(&[], &[], &[])),
+        };
+        self.rebuild_selection();
+    }
+
+    fn rebuild_selection(&mut self) {
+        let (sys, r, energy) = (self.system, &self.r, &self.energy);
+        match &mut self.select {
+            Select::None => {}
+            Select::Energy(t) => *t = MaxTree::new(energy),
+            Select::Residual(t) => {
+                let keys: Vec<f64> = (0..r.len()).map(|i| energy[i] / sys.area[i]).collect();
+                *t = MaxTree::new(&keys);
+            }
+            Select::Ambient(t) => *t = AmbientTree::new(r, &sys.reflectance, &sys.area),
+        }
+    }
+
+    /// The patch with the largest key of the selection kept, and that key. The ambient term is
+    /// used by [`Select::Ambient`] only.
+    pub fn shooter(&self, ambient: Rgb) -> (usize, f64) {
+        match &self.select {
+            Select::None => (0, f64::NEG_INFINITY),
+            Select::Energy(t) | Select::Residual(t) => {
+                let (k, i) = t.max();
+                (i, k)
+            }
+            Select::Ambient(t) => {
+                let (sys, r) = (self.system, &self.r);
+                t.argmax(ambient, |i| {
+                    let a = r[i] + sys.reflectance[i] * ambient;
+                    (a.r.abs() + a.g.abs() + a.b.abs()) * sys.area[i]
+                })
+            }
+        }
+    }
+
     /// Recompute the sums from the residuals (against rounding drift).
     pub fn resum(&mut self) {
         let a = &self.system.area;
         for i in 0..self.r.len() {
             self.energy[i] = abs_sum(self.r[i]) * a[i];
         }
+        self.rebuild_selection();
         self.abs_unshot = self.energy.iter().sum();
         self.signed_unshot = self.r.iter().zip(a).map(|(r, a)| *r * *a).sum();
         self.updates = 0;
@@ -120,6 +190,12 @@ impl<'s> Relaxation<'s> {
         let e = abs_sum(v) * a;
         self.abs_unshot += e - self.energy[j];
         self.energy[j] = e;
+        match &mut self.select {
+            Select::None => {}
+            Select::Energy(t) => t.set(j, e),
+            Select::Residual(t) => t.set(j, e / a),
+            Select::Ambient(t) => t.set(j, v, a),
+        }
     }
 
     /// Change `x_i` by `delta`, with `column` = column i of F (`(j, F_ji)`).
@@ -178,18 +254,6 @@ impl<'s> Relaxation<'s> {
     /// The emitted energy, channels summed.
     pub fn emitted_total(&self) -> f64 {
         self.emitted_total
-    }
-
-    /// Index of the largest of `key(i)` over all patches (first on ties), with its value.
-    pub fn argmax(&self, key: impl Fn(usize) -> f64) -> (usize, f64) {
-        let mut best = (0, f64::NEG_INFINITY);
-        for i in 0..self.r.len() {
-            let k = key(i);
-            if k > best.1 {
-                best = (i, k);
-            }
-        }
-        best
     }
 
     /// Write `x` (or `x + r` when `plus_residual`) into `out`.

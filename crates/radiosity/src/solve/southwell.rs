@@ -3,7 +3,7 @@
 //! residuals through one column of F (eq. 16). Outputs the unknowns x. Converges for
 //! radiosity matrices, which are row diagonally dominant (appendix A).
 
-use super::relaxation::Relaxation;
+use super::relaxation::{Relaxation, SelectKind};
 use super::{Operator, Solver, SolverState, System};
 
 /// Southwell relaxation in progress.
@@ -15,9 +15,9 @@ pub struct Southwell<'s> {
 impl<'s> Southwell<'s> {
     /// Start from x = 0.
     pub fn new(system: &'s System) -> Self {
-        Self {
-            core: Relaxation::from_zero(system),
-        }
+        let mut core = Relaxation::from_zero(system);
+        core.select_by(SelectKind::Residual);
+        Self { core }
     }
 }
 
@@ -34,9 +34,7 @@ impl SolverState for Southwell<'_> {
     }
 
     fn step(&mut self, source: &mut dyn Operator) -> bool {
-        let area = &self.core.system.area;
-        let energy = &self.core.energy;
-        let (i, best) = self.core.argmax(|i| energy[i] / area[i]);
+        let (i, best) = self.core.shooter(crate::color::Rgb::BLACK);
         if best <= 0.0 {
             return false;
         }

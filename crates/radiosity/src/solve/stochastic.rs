@@ -7,53 +7,10 @@
 //! `U_j/n`. No form factor is stored. The result is unbiased; its variance falls as n grows.
 //! Shooters are found in O(log N) with a max-tree over the unshot energies.
 
+use super::select::MaxTree;
 use super::{Info, Operator, SolveError, Solver, SolverParams, SolverState, System};
 use crate::color::Rgb;
 use crate::sampling::{stream, Rng64};
-
-/// A binary max-tree over N keys: update and arg-max in O(log N).
-#[derive(Clone, Debug)]
-struct MaxTree {
-    size: usize,
-    node: Vec<(f64, u32)>,
-}
-
-impl MaxTree {
-    fn new(keys: &[f64]) -> Self {
-        let size = keys.len().next_power_of_two().max(1);
-        let mut node = vec![(f64::NEG_INFINITY, 0u32); 2 * size];
-        for (i, &k) in keys.iter().enumerate() {
-            node[size + i] = (k, i as u32);
-        }
-        for p in (1..size).rev() {
-            node[p] = Self::better(node[2 * p], node[2 * p + 1]);
-        }
-        Self { size, node }
-    }
-
-    fn better(a: (f64, u32), b: (f64, u32)) -> (f64, u32) {
-        if b.0 > a.0 {
-            b
-        } else {
-            a
-        }
-    }
-
-    fn set(&mut self, i: usize, key: f64) {
-        let mut p = self.size + i;
-        self.node[p].0 = key;
-        p /= 2;
-        while p >= 1 {
-            self.node[p] = Self::better(self.node[2 * p], self.node[2 * p + 1]);
-            p /= 2;
-        }
-    }
-
-    fn max(&self) -> (f64, usize) {
-        let (k, i) = self.node[1];
-        (k, i as usize)
-    }
-}
 
 /// Photon shooting in progress.
 #[derive(Clone, Debug)]
