@@ -304,6 +304,11 @@ pub struct SolveSystemArgs {
     /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
     #[arg(long, value_name = "N", default_value_t = 1000, help_heading = SOLVER)]
     pub photons: u32,
+    /// `stochastic-jacobi`: rays per patch in each iteration (all patches shoot N × this many
+    /// rays, each patch's share in proportion to its unshot power) and in the final gathering
+    /// iteration.
+    #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
+    pub iteration_rays: u32,
     /// Seed of `stochastic`.
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = SOLVER)]
     pub seed: u64,
@@ -358,6 +363,11 @@ pub struct SolveArgs {
     /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
     #[arg(long, value_name = "N", default_value_t = 1000, help_heading = SOLVER)]
     pub photons: u32,
+    /// `stochastic-jacobi`: rays per patch in each iteration (all patches shoot N × this many
+    /// rays, each patch's share in proportion to its unshot power) and in the final gathering
+    /// iteration.
+    #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
+    pub iteration_rays: u32,
     /// Seed of every random stream.
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]
     pub seed: u64,

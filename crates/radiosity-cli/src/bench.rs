@@ -50,6 +50,7 @@ fn solvers(sizes: &[usize], runs: usize) -> Result<()> {
             let iterations = match method {
                 Solver::Gauss => 1,
                 Solver::Stochastic => 200_000,
+                Solver::StochasticJacobi => 4,
                 _ => mesh.len() as u64,
             };
             let params = SolverParams {

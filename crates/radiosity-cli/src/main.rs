@@ -129,8 +129,14 @@ fn solve_scene(a: &SolveArgs) -> Result<(Scene, Solution)> {
 
 fn solve_system(a: SolveSystemArgs) -> Result<()> {
     let solver = a.solver.0;
-    let params =
-        settings::solver_params(a.tolerance, a.max_iterations, a.omega, a.photons, a.seed)?;
+    let params = settings::solver_params(
+        a.tolerance,
+        a.max_iterations,
+        a.omega,
+        a.photons,
+        a.iteration_rays,
+        a.seed,
+    )?;
     if FileFormat::from_path(&a.out) != Some(FileFormat::Csv) {
         anyhow::bail!("{}: unsupported output format (use .csv)", a.out.display());
     }

@@ -107,6 +107,12 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
         },
         100.0 * i.unshot_fraction
     );
+    if i.estimated_error > 0.0 {
+        println!(
+            "error       estimated standard error of B {:.2}% (area-weighted RMS, relative)",
+            100.0 * i.estimated_error
+        );
+    }
     println!(
         "energy      emitted {:.6e}: absorbed {:.2}%, escaped {:.2}%, unshot {:.2}%",
         e,

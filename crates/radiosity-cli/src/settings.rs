@@ -50,7 +50,14 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
         form_factors,
         rows: a.rows.into(),
         solver: a.solver.0,
-        params: solver_params(a.tolerance, a.max_iterations, a.omega, a.photons, a.seed)?,
+        params: solver_params(
+            a.tolerance,
+            a.max_iterations,
+            a.omega,
+            a.photons,
+            a.iteration_rays,
+            a.seed,
+        )?,
         memory_limit: 0,
         trace: a.trace.is_some(),
     })
@@ -70,6 +77,7 @@ pub fn flag_of(e: &(dyn std::error::Error + 'static)) -> Option<&'static str> {
             SolverParameter::Tolerance => "--tolerance",
             SolverParameter::Omega => "--omega",
             SolverParameter::Photons => "--photons",
+            SolverParameter::IterationRays => "--iteration-rays",
         });
     }
     None
@@ -100,6 +108,7 @@ pub fn solver_params(
     max_iterations: Option<u64>,
     omega: f64,
     photons: u32,
+    iteration_rays: u32,
     seed: u64,
 ) -> Result<SolverParams> {
     if !(0.0..1.0).contains(&tolerance) {
@@ -111,11 +120,15 @@ pub fn solver_params(
     if photons == 0 {
         bail!("--photons 0: at least one photon per shot is needed");
     }
+    if iteration_rays == 0 {
+        bail!("--iteration-rays 0: at least one ray per patch and iteration is needed");
+    }
     Ok(SolverParams {
         tolerance,
         max_iterations: max_iterations.unwrap_or(u64::MAX),
         omega,
         photons,
+        iteration_rays,
         seed,
         ..Default::default()
     })

@@ -10,14 +10,15 @@
 //!
 //! Monte Carlo rows get rays in proportion to the power about to be shot ([`Params::rays_for`]);
 //! a cached row is reused unless the power now shot would want 4× its rays, and a row estimated
-//! again gets fresh random streams (its version). Photons ([`PhotonSampler`]) are single rays
-//! for Monte Carlo, draws from the row for the other methods.
+//! again gets fresh random streams (its version). Photons ([`PhotonSampler`]) are single rays,
+//! for Monte Carlo only.
 
 use super::{
     monte_carlo, Effort, Entry, Estimator, FormFactorMethod, FormFactorStats, Params, Scratch,
 };
-use crate::sampling::{uniform, Rng64};
+use crate::sampling::Rng64;
 use crate::system::{Operator, PhotonSampler};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 #[derive(Debug)]
@@ -38,6 +39,8 @@ pub struct OnDemandRows<'a> {
     current_row: Option<usize>,
     column: Vec<Entry>,
     stats: FormFactorStats,
+    /// Photon rays cast (from any thread).
+    photon_rays: AtomicU64,
 }
 
 impl<'a> OnDemandRows<'a> {
@@ -53,12 +56,15 @@ impl<'a> OnDemandRows<'a> {
             current_row: None,
             column: Vec::new(),
             stats: FormFactorStats::default(),
+            photon_rays: AtomicU64::new(0),
         }
     }
 
     /// Work done so far.
     pub fn stats(&self) -> FormFactorStats {
-        self.stats
+        let mut s = self.stats;
+        s.rays += self.photon_rays.load(Ordering::Relaxed);
+        s
     }
 
     /// The Monte Carlo rays of the cached row `i`, if it is cached.
@@ -154,28 +160,18 @@ impl Operator for OnDemandRows<'_> {
         &self.column
     }
 
-    fn photons(&mut self) -> Option<&mut dyn PhotonSampler> {
-        Some(self)
+    /// Monte Carlo only: photons are single rays, which threads can cast at once. Rows of the
+    /// other methods are computed when asked, which a shared sampler cannot do.
+    fn photons(&self) -> Option<&dyn PhotonSampler> {
+        (self.params().method == FormFactorMethod::MonteCarlo).then_some(self as &dyn PhotonSampler)
     }
 }
 
 impl PhotonSampler for OnDemandRows<'_> {
-    /// Monte Carlo: one ray from a uniform point of patch i in a cosine-distributed direction.
-    /// Other methods: a draw from row i, patch j with probability F_ij, none with 1 − Σ_j F_ij.
-    fn sample(&mut self, i: usize, rng: &mut Rng64) -> Option<u32> {
-        if self.params().method == FormFactorMethod::MonteCarlo {
-            self.stats.rays += 1;
-            return monte_carlo::sample_photon(self.estimator.mesh(), self.estimator.bvh(), i, rng);
-        }
-        let cached = self.ensure_row(i, 0.0);
-        let mut u = uniform(rng) as f64;
-        for &(j, f) in self.row_slice(i, cached) {
-            u -= f as f64;
-            if u < 0.0 {
-                return Some(j);
-            }
-        }
-        None
+    /// One ray from a uniform point of patch i in a cosine-distributed direction.
+    fn sample(&self, i: usize, rng: &mut Rng64) -> Option<u32> {
+        self.photon_rays.fetch_add(1, Ordering::Relaxed);
+        monte_carlo::sample_photon(self.estimator.mesh(), self.estimator.bvh(), i, rng)
     }
 }
 

@@ -164,6 +164,7 @@ impl SolverState for Gauss<'_> {
             absorbed,
             escaped,
             unshot,
+            estimated_error: 0.0,
         }
     }
 }

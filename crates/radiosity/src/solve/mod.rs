@@ -20,6 +20,7 @@ pub mod select;
 pub mod sor;
 pub mod southwell;
 pub mod stochastic;
+pub mod stochastic_jacobi;
 pub mod trace;
 
 pub use crate::system::{Operator, System, SystemError};
@@ -58,6 +59,9 @@ pub struct Info {
     pub escaped: Rgb,
     /// Power not yet shot, Σ ΔB_i A_i.
     pub unshot: Rgb,
+    /// Monte Carlo methods that estimate it: the standard error of B relative to B
+    /// (area-weighted RMS over patches); 0 where not estimated.
+    pub estimated_error: f64,
 }
 
 /// A solver parameter, for errors (the program maps it to its own option name).
@@ -69,6 +73,8 @@ pub enum Parameter {
     Omega,
     /// [`SolverParams::photons`].
     Photons,
+    /// [`SolverParams::iteration_rays`].
+    IterationRays,
 }
 
 impl std::fmt::Display for Parameter {
@@ -77,6 +83,7 @@ impl std::fmt::Display for Parameter {
             Parameter::Tolerance => "tolerance",
             Parameter::Omega => "relaxation factor ω",
             Parameter::Photons => "photons per shot",
+            Parameter::IterationRays => "rays per patch and iteration",
         })
     }
 }
@@ -158,11 +165,14 @@ pub enum Solver {
     Overshoot,
     /// Probabilistic progressive refinement: photon shooting (Szirmay-Kalos & Márton) ([`stochastic`]).
     Stochastic,
+    /// Stochastic Jacobi: all patches shoot at once, rays in parallel (Neumann et al. 1994,
+    /// Bekaert 1999) ([`stochastic_jacobi`]).
+    StochasticJacobi,
 }
 
 impl Solver {
     /// Every method, in the order of the docs.
-    pub const ALL: [Solver; 11] = [
+    pub const ALL: [Solver; 12] = [
         Solver::Gauss,
         Solver::Jacobi,
         Solver::GaussSeidel0,
@@ -174,6 +184,7 @@ impl Solver {
         Solver::OvershootAmbient,
         Solver::Overshoot,
         Solver::Stochastic,
+        Solver::StochasticJacobi,
     ];
 
     /// The command-line name.
@@ -190,6 +201,7 @@ impl Solver {
             Solver::OvershootAmbient => "overshoot-ambient",
             Solver::Overshoot => "overshoot",
             Solver::Stochastic => "stochastic",
+            Solver::StochasticJacobi => "stochastic-jacobi",
         }
     }
 
@@ -217,6 +229,9 @@ impl Solver {
             Solver::Stochastic => {
                 "photon shooting, probabilistic progressive refinement (Szirmay-Kalos & Márton)"
             }
+            Solver::StochasticJacobi => {
+                "stochastic Jacobi: all patches shoot at once, rays in parallel (Neumann 1994, Bekaert 1999)"
+            }
         }
     }
 
@@ -230,7 +245,10 @@ impl Solver {
     pub fn needs_all_rows(self) -> bool {
         !matches!(
             self,
-            Solver::Progressive | Solver::OvershootAmbient | Solver::Stochastic
+            Solver::Progressive
+                | Solver::OvershootAmbient
+                | Solver::Stochastic
+                | Solver::StochasticJacobi
         )
     }
 }
@@ -252,8 +270,11 @@ pub struct SolverParams {
     pub omega: f64,
     /// Photons per unit of a shooter's unshot power for `stochastic` (each carries 1/n).
     pub photons: u32,
-    /// Seed of `stochastic`'s random stream.
+    /// Seed of `stochastic`'s and `stochastic-jacobi`'s random streams.
     pub seed: u64,
+    /// `stochastic-jacobi`: rays per patch in each iteration (R = this × N) and in the final
+    /// gathering iteration.
+    pub iteration_rays: u32,
     /// Memory the solver may use, bytes (`gauss`' dense matrix, `overshoot`'s shot matrix).
     pub memory_limit: u64,
 }
@@ -266,6 +287,7 @@ impl Default for SolverParams {
             omega: 1.1,
             photons: 1000,
             seed: 1,
+            iteration_rays: 16,
             memory_limit: 4 << 30,
         }
     }
@@ -290,6 +312,12 @@ pub trait SolverState {
     fn unshot_fraction(&mut self, source: &mut dyn Operator, exact: bool) -> f64;
     /// Iterations done.
     fn iterations(&self) -> u64;
+    /// Called once when the driver stops (tolerance or iteration cap): a method may finish its
+    /// estimate here (stochastic Jacobi's final gathering iteration). Returns true when it
+    /// changed the estimate. Nothing by default.
+    fn finish(&mut self, _source: &mut dyn Operator) -> bool {
+        false
+    }
     /// The energy bookkeeping of the current state.
     fn info(&mut self, source: &mut dyn Operator) -> Info;
 }
@@ -332,6 +360,12 @@ pub fn start<'s>(
             }
             Box::new(stochastic::Stochastic::new(system, params)?)
         }
+        Solver::StochasticJacobi => {
+            if source.photons().is_none() {
+                return Err(SolveError::NoPhotons { solver: method });
+            }
+            Box::new(stochastic_jacobi::StochasticJacobi::new(system, params)?)
+        }
     })
 }
 
@@ -357,6 +391,18 @@ pub fn run(
         let done = status.unshot_fraction <= params.tolerance;
         if done || solver.iterations() >= params.max_iterations {
             let converged = done || solver.unshot_fraction(source, true) <= params.tolerance;
+            let t = Instant::now();
+            if solver.finish(source) {
+                seconds += t.elapsed().as_secs_f64();
+                observer(
+                    &Status {
+                        iterations: solver.iterations(),
+                        unshot_fraction: status.unshot_fraction,
+                        seconds,
+                    },
+                    &*solver,
+                );
+            }
             let mut info = solver.info(source);
             info.converged = converged;
             info.seconds = seconds;
@@ -366,6 +412,9 @@ pub fn run(
         let more = solver.step(source);
         seconds += t.elapsed().as_secs_f64();
         if !more {
+            let t = Instant::now();
+            solver.finish(source);
+            seconds += t.elapsed().as_secs_f64();
             let mut info = solver.info(source);
             info.converged = true;
             info.seconds = seconds;

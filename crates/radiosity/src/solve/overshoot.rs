@@ -275,6 +275,7 @@ impl SolverState for Overshoot<'_> {
             absorbed,
             escaped,
             unshot,
+            estimated_error: 0.0,
         }
     }
 }

@@ -153,7 +153,7 @@ impl<'s> Relaxation<'s> {
     }
 
     /// The patch with the largest key of the selection kept, and that key. The ambient term is
-    /// used by [`Select::Ambient`] only.
+    /// used by [`SelectKind::Ambient`] only.
     pub fn shooter(&self, ambient: Rgb) -> (usize, f64) {
         match &self.select {
             Select::None => (0, f64::NEG_INFINITY),
@@ -277,6 +277,7 @@ impl<'s> Relaxation<'s> {
             absorbed: self.absorbed,
             escaped: self.escaped,
             unshot: self.signed_unshot,
+            estimated_error: 0.0,
         }
     }
 }

@@ -142,6 +142,7 @@ impl SolverState for Stochastic<'_> {
             absorbed: self.absorbed,
             escaped: self.escaped,
             unshot,
+            estimated_error: 0.0,
         }
     }
 }

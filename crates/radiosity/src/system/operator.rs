@@ -57,16 +57,16 @@ pub trait Operator {
     }
 
     /// The photon sampler that goes with this operator, if it has one (the photon-shooting
-    /// solver needs it).
-    fn photons(&mut self) -> Option<&mut dyn PhotonSampler> {
+    /// and stochastic Jacobi solvers need it).
+    fn photons(&self) -> Option<&dyn PhotonSampler> {
         None
     }
 }
 
 /// Where a photon leaving patch `i` first arrives: patch `j` with probability `F_ij`, `None`
 /// (lost) with probability `1 − Σ_j F_ij`. A stored matrix draws from its row; a scene casts a
-/// ray.
-pub trait PhotonSampler {
+/// ray. Shared by threads: each brings its own random stream.
+pub trait PhotonSampler: Sync {
     /// One draw, from the random stream `rng`.
-    fn sample(&mut self, i: usize, rng: &mut Rng64) -> Option<u32>;
+    fn sample(&self, i: usize, rng: &mut Rng64) -> Option<u32>;
 }

@@ -132,14 +132,14 @@ impl Operator for SparseMatrix {
         self.column_entries(i)
     }
 
-    fn photons(&mut self) -> Option<&mut dyn PhotonSampler> {
+    fn photons(&self) -> Option<&dyn PhotonSampler> {
         Some(self)
     }
 }
 
 /// A draw from the stored row by its cumulative sums.
 impl PhotonSampler for SparseMatrix {
-    fn sample(&mut self, i: usize, rng: &mut Rng64) -> Option<u32> {
+    fn sample(&self, i: usize, rng: &mut Rng64) -> Option<u32> {
         let (a, b) = (self.row_ptr[i], self.row_ptr[i + 1]);
         if a == b {
             return None;
