@@ -141,7 +141,7 @@ const EXAMPLES_VIEW: &str = "Examples:
 
 const EXAMPLES_BENCH: &str = "Examples:
   radiosity bench --patches 10000 --runs 5
-  radiosity bench --solvers 500,1000,2000";
+  radiosity bench --scale hosp.mgf --one-sided --sizes 25000,100000 --solver stochastic-jacobi";
 
 const EXAMPLES_SOLVE_SYSTEM: &str = "Examples:
   radiosity solve-system --matrix F.mtx --patches patches.csv -o B.csv
@@ -471,6 +471,26 @@ pub struct BenchArgs {
     /// by monte-carlo and by hemicube, with time and peak memory.
     #[arg(long, help_heading = FORM_FACTORS)]
     pub city: bool,
+    /// Instead: solve this scene at each of `--sizes` (patch counts), each in a fresh process,
+    /// and print rays, wall and CPU time, the time of each stage, peak resident memory and the
+    /// fitted exponents against N.
+    #[arg(long, value_name = "SCENE", requires = "sizes", help_heading = SCENE)]
+    pub scale: Option<String>,
+    /// `--scale`: the patch counts.
+    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1.., help_heading = MESHING)]
+    pub sizes: Option<Vec<usize>>,
+    /// `--scale`: keep every surface one-sided (see `solve --help`).
+    #[arg(long, help_heading = SCENE)]
+    pub one_sided: bool,
+    /// `--scale`: the solution method.
+    #[arg(long, value_name = "M", value_enum, default_value = "progressive", help_heading = SOLVER)]
+    pub solver: SolverArg,
+    /// `--scale`: stop at this fraction of the emitted energy unshot.
+    #[arg(long, value_name = "F", default_value_t = 0.01, help_heading = SOLVER)]
+    pub tolerance: f64,
+    /// `--scale`, `stochastic-jacobi`: rays per patch and iteration.
+    #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
+    pub iteration_rays: u32,
 }
 
 /// `radiosity view`.

@@ -88,6 +88,9 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if a.runs == 0 || a.rays == 0 || a.patches == 0 {
         bail!("--runs, --rays and --patches must be positive");
     }
+    if let Some(scene) = &a.scale {
+        return crate::scale::run(&a, scene);
+    }
     crate::settings::threads(a.threads)?;
     if a.form_factors {
         return form_factor_table(a.runs);

@@ -5,6 +5,7 @@ mod args;
 mod bench;
 mod experiment;
 mod report;
+mod scale;
 mod settings;
 mod view_factors;
 

@@ -80,6 +80,20 @@ impl Observer for Progress {
     }
 }
 
+/// This process's CPU seconds (user + system) and peak resident set in bytes, from `/proc`
+/// (Linux; `None` elsewhere). Clock ticks are taken as 100 per second, Linux's `USER_HZ`.
+pub fn resources() -> Option<(f64, u64)> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are the 14th and 15th.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: u64 = f.get(11)?.parse::<u64>().ok()? + f.get(12)?.parse::<u64>().ok()?;
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let hwm = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = hwm.split_whitespace().nth(1)?.parse().ok()?;
+    Some((ticks as f64 / 100.0, kib * 1024))
+}
+
 /// Print what was done: patches, rays, iterations, energy, time per stage.
 pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
     let i = &s.info;
@@ -134,6 +148,12 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
         println!(
             "memory      peak heap {:.1} MiB (every allocation since start, counted)",
             crate::alloc::Probe.peak() as f64 / (1024.0 * 1024.0)
+        );
+    }
+    if let Some((cpu, resident)) = resources() {
+        println!(
+            "resources   cpu {cpu:.2} s, peak resident {:.1} MiB",
+            resident as f64 / (1024.0 * 1024.0)
         );
     }
 }

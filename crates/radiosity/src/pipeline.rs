@@ -191,11 +191,6 @@ pub fn solve(
     observer: &dyn Observer,
 ) -> Result<Solution, Error> {
     scene.validate()?;
-    observer.event(Event::Stage(Stage::Mesh));
-    let t = Instant::now();
-    let mesh = Mesh::build(scene, settings.mesh)?;
-    let mesh_s = t.elapsed().as_secs_f64();
-
     let limit = match settings.memory_limit {
         0 => available_memory().unwrap_or(u64::MAX),
         l => l,
@@ -203,13 +198,41 @@ pub fn solve(
     let store = settings.stores_rows();
     // A stored matrix holds at most min(N, rays) entries a row, 20 bytes each (rows, columns,
     // sampling sums).
-    let per_patch = BYTES_PER_PATCH
-        + if store {
-            20 * (mesh.len() as u64).min(settings.form_factors.rays as u64)
-        } else {
-            0
-        };
-    let needed = mesh.len() as u64 * per_patch;
+    let bytes_for = |patches: u64| {
+        patches
+            * (BYTES_PER_PATCH
+                + if store {
+                    20 * patches.min(settings.form_factors.rays as u64)
+                } else {
+                    0
+                })
+    };
+    // Checked before meshing where the patch count is asked for (the mesher comes within a few
+    // per cent of it), and again after meshing with the count made.
+    if let MeshParams::Patches(n) = settings.mesh {
+        let needed = bytes_for(n as u64);
+        if needed > limit {
+            return Err(Error::OutOfMemory {
+                what: format!(
+                    "{n} patches{}",
+                    if store {
+                        " with every form-factor row stored"
+                    } else {
+                        ""
+                    }
+                ),
+                needed,
+                limit,
+                stored_rows: store,
+            });
+        }
+    }
+    observer.event(Event::Stage(Stage::Mesh));
+    let t = Instant::now();
+    let mesh = Mesh::build(scene, settings.mesh)?;
+    let mesh_s = t.elapsed().as_secs_f64();
+
+    let needed = bytes_for(mesh.len() as u64);
     if needed > limit {
         return Err(Error::OutOfMemory {
             what: format!(

@@ -40,11 +40,27 @@ impl MaxTree {
     /// Set key `i`.
     pub fn set(&mut self, i: usize, key: f64) {
         let mut p = self.size + i;
-        if self.node[p].0 == key {
+        let old = self.node[p].0;
+        if old == key {
             return;
         }
         self.node[p].0 = key;
         p /= 2;
+        if key > old {
+            // A key that grows only climbs while it beats the maximum above it (a parent holds
+            // the larger of its children, the lower index on ties): one read a level, and most
+            // receivers of a shot stop at the first.
+            let me = (key, i as u32);
+            while p >= 1 {
+                let cur = self.node[p];
+                if cur.0 > key || (cur.0 == key && cur.1 < me.1) {
+                    break;
+                }
+                self.node[p] = me;
+                p /= 2;
+            }
+            return;
+        }
         while p >= 1 {
             let b = Self::better(self.node[2 * p], self.node[2 * p + 1]);
             if self.node[p] == b {

@@ -6,13 +6,13 @@
 //!
 //! **Incremental shooting iterations.** With unshot radiosity ΔB_i and p_i = |ΔB_i|₁ A_i, P =
 //! Σ p_i, ray k of the iteration leaves the patch i whose cumulative share of P contains
-//! (k + ξ)/R (systematic sampling: patch i gets ⌊R p_i/P⌋ or ⌈R p_i/P⌉ rays), from a uniform
-//! point in a cosine direction ([`PhotonSampler`]), and carries the power w_i = ΔB_i A_i ·
-//! (P/R)/p_i (per channel; |w_i|₁ = P/R for every ray). A ray landing on j adds ρ_j w_i / A_j to
-//! B_j and to the new unshot ΔB'_j; a lost ray's power escapes. Each source keeps what it did not
-//! shoot, ΔB_i − n_i w_i / A_i (at most one ray's worth, either sign), so the books close
-//! exactly: emitted = absorbed + escaped + Σ ΔB_i A_i after every iteration. The expected
-//! transfer is one Jacobi step on the power system, so the estimate is unbiased.
+//! (k + ξ)/R (systematic sampling: patch i gets n_i = ⌊R p_i/P⌋ or ⌈R p_i/P⌉ rays; in the first
+//! iteration every emitter at least one), from a uniform point in a cosine direction
+//! ([`PhotonSampler`]), and carries the power w_i = ΔB_i A_i / n_i. A ray landing on j adds
+//! ρ_j w_i / A_j to B_j and to the new unshot ΔB'_j; a lost ray's power escapes. A source without
+//! rays keeps its unshot for a later iteration, so the books close exactly: emitted = absorbed +
+//! escaped + Σ ΔB_i A_i after every iteration. The expected transfer is one Jacobi step on the
+//! power system, so the estimate is unbiased.
 //!
 //! **The final regular iteration** (Bekaert's "regular" gathering step), run once when the
 //! unshot energy is below the tolerance or the iteration cap is reached: n rays from every patch
@@ -22,8 +22,12 @@
 //! where s_j = Σ_i F_ji is the fraction of rays from j that hit anything. s_j is estimated from
 //! all the rays j shot in earlier iterations (independent of the gathering rays, so the
 //! estimator stays unbiased; s_j = 1 in a closed scene); a patch that never shot gathers
-//! without the variate. The standard error of the gathered B follows from the rays' sample
-//! variance and is reported ([`super::Info::estimated_error`]).
+//! without the variate. Only the reflected part `B − E` is gathered: the direct light is taken
+//! from the first iteration, in which every emitter shoots all its emission from its own surface
+//! (so a gathering ray that sees the wrong one of two coincident surfaces, a light and a
+//! ceiling, cannot lose it). The standard error of B follows from the gathering rays' sample
+//! variance and the first iteration's arrivals, and is reported
+//! ([`super::Info::estimated_error`]).
 //!
 //! **Determinism.** Rays are traced in chunks of [`CHUNK`], each with its own random stream keyed
 //! by (seed, iteration, chunk); hits are reduced in chunk order, so B does not depend on the
@@ -51,6 +55,11 @@ pub struct StochasticJacobi<'s> {
     /// Rays shot from each patch so far, and how many of them hit a patch: s_j's estimate.
     rays: Vec<u32>,
     hits: Vec<u32>,
+    /// What the first iteration delivered: ρ_j × the direct irradiance from the emitters, and
+    /// the sum of the squares of its arrivals (channels summed): its variance, as the arrivals
+    /// are nearly a Poisson process.
+    direct: Vec<Rgb>,
+    direct_sq: Vec<f64>,
     rays_per_patch: u32,
     seed: u64,
     emitted: Rgb,
@@ -79,6 +88,8 @@ impl<'s> StochasticJacobi<'s> {
             unshot: system.emission.clone(),
             rays: vec![0; n],
             hits: vec![0; n],
+            direct: Vec::new(),
+            direct_sq: Vec::new(),
             rays_per_patch: params.iteration_rays,
             seed: params.seed,
             emitted,
@@ -107,42 +118,53 @@ impl<'s> StochasticJacobi<'s> {
         total / self.emitted_total
     }
 
-    /// One incremental shooting iteration of `r` rays.
+    /// One incremental shooting iteration of about R rays.
     fn shoot(&mut self, sampler: &dyn PhotonSampler) {
         let sys = self.system;
         let n = sys.len();
-        // Cumulative unshot energy, for systematic sampling of the sources.
-        let mut cumulative = Vec::with_capacity(n);
-        let mut total = 0.0f64;
-        for i in 0..n {
-            let u = self.unshot[i];
-            total += (u.r.abs() + u.g.abs() + u.b.abs()) * sys.area[i];
-            cumulative.push(total);
-        }
+        let energy = |u: Rgb, a: f64| (u.r.abs() + u.g.abs() + u.b.abs()) * a;
+        let total: f64 = (0..n).map(|i| energy(self.unshot[i], sys.area[i])).sum();
         if total <= 0.0 {
             return;
         }
-        let r = self.budget();
+        // Rays per source by systematic sampling: patch i gets the k with (k + ξ)/R · P in its
+        // slice of the cumulative unshot energy, ⌊R p_i/P⌋ or ⌈R p_i/P⌉ of them. In the first
+        // iteration every emitter shoots at least once, so that all emitted light leaves in it.
+        let r = self.budget() as f64;
         let mut rng = stream(self.seed, self.iterations, u64::MAX, 0);
         let xi = uniform(&mut rng) as f64;
-        let source_of = |k: u64| -> usize {
-            let target = (k as f64 + xi) / r as f64 * total;
-            cumulative.partition_point(|&c| c <= target).min(n - 1)
-        };
-        // Each source's ray power: w_i = ΔB_i A_i (P/R) / p_i.
-        let per_ray = total / r as f64;
-        let weight = |i: usize, u: Rgb| {
-            let p = (u.r.abs() + u.g.abs() + u.b.abs()) * sys.area[i];
-            u * (sys.area[i] * per_ray / p)
+        let first = self.iterations == 0;
+        let mut end = Vec::with_capacity(n);
+        let (mut acc, mut before, mut rays) = (0.0f64, 0u64, 0u64);
+        for i in 0..n {
+            acc += energy(self.unshot[i], sys.area[i]);
+            let upto = (acc / total * r - xi).ceil().max(0.0) as u64;
+            let mut count = upto.saturating_sub(before);
+            before = before.max(upto);
+            if first && count == 0 && self.unshot[i] != Rgb::BLACK {
+                count = 1;
+            }
+            rays += count;
+            end.push(rays);
+        }
+        let source_of = |k: u64| end.partition_point(|&e| e <= k).min(n - 1);
+        // Each source shoots all its unshot radiosity, split evenly over its rays; a source
+        // without rays keeps it for a later iteration. The books stay exact.
+        let weight = |i: usize| {
+            let count = end[i] - if i == 0 { 0 } else { end[i - 1] };
+            self.unshot[i] * (sys.area[i] / count as f64)
         };
         let mut received = vec![Rgb::BLACK; n];
+        if first {
+            self.direct_sq = vec![0.0; n];
+        }
         // (source, hit) of each ray of a batch, filled in parallel, reduced in ray order.
-        let mut buf = vec![(0u32, 0u32); (r as usize).min(BATCH)];
+        let mut buf = vec![(0u32, 0u32); (rays as usize).min(BATCH)];
         let mut done = 0u64;
         let seed = self.seed;
         let iteration = self.iterations;
-        while done < r {
-            let batch = (r - done).min(BATCH as u64) as usize;
+        while done < rays {
+            let batch = (rays - done).min(BATCH as u64) as usize;
             let first_chunk = done / CHUNK as u64;
             buf[..batch]
                 .par_chunks_mut(CHUNK)
@@ -156,48 +178,57 @@ impl<'s> StochasticJacobi<'s> {
                         *slot = (i as u32, hit);
                     }
                 });
-            {
-                for &(i, j) in &buf[..batch] {
-                    let i = i as usize;
-                    let w = weight(i, self.unshot[i]);
-                    // What i shot leaves its unshot now (the new unshot is in `received`).
-                    received[i] -= w * (1.0 / sys.area[i]);
-                    self.rays[i] = self.rays[i].saturating_add(1);
-                    if j == u32::MAX {
-                        self.escaped += w;
-                    } else {
-                        let j = j as usize;
-                        self.hits[i] = self.hits[i].saturating_add(1);
-                        let rho = sys.reflectance[j];
-                        let db = rho * w * (1.0 / sys.area[j]);
-                        received[j] += db;
-                        self.b[j] += db;
-                        self.absorbed += (Rgb::splat(1.0) - rho) * w;
+            for &(i, j) in &buf[..batch] {
+                let i = i as usize;
+                let w = weight(i);
+                self.rays[i] = self.rays[i].saturating_add(1);
+                if j == u32::MAX {
+                    self.escaped += w;
+                } else {
+                    let j = j as usize;
+                    self.hits[i] = self.hits[i].saturating_add(1);
+                    let rho = sys.reflectance[j];
+                    let db = rho * w * (1.0 / sys.area[j]);
+                    received[j] += db;
+                    if first {
+                        self.direct_sq[j] += db.sum() * db.sum();
                     }
+                    self.b[j] += db;
+                    self.absorbed += (Rgb::splat(1.0) - rho) * w;
                 }
             }
             done += batch as u64;
         }
-        for (u, d) in self.unshot.iter_mut().zip(&received) {
-            *u += *d;
+        for i in 0..n {
+            let count = end[i] - if i == 0 { 0 } else { end[i - 1] };
+            if count > 0 {
+                self.unshot[i] = Rgb::BLACK;
+            }
+            self.unshot[i] += received[i];
+        }
+        if first {
+            self.direct = received;
         }
     }
 
-    /// The final regular iteration with the constant control variate: gather from every patch.
+    /// The final regular iteration: direct light as shot in the first iteration (every emitter
+    /// shoots then, from its own surface), plus the reflected light `ρ_j Σ_i F_ji (B_i − E_i)`
+    /// gathered by rays from every patch j, with the constant control variate β (the
+    /// area-weighted mean of B − E). Gathering only the reflected part keeps the direct light
+    /// exact where a light and another surface coincide and a gathering ray would see the
+    /// wrong one of the two (as in RenderPark's hospital).
     fn gather(&mut self, sampler: &dyn PhotonSampler) {
         let sys = self.system;
         let n = sys.len();
         let total_area = sys.total_area();
-        let beta = self
-            .b
-            .iter()
-            .zip(&sys.area)
-            .map(|(b, a)| *b * *a)
+        let beta = (0..n)
+            .map(|i| (self.b[i] - sys.emission[i]) * sys.area[i])
             .sum::<Rgb>()
             * (1.0 / total_area);
         let per = self.rays_per_patch as usize;
         let old = &self.b;
-        let (rays, hits) = (&self.rays, &self.hits);
+        let (rays, hits, direct, direct_sq) =
+            (&self.rays, &self.hits, &self.direct, &self.direct_sq);
         let seed = self.seed;
         // Per patch: the gathered B and the variance of its estimate (channels summed).
         let gathered: Vec<(Rgb, f64)> = (0..n)
@@ -213,7 +244,7 @@ impl<'s> StochasticJacobi<'s> {
                 let (mut sum, mut sum_sq) = (Rgb::BLACK, 0.0f64);
                 for _ in 0..per {
                     let v = match sampler.sample(j, &mut rng) {
-                        Some(i) => old[i as usize] - cv,
+                        Some(i) => old[i as usize] - sys.emission[i as usize] - cv,
                         None => Rgb::BLACK,
                     };
                     sum += v;
@@ -226,9 +257,11 @@ impl<'s> StochasticJacobi<'s> {
                     0.0
                 };
                 let rho = sys.reflectance[j];
-                let b = sys.emission[j] + rho * (cv * s + mean);
+                let direct = direct.get(j).copied().unwrap_or(Rgb::BLACK);
+                let b = sys.emission[j] + direct + rho * (cv * s + mean);
                 let rho_mean = rho.sum() / 3.0;
-                (b, rho_mean * rho_mean * var)
+                let direct_var = direct_sq.get(j).copied().unwrap_or(0.0);
+                (b, rho_mean * rho_mean * var + direct_var)
             })
             .collect();
         let (mut err, mut norm) = (0.0, 0.0);
