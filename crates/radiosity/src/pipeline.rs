@@ -198,23 +198,19 @@ pub fn solve(
     let store = settings.stores_rows();
     // A stored matrix holds at most min(N, rays) entries a row, 20 bytes each (rows, columns,
     // sampling sums).
-    let bytes_for = |patches: u64| {
-        patches
-            * (BYTES_PER_PATCH
+    let check = |patches: u64| -> Result<u64, Error> {
+        let needed = patches.saturating_mul(
+            BYTES_PER_PATCH
                 + if store {
                     20 * patches.min(settings.form_factors.rays as u64)
                 } else {
                     0
-                })
-    };
-    // Checked before meshing where the patch count is asked for (the mesher comes within a few
-    // per cent of it), and again after meshing with the count made.
-    if let MeshParams::Patches(n) = settings.mesh {
-        let needed = bytes_for(n as u64);
+                },
+        );
         if needed > limit {
             return Err(Error::OutOfMemory {
                 what: format!(
-                    "{n} patches{}",
+                    "{patches} patches{}",
                     if store {
                         " with every form-factor row stored"
                     } else {
@@ -226,29 +222,18 @@ pub fn solve(
                 stored_rows: store,
             });
         }
+        Ok(needed)
+    };
+    // Checked before meshing where the patch count is asked for (the mesher comes within a few
+    // per cent of it), and again after meshing with the count made.
+    if let MeshParams::Patches(n) = settings.mesh {
+        check(n as u64)?;
     }
     observer.event(Event::Stage(Stage::Mesh));
     let t = Instant::now();
     let mesh = Mesh::build(scene, settings.mesh)?;
     let mesh_s = t.elapsed().as_secs_f64();
-
-    let needed = bytes_for(mesh.len() as u64);
-    if needed > limit {
-        return Err(Error::OutOfMemory {
-            what: format!(
-                "{} patches{}",
-                mesh.len(),
-                if store {
-                    " with every form-factor row stored"
-                } else {
-                    ""
-                }
-            ),
-            needed,
-            limit,
-            stored_rows: store,
-        });
-    }
+    let needed = check(mesh.len() as u64)?;
     let mut ff = settings.form_factors;
     ff.cache_bytes = ff.cache_bytes.min(((limit - needed) / 2) as usize);
     // Parameters are checked before any work.
