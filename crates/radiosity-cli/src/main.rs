@@ -185,9 +185,12 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
         info.iterations,
         solver,
         if info.converged {
-            "converged"
+            "converged".to_string()
         } else {
-            "stopped at --max-iterations"
+            format!(
+                "stopped after {} iterations without converging",
+                info.iterations
+            )
         },
         info.unshot_fraction,
         info.seconds

@@ -115,9 +115,12 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
         i.iterations,
         s.method,
         if i.converged {
-            "converged"
+            "converged".to_string()
         } else {
-            "stopped at --max-iterations"
+            format!(
+                "stopped after {} iterations without converging",
+                i.iterations
+            )
         },
         100.0 * i.unshot_fraction
     );
@@ -143,17 +146,20 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
         line += &format!(", render {r:.3} s, write {w:.3} s");
     }
     println!("{line}");
-    {
+    // Resident memory is what the run used; the heap count also includes memory reserved and
+    // never touched (a linear-algebra library's per-thread scratch), so it comes second.
+    let heap = {
         use radiosity::experiment::MemoryProbe;
-        println!(
-            "memory      peak heap {:.1} MiB (every allocation since start, counted)",
-            crate::alloc::Probe.peak() as f64 / (1024.0 * 1024.0)
-        );
-    }
-    if let Some((cpu, resident)) = resources() {
-        println!(
-            "resources   cpu {cpu:.2} s, peak resident {:.1} MiB",
-            resident as f64 / (1024.0 * 1024.0)
-        );
+        crate::alloc::Probe.peak() as f64 / (1024.0 * 1024.0)
+    };
+    match resources() {
+        Some((cpu, resident)) => {
+            println!(
+                "memory      peak resident {:.1} MiB (heap allocated at most {heap:.1} MiB)",
+                resident as f64 / (1024.0 * 1024.0)
+            );
+            println!("cpu         {cpu:.2} s (user and system, all threads)");
+        }
+        None => println!("memory      heap allocated at most {heap:.1} MiB"),
     }
 }

@@ -44,8 +44,10 @@ fn parse(summary: &str) -> Row {
             row.iterations = get(0);
         } else if line.starts_with("time ") {
             (row.mesh, row.bvh, row.form_factors, row.solve) = (get(0), get(1), get(2), get(3));
-        } else if line.starts_with("resources ") {
-            (row.cpu, row.resident_mib) = (get(0), get(1));
+        } else if line.starts_with("memory ") {
+            row.resident_mib = get(0);
+        } else if line.starts_with("cpu ") {
+            row.cpu = get(0);
         }
     }
     row

@@ -181,6 +181,26 @@ pub fn image(a: &ImageArgs, seed: u64) -> Result<radiosity::render::RenderParams
     if a.spp == 0 {
         bail!("--spp 0: at least one sample per pixel is needed");
     }
+    if a.width > MAX_IMAGE_SIDE || a.height > MAX_IMAGE_SIDE {
+        bail!(
+            "--width {} --height {}: at most {MAX_IMAGE_SIDE} pixels a side",
+            a.width,
+            a.height
+        );
+    }
+    // The float image, its 8-bit or encoded copy: about 24 bytes a pixel.
+    let needed = 24 * a.width as u64 * a.height as u64;
+    if let Some(free) = radiosity::pipeline::available_memory() {
+        if needed > free / 2 {
+            bail!(
+                "--width {} --height {}: the image would need about {} MiB, more than half the {} MiB available",
+                a.width,
+                a.height,
+                needed >> 20,
+                free >> 20
+            );
+        }
+    }
     Ok(radiosity::render::RenderParams {
         width: a.width,
         height: a.height,
@@ -208,11 +228,20 @@ pub fn check_output(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Largest image side, pixels.
+pub const MAX_IMAGE_SIDE: u32 = 32768;
+
+/// Most worker threads.
+pub const MAX_THREADS: usize = 1024;
+
 /// Set the worker-thread count of the global pool.
 pub fn threads(t: Option<usize>) -> Result<()> {
     if let Some(t) = t {
         if t == 0 {
             bail!("--threads 0: at least one thread is needed");
+        }
+        if t > MAX_THREADS {
+            bail!("--threads {t}: at most {MAX_THREADS}");
         }
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)

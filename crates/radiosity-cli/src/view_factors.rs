@@ -63,7 +63,18 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         check_planar(&scene)?;
     }
     let t = Instant::now();
+    let memory = radiosity::pipeline::MemoryCheck {
+        limit: radiosity::pipeline::available_memory().unwrap_or(u64::MAX),
+        stored_rows: true,
+        rays: if method == radiosity::formfactor::FormFactorMethod::MonteCarlo {
+            a.rays
+        } else {
+            u32::MAX
+        },
+    };
+    memory.before_meshing(&scene, mesh_params)?;
     let mesh = Mesh::build(&scene, mesh_params)?;
+    memory.check(mesh.len() as u64)?;
     let bvh = Bvh::build(&mesh);
     let params = Params {
         method,

@@ -1517,3 +1517,278 @@ fn view_shows_a_baked_gltf_without_solving() {
         &["baked.glb", "shot.png"],
     );
 }
+
+/// Each class of hostile input found by mutating files and options: a one-line located error,
+/// a non-zero exit, no panic or signal, no output, within seconds (a hang or an abort on
+/// allocation fails the test, which runs them all in a few seconds).
+#[test]
+fn hostile_inputs_get_one_line_errors_quickly() {
+    let dir = scratch("hostile");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../radiosity/tests/data");
+    for f in ["room.gltf", "room.bin", "checker.png"] {
+        std::fs::copy(data.join(f), dir.join(f)).unwrap();
+    }
+    let room = std::fs::read_to_string(dir.join("room.gltf")).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&room).unwrap();
+    // glTF that the dependency's own validation lets through and then panicked on.
+    let gltf_case = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut j = json.clone();
+        edit(&mut j);
+        write(&dir, name, &j.to_string());
+    };
+    gltf_case("attr.gltf", &|j| {
+        j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 999.into()
+    });
+    gltf_case("camera.gltf", &|j| {
+        j["cameras"] = serde_json::json!([{ "type": "orthographic" }]);
+    });
+    gltf_case("image.gltf", &|j| {
+        j["images"] = serde_json::json!([{}]);
+    });
+    json["buffers"][0]["uri"] = "/dev/zero".into();
+    write(&dir, "zero.gltf", &json.to_string());
+    // MGF: a chain of 200 includes, a huge transform array, arrays nested to 10⁹ statements.
+    for k in 0..200 {
+        write(
+            &dir,
+            &format!("inc{k}.mgf"),
+            &format!("i inc{}.mgf\n", k + 1),
+        );
+    }
+    write(&dir, "inc200.mgf", "v a =\np 0 0 0\n");
+    write(
+        &dir,
+        "array.mgf",
+        "xf -a 4000000000 -t 1 0 0\nv a =\np 0 0 0\nxf\n",
+    );
+    write(
+        &dir,
+        "nested.mgf",
+        "xf -a 1000 -t 1 0 0\nxf -a 1000 -t 0 1 0\nxf -a 1000 -t 0 0 1\nv a =\np 0 0 0\nxf\nxf\nxf\n",
+    );
+    // OBJ: one polygon of 20,000 vertices; a face repeating its indices 10⁵ times; a material
+    // library that is a device; a face with a repeated vertex (zero area once meshed); a
+    // megabyte-long token.
+    let mut big = String::from("mtllib l.mtl\nusemtl light\n");
+    for k in 0..20_000 {
+        let t = k as f64 / 20_000.0 * std::f64::consts::TAU;
+        big += &format!("v {} {} 0\n", t.cos(), t.sin());
+    }
+    big += "f";
+    for k in 1..=20_000 {
+        big += &format!(" {k}");
+    }
+    write(&dir, "big.obj", &(big + "\n"));
+    write(&dir, "l.mtl", "newmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+    let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    write(
+        &dir,
+        "repeat.obj",
+        &format!("{tri}f{}\n", " 1 2 3".repeat(100_000)),
+    );
+    write(
+        &dir,
+        "zero.obj",
+        &format!("mtllib /dev/zero\n{tri}f 1 2 3\n"),
+    );
+    write(
+        &dir,
+        "long.obj",
+        &format!("v 0 0 {}\n", "9".repeat(1 << 20) + "x"),
+    );
+    // Matrix Market whose size line promises more than the file holds.
+    write(
+        &dir,
+        "rows.mtx",
+        "%%MatrixMarket matrix coordinate real general\n4000000000 4000000000 1\n1 1 0.5\n",
+    );
+    write(
+        &dir,
+        "entries.mtx",
+        "%%MatrixMarket matrix coordinate real general\n1 1 4000000000\n1 1 0.5\n",
+    );
+    write(&dir, "p.csv", "area,reflectance,emission\n1,0.5,1\n");
+    let keep: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    let keep: Vec<&str> = keep.iter().map(String::as_str).collect();
+    let solve = |scene: &str| {
+        vec!["solve", scene, "--patches", "200", "-o", "out.csv"]
+            .into_iter()
+            .map(String::from)
+            .collect::<Vec<_>>()
+    };
+    let args = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let cases: Vec<(Vec<String>, Vec<&str>)> = vec![
+        (solve("attr.gltf"), vec!["attr.gltf", "no accessor 999"]),
+        (solve("camera.gltf"), vec!["camera.gltf", "cameras[0]"]),
+        (solve("image.gltf"), vec!["image.gltf", "images[0]"]),
+        (solve("zero.gltf"), vec!["/dev/zero", "not a regular file"]),
+        (solve("inc0.mgf"), vec!["includes nest deeper than 64"]),
+        (solve("array.mgf"), vec!["array.mgf:1", "transform"]),
+        (
+            solve("nested.mgf"),
+            vec!["nested.mgf:3", "nested transform arrays"],
+        ),
+        (solve("big.obj"), vec!["big.obj:20003", "at most 4096"]),
+        (solve("repeat.obj"), vec!["repeat.obj:4", "at most 4096"]),
+        (solve("zero.obj"), vec!["zero.obj:1", "not a regular file"]),
+        (solve("long.obj"), vec!["long.obj:1", "…"]),
+        (
+            args(&["solve", "cornell", "--max-edge", "0.00001", "-o", "out.csv"]),
+            vec!["patches would need", "--max-edge"],
+        ),
+        (
+            args(&[
+                "solve",
+                "cornell",
+                "--patches",
+                "1000000000000",
+                "-o",
+                "out.csv",
+            ]),
+            vec!["1000000000000 patches would need"],
+        ),
+        (
+            args(&["render", "cornell", "--width", "100000", "-o", "out.png"]),
+            vec!["--width 100000", "at most 32768"],
+        ),
+        (
+            args(&["render", "cornell", "--threads", "100000", "-o", "out.png"]),
+            vec!["--threads 100000", "at most"],
+        ),
+        (
+            args(&[
+                "solve",
+                "cornell",
+                "--solver",
+                "gauss",
+                "--patches",
+                "60000",
+                "-o",
+                "out.csv",
+            ]),
+            vec!["gauss on", "iterative solver"],
+        ),
+        (
+            args(&[
+                "solve-system",
+                "--matrix",
+                "rows.mtx",
+                "--patches",
+                "p.csv",
+                "-o",
+                "out.csv",
+            ]),
+            vec!["rows.mtx:2", "4000000000 rows"],
+        ),
+        (
+            args(&[
+                "solve-system",
+                "--matrix",
+                "entries.mtx",
+                "--patches",
+                "p.csv",
+                "-o",
+                "out.csv",
+            ]),
+            vec!["entries.mtx:2", "4000000000 entries"],
+        ),
+    ];
+    for (args, needles) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let t = std::time::Instant::now();
+        let out = run(&args, &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            t.elapsed().as_secs_f64() < 10.0,
+            "{args:?} took {:?}",
+            t.elapsed()
+        );
+        assert!(
+            err.lines().all(|l| l.chars().count() <= 600),
+            "{args:?}: a long line: {} characters",
+            err.len()
+        );
+        assert_fails(&out, &needles, &dir, &keep);
+    }
+}
+
+/// A system whose reflectance is nearly 1 converges arbitrarily slowly: the default iteration
+/// cap stops it, saying so, with the unshot energy it reached.
+#[test]
+fn iterative_solves_always_stop() {
+    let dir = scratch("cap");
+    write(
+        &dir,
+        "f.mtx",
+        "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 2 1\n2 1 1\n",
+    );
+    write(
+        &dir,
+        "p.csv",
+        "area,reflectance,emission\n1,0.9999999,1\n1,0.9999999,0\n",
+    );
+    let t = std::time::Instant::now();
+    let out = run(
+        &[
+            "solve-system",
+            "--matrix",
+            "f.mtx",
+            "--patches",
+            "p.csv",
+            "--solver",
+            "jacobi",
+            "--tolerance",
+            "1e-9",
+            "-o",
+            "b.csv",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(t.elapsed().as_secs_f64() < 10.0);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("stopped after 20000 iterations without converging"),
+        "{text}"
+    );
+}
+
+/// Outputs are replaced by renaming only when they are regular files: a symbolic link stays a
+/// link with its target rewritten, and a link to nothing is refused.
+#[cfg(unix)]
+#[test]
+fn outputs_through_links_keep_the_link() {
+    let dir = scratch("links");
+    std::fs::write(dir.join("real.csv"), "old").unwrap();
+    std::os::unix::fs::symlink(dir.join("real.csv"), dir.join("link.csv")).unwrap();
+    let out = run(
+        &["solve", "furnace", "--patches", "50", "-o", "link.csv"],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::symlink_metadata(dir.join("link.csv"))
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert!(std::fs::read_to_string(dir.join("real.csv"))
+        .unwrap()
+        .starts_with("patch,"));
+    std::os::unix::fs::symlink(dir.join("nothing.csv"), dir.join("dangling.csv")).unwrap();
+    let out = run(
+        &["solve", "furnace", "--patches", "50", "-o", "dangling.csv"],
+        &dir,
+    );
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("symbolic link to nothing"));
+}

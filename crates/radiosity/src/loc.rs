@@ -122,3 +122,68 @@ mod tests {
         );
     }
 }
+
+/// Longest quoted excerpt of the input kept in a message, characters.
+pub const MAX_EXCERPT: usize = 40;
+/// Longest message kept, characters.
+pub const MAX_MESSAGE: usize = 400;
+
+/// `message` with every '…'-quoted excerpt of the input cut to [`MAX_EXCERPT`] characters and
+/// the whole to [`MAX_MESSAGE`], so that a hostile file cannot echo a megabyte into an error.
+pub fn shorten(message: String) -> String {
+    if message.chars().count() <= MAX_EXCERPT {
+        return message;
+    }
+    let mut out = String::with_capacity(message.len().min(MAX_MESSAGE + 8));
+    let mut inside = false;
+    let mut run = 0usize;
+    for c in message.chars() {
+        if c == '\'' {
+            if inside && run > MAX_EXCERPT {
+                out.push('…');
+            }
+            inside = !inside;
+            run = 0;
+            out.push(c);
+        } else if inside {
+            run += 1;
+            if run <= MAX_EXCERPT {
+                out.push(c);
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    if out.chars().count() > MAX_MESSAGE {
+        out = out.chars().take(MAX_MESSAGE).collect::<String>() + "…";
+    }
+    out
+}
+
+#[cfg(test)]
+mod shorten_tests {
+    use super::*;
+
+    #[test]
+    fn long_excerpts_and_messages_are_cut() {
+        let long = "x".repeat(1_000_000);
+        let m = shorten(format!("malformed number '{long}' in vertex"));
+        assert_eq!(
+            m,
+            format!("malformed number '{}…' in vertex", "x".repeat(MAX_EXCERPT))
+        );
+        assert!(shorten("y".repeat(5000)).chars().count() <= MAX_MESSAGE + 1);
+        assert_eq!(shorten("short 'a' message".into()), "short 'a' message");
+    }
+}
+
+/// `100 · part / whole` as a percentage with `decimals` decimals, or "an unknown share" where it
+/// is not a finite number (a zero or non-finite whole), so that no message says `NaN%`.
+pub fn percent(part: f64, whole: f64, decimals: usize) -> String {
+    let p = 100.0 * part / whole;
+    if p.is_finite() {
+        format!("{p:.decimals$}%")
+    } else {
+        "an unknown share".to_string()
+    }
+}

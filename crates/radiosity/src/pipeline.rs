@@ -176,12 +176,94 @@ pub fn patch_system(scene: &Scene, mesh: &Mesh) -> System {
 /// vertices, two triangles and their hierarchy nodes, the system and solver vectors).
 pub const BYTES_PER_PATCH: u64 = 420;
 
-/// Memory the machine has available, from `/proc/meminfo` (`None` where unknown).
+/// The memory a job needs against what it may use: per patch [`BYTES_PER_PATCH`], plus, when
+/// every row of F is stored, at most min(N, rays) entries a row of 20 bytes (rows, columns,
+/// sampling sums).
+#[derive(Clone, Copy, Debug)]
+pub struct MemoryCheck {
+    /// Bytes the job may use.
+    pub limit: u64,
+    /// Every row of F is stored.
+    pub stored_rows: bool,
+    /// Monte Carlo rays a row (bounds a stored row's entries).
+    pub rays: u32,
+}
+
+impl MemoryCheck {
+    /// The bytes `patches` patches need, or the refusal.
+    pub fn check(&self, patches: u64) -> Result<u64, Error> {
+        let per_patch = BYTES_PER_PATCH
+            + if self.stored_rows {
+                20 * patches.min(self.rays as u64)
+            } else {
+                0
+            };
+        let needed = patches.saturating_mul(per_patch);
+        if needed > self.limit {
+            return Err(Error::OutOfMemory {
+                what: format!(
+                    "{patches} patches{}",
+                    if self.stored_rows {
+                        " with every form-factor row stored"
+                    } else {
+                        ""
+                    }
+                ),
+                needed,
+                limit: self.limit,
+                stored_rows: self.stored_rows,
+            });
+        }
+        Ok(needed)
+    }
+
+    /// Checked before meshing from what the meshing parameters imply: the patch count asked
+    /// for (the mesher comes within a few per cent of it), or, for a largest edge l, the
+    /// scene's area / l² (a patch no longer than l a side covers at most l²).
+    pub fn before_meshing(&self, scene: &Scene, mesh: MeshParams) -> Result<(), Error> {
+        match mesh {
+            MeshParams::Patches(n) => self.check(n as u64).map(|_| ()),
+            MeshParams::MaxEdge(l) => {
+                let at_least = scene.total_area() / (l as f64 * l as f64);
+                self.check(if at_least.is_finite() {
+                    at_least as u64
+                } else {
+                    u64::MAX
+                })
+                .map(|_| ())
+            }
+            MeshParams::Faces => Ok(()),
+        }
+    }
+}
+
+/// Memory this process may still use: the smallest of the machine's available memory
+/// (`/proc/meminfo`), the room left under its cgroup's limit (`memory.max` − `memory.current`,
+/// cgroup v2) and its address-space limit (`ulimit -v`, `/proc/self/limits`). `None` where none
+/// is known.
 pub fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+    let read = |p: &str| std::fs::read_to_string(p).ok();
+    let meminfo = read("/proc/meminfo").and_then(|t| {
+        let line = t
+            .lines()
+            .find(|l| l.starts_with("MemAvailable:"))?
+            .to_string();
+        let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        Some(kib * 1024)
+    });
+    let cgroup = (|| {
+        let max: u64 = read("/sys/fs/cgroup/memory.max")?.trim().parse().ok()?;
+        let current: u64 = read("/sys/fs/cgroup/memory.current")?.trim().parse().ok()?;
+        Some(max.saturating_sub(current))
+    })();
+    let address_space = read("/proc/self/limits").and_then(|t| {
+        let line = t
+            .lines()
+            .find(|l| l.starts_with("Max address space"))?
+            .to_string();
+        line.split_whitespace().nth(3)?.parse::<u64>().ok()
+    });
+    [meminfo, cgroup, address_space].into_iter().flatten().min()
 }
 
 /// Validate, mesh and solve `scene`.
@@ -196,44 +278,33 @@ pub fn solve(
         l => l,
     };
     let store = settings.stores_rows();
-    // A stored matrix holds at most min(N, rays) entries a row, 20 bytes each (rows, columns,
-    // sampling sums).
-    let check = |patches: u64| -> Result<u64, Error> {
-        let needed = patches.saturating_mul(
-            BYTES_PER_PATCH
-                + if store {
-                    20 * patches.min(settings.form_factors.rays as u64)
-                } else {
-                    0
-                },
-        );
-        if needed > limit {
-            return Err(Error::OutOfMemory {
-                what: format!(
-                    "{patches} patches{}",
-                    if store {
-                        " with every form-factor row stored"
-                    } else {
-                        ""
-                    }
-                ),
-                needed,
-                limit,
-                stored_rows: store,
-            });
-        }
-        Ok(needed)
+    let memory = MemoryCheck {
+        limit,
+        stored_rows: store,
+        rays: settings.form_factors.rays,
     };
-    // Checked before meshing where the patch count is asked for (the mesher comes within a few
-    // per cent of it), and again after meshing with the count made.
-    if let MeshParams::Patches(n) = settings.mesh {
-        check(n as u64)?;
-    }
+    let check = |patches: u64| memory.check(patches);
+    memory.before_meshing(scene, settings.mesh)?;
     observer.event(Event::Stage(Stage::Mesh));
     let t = Instant::now();
     let mesh = Mesh::build(scene, settings.mesh)?;
     let mesh_s = t.elapsed().as_secs_f64();
     let needed = check(mesh.len() as u64)?;
+    // Gauss' dense matrix is refused before any form factor is computed.
+    if settings.solver == Solver::Gauss {
+        let dense = crate::solve::gauss::bytes_needed(mesh.len());
+        let allowed = settings.params.memory_limit.min(limit - needed);
+        if dense > allowed {
+            return Err(crate::solve::SolveError::TooLarge {
+                solver: Solver::Gauss,
+                n: mesh.len(),
+                needed: dense,
+                limit: allowed,
+                alternative: "an iterative solver (progressive, gauss-seidel or overshoot) needs no dense matrix",
+            }
+            .into());
+        }
+    }
     let mut ff = settings.form_factors;
     ff.cache_bytes = ff.cache_bytes.min(((limit - needed) / 2) as usize);
     // Parameters are checked before any work.
@@ -247,7 +318,7 @@ pub fn solve(
     let bvh_s = t.elapsed().as_secs_f64();
 
     let system = patch_system(scene, &mesh);
-    system.validate().map_err(crate::solve::SolveError::from)?;
+    system.validate().map_err(|e| located(e, scene, &mesh))?;
 
     let estimator = Estimator::new(&mesh, &bvh, ff)?;
     let mut stored;
@@ -308,6 +379,21 @@ pub fn solve(
         form_factors,
         trace,
     })
+}
+
+/// A system error about a patch, as an error at the place of the polygon it was cut from.
+fn located(e: crate::system::SystemError, scene: &Scene, mesh: &Mesh) -> Error {
+    use crate::system::SystemError as E;
+    match &e {
+        E::Area { patch, .. } | E::Reflectance { patch, .. } | E::Emission { patch, .. } => {
+            let surface = mesh.patches[*patch].surface as usize;
+            Error::Scene(crate::scene::SceneError::Invalid {
+                at: scene.place_of(surface),
+                message: format!("{e} (a patch cut from this polygon)"),
+            })
+        }
+        _ => Error::Solve(e.into()),
+    }
 }
 
 /// Largest system whose trace measures the error against an LU solution.

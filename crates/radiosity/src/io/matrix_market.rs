@@ -58,8 +58,10 @@ pub fn read(path: &Path) -> Result<SparseMatrix, InputError> {
     let mut size: Option<(usize, usize, usize)> = None;
     let mut triplets = Vec::new();
     let mut last_line = 1;
+    // Bytes consumed so far, to check the counts of the size line against what follows.
     for (line, raw) in lines {
         last_line = line;
+        let offset = raw.as_ptr() as usize - text.as_ptr() as usize + raw.len();
         let s = raw.trim();
         if s.is_empty() || s.starts_with('%') {
             continue;
@@ -93,8 +95,26 @@ pub fn read(path: &Path) -> Result<SparseMatrix, InputError> {
                 if r > u32::MAX as usize {
                     return Err(at(path, line, format!("{r} rows are more than supported")));
                 }
+                // Every entry takes a line of at least 6 bytes ("1 1 0\n"), and a form-factor
+                // matrix has at least one byte of data per row: counts the rest of the file
+                // cannot hold are refused before anything is allocated for them.
+                let rest = text.len() - offset;
+                if n > rest / 6 + 1 {
+                    return Err(at(
+                        path,
+                        line,
+                        format!("the size line announces {n} entries but only {rest} bytes follow"),
+                    ));
+                }
+                if r > rest + 1 {
+                    return Err(at(
+                        path,
+                        line,
+                        format!("the size line announces {r} rows but only {rest} bytes follow"),
+                    ));
+                }
                 size = Some((r, c, n));
-                triplets.reserve(n.min(1 << 28));
+                triplets.reserve(n);
             }
             Some((n, _, _)) => {
                 if toks.len() != 3 {

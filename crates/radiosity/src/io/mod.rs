@@ -39,12 +39,12 @@ pub enum InputError {
 pub(crate) fn at(path: &Path, line: usize, message: impl Into<String>) -> InputError {
     InputError::Invalid {
         at: FileLoc::line(path, line),
-        message: message.into(),
+        message: crate::loc::shorten(message.into()),
     }
 }
 
 pub(crate) fn read_text(path: &Path) -> Result<String, InputError> {
-    let bytes = std::fs::read(path).map_err(|source| InputError::Io {
+    let bytes = read_input(path).map_err(|source| InputError::Io {
         path: path.to_path_buf(),
         source,
     })?;
@@ -58,4 +58,39 @@ pub(crate) fn read_text(path: &Path) -> Result<String, InputError> {
             ),
         )
     })
+}
+
+/// Largest input file read, bytes.
+pub const MAX_INPUT_BYTES: u64 = 4 << 30;
+
+/// Read an input file whole: a regular file (not a device, a pipe or a folder, which could be
+/// endless or block), of at most [`MAX_INPUT_BYTES`]; the read stops there even if the file
+/// grows meanwhile. Every loader reads through this, files named inside other files included.
+pub fn read_input(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file",
+        ));
+    }
+    if meta.len() > MAX_INPUT_BYTES {
+        return Err(too_large());
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    std::fs::File::open(path)?
+        .take(MAX_INPUT_BYTES + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(too_large());
+    }
+    Ok(bytes)
+}
+
+fn too_large() -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        format!("larger than the {} GiB input limit", MAX_INPUT_BYTES >> 30),
+    )
 }

@@ -17,10 +17,44 @@ pub struct OutputError {
 
 /// Write through `body` into a temporary file beside `path`, then rename it to `path`, so a
 /// failure never leaves a half-written output. Generic over the caller's error type.
+///
+/// Only regular files (or new paths) are replaced by renaming. A symbolic link is followed and
+/// its target written the same way, so the link stays a link; a device or a pipe (`/dev/null`)
+/// is written in place; a folder or a dangling link is refused.
 pub fn write_atomic<E: From<OutputError>>(
     path: &Path,
     body: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
 ) -> Result<(), E> {
+    let fail = |source| OutputError {
+        path: path.to_path_buf(),
+        source,
+    };
+    let refuse = |what: &str| fail(std::io::Error::new(std::io::ErrorKind::InvalidInput, what));
+    let target = match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => path.to_path_buf(),
+        Err(e) => return Err(fail(e).into()),
+        Ok(m) if m.file_type().is_symlink() => match std::fs::canonicalize(path) {
+            Ok(t) => t,
+            Err(_) => return Err(refuse("is a symbolic link to nothing").into()),
+        },
+        Ok(_) => path.to_path_buf(),
+    };
+    match std::fs::metadata(&target) {
+        Ok(m) if m.is_dir() => return Err(refuse("is a folder").into()),
+        Ok(m) if !m.is_file() => {
+            // A device or a pipe: write in place; there is nothing to replace.
+            let result = (|| {
+                let file = std::fs::OpenOptions::new().write(true).open(&target)?;
+                let mut w = BufWriter::new(file);
+                body(&mut w)?;
+                w.into_inner().map_err(|e| e.into_error())?;
+                Ok(())
+            })();
+            return result.map_err(|e| fail(e).into());
+        }
+        _ => {}
+    }
+    let path = target.as_path();
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -37,11 +71,5 @@ pub fn write_atomic<E: From<OutputError>>(
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
-    result.map_err(|source| {
-        OutputError {
-            path: path.to_path_buf(),
-            source,
-        }
-        .into()
-    })
+    result.map_err(|source| fail(source).into())
 }

@@ -197,9 +197,9 @@ fn pieces(scene: &Scene, i: usize) -> Result<Vec<Piece>, SceneError> {
     }
     if !planar {
         return Err(bad(format!(
-            "polygon with {} vertices is not planar (a vertex lies {:.3}% of the polygon's size off its plane); split it into triangles",
+            "polygon with {} vertices is not planar (a vertex lies {} of the polygon's size off its plane); split it into triangles",
             v.len(),
-            100.0 * dev / diam
+            crate::loc::percent(dev as f64, diam as f64, 3)
         )));
     }
     let tris = ear_clip(v, n).ok_or_else(|| {
@@ -220,8 +220,8 @@ pub fn check_planar(scene: &Scene) -> Result<(), SceneError> {
                 return Err(SceneError::Invalid {
                     at: scene.place_of(i),
                     message: format!(
-                        "face is not planar (a vertex lies {:.3}% of its size off its plane); one patch per face needs planar faces: split it into triangles",
-                        100.0 * dev / diam
+                        "face is not planar (a vertex lies {} of its size off its plane); one patch per face needs planar faces: split it into triangles",
+                        crate::loc::percent(dev as f64, diam as f64, 3)
                     ),
                 });
             }

@@ -60,7 +60,7 @@ const SUPPORTED_REQUIRED: &[&str] = &[
 fn invalid(path: &Path, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
         at: crate::loc::FileLoc::file(path),
-        message: message.into(),
+        message: crate::loc::shorten(message.into()),
     }
 }
 
@@ -184,7 +184,7 @@ impl<'a> Reader<'a> {
             .parent()
             .unwrap_or(Path::new("."))
             .join(percent_decode(uri));
-        let bytes = std::fs::read(&file).map_err(|e| {
+        let bytes = crate::io::read_input(&file).map_err(|e| {
             invalid(
                 self.path,
                 format!("{what}: cannot read '{}': {e}", file.display()),
@@ -440,12 +440,84 @@ pub fn load_vertex_colours(path: &Path) -> Result<(Scene, Vec<[Rgb; 3]>), SceneE
     Ok((scene, colours))
 }
 
+/// What the `gltf` crate's validation lets through and its accessors then unwrap (a panic on a
+/// hostile file): a primitive attribute naming an accessor that is not there, a camera whose
+/// `type` names an absent object, an image with neither `uri` nor `bufferView`. Checked on the
+/// JSON first, each refused with its JSON path.
+fn check_references(path: &Path, json: &[u8]) -> Result<(), SceneError> {
+    use serde_json::Value;
+    // Malformed JSON is left to the glTF parser, whose message is better.
+    let Ok(root) = serde_json::from_slice::<Value>(json) else {
+        return Ok(());
+    };
+    let count = |key: &str| root.get(key).and_then(Value::as_array).map_or(0, Vec::len);
+    let accessors = count("accessors");
+    let list = |key: &str| {
+        root.get(key)
+            .and_then(Value::as_array)
+            .cloned()
+            .unwrap_or_default()
+    };
+    for (m, mesh) in list("meshes").iter().enumerate() {
+        let prims = mesh.get("primitives").and_then(Value::as_array);
+        for (p, prim) in prims.into_iter().flatten().enumerate() {
+            let attrs = prim.get("attributes").and_then(Value::as_object);
+            for (name, index) in attrs.into_iter().flatten() {
+                match index.as_u64() {
+                    Some(i) if (i as usize) < accessors => {}
+                    _ => {
+                        return Err(invalid(
+                            path,
+                            format!(
+                                "invalid glTF: meshes[{m}].primitives[{p}].attributes.{}: no accessor {index}",
+                                crate::loc::shorten(name.clone())
+                            ),
+                        ))
+                    }
+                }
+            }
+            let targets = prim.get("targets").and_then(Value::as_array);
+            for (t, target) in targets.into_iter().flatten().enumerate() {
+                for (name, index) in target.as_object().into_iter().flatten() {
+                    if !index.as_u64().is_some_and(|i| (i as usize) < accessors) {
+                        return Err(invalid(
+                            path,
+                            format!(
+                                "invalid glTF: meshes[{m}].primitives[{p}].targets[{t}].{}: no accessor {index}",
+                                crate::loc::shorten(name.clone())
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    for (c, camera) in list("cameras").iter().enumerate() {
+        let kind = camera.get("type").and_then(Value::as_str).unwrap_or("");
+        if matches!(kind, "perspective" | "orthographic") && camera.get(kind).is_none() {
+            return Err(invalid(
+                path,
+                format!("invalid glTF: cameras[{c}]: type '{kind}' but no '{kind}' object"),
+            ));
+        }
+    }
+    for (i, image) in list("images").iter().enumerate() {
+        if image.get("uri").is_none() && image.get("bufferView").is_none() {
+            return Err(invalid(
+                path,
+                format!("invalid glTF: images[{i}]: neither 'uri' nor 'bufferView'"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn read_scene(
     path: &Path,
     one_sided: bool,
     mut colours: Option<&mut Vec<[Rgb; 3]>>,
 ) -> Result<Scene, SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+    let bytes = crate::io::read_input(path).map_err(|source| SceneError::Io {
         path: path.to_path_buf(),
         source,
     })?;
@@ -454,6 +526,7 @@ fn read_scene(
     } else {
         (&bytes[..], None)
     };
+    check_references(path, json)?;
     let gltf = ::gltf::Gltf::from_slice(json).map_err(|e| match e {
         ::gltf::Error::Validation(list) => {
             let (p, err) = &list[0];

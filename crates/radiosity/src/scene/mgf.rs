@@ -163,7 +163,7 @@ impl XfSpec {
                 Part::Array(n) => *n as usize,
                 _ => 1,
             })
-            .product()
+            .fold(1usize, usize::saturating_mul)
     }
 
     /// The transform of array element `e` (mixed radix over the `-a` parts, first fastest).
@@ -219,6 +219,11 @@ type Lines = Rc<Vec<(usize, String)>>;
 struct Reader {
     /// Files being read, outermost first (for include loops).
     open: Vec<PathBuf>,
+    /// The canonical paths of `open`, for the include-loop check.
+    open_canonical: Vec<PathBuf>,
+    /// Statements read so far, array repetitions and includes counted: bounded by
+    /// [`MAX_STATEMENTS`], so that nested arrays cannot make a small file endless.
+    statements: u64,
     /// Text of files already read (includes are often repeated).
     cache: HashMap<PathBuf, Lines>,
     colours: HashMap<String, Chroma>,
@@ -252,7 +257,7 @@ struct Reader {
 fn invalid(path: &Path, line: usize, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
         at: crate::loc::FileLoc::line(path, line),
-        message: message.into(),
+        message: crate::loc::shorten(message.into()),
     }
 }
 
@@ -292,6 +297,25 @@ fn count(path: &Path, line: usize, tok: &str, what: &str) -> Result<u32, SceneEr
             format!("{what} needs a positive count, not '{tok}'"),
         )
     })
+}
+
+/// Deepest chain of includes.
+pub const MAX_INCLUDE_DEPTH: usize = 64;
+/// Most elements of one transform array (the product of its `-a` counts), and of the arrays
+/// open around a statement together.
+pub const MAX_ARRAY_ELEMENTS: usize = 1 << 20;
+/// Most statements read, array repetitions and includes counted.
+pub const MAX_STATEMENTS: u64 = 4_000_000;
+
+fn check_elements(path: &Path, line: usize, spec: &XfSpec) -> Result<(), SceneError> {
+    if spec.elements() > MAX_ARRAY_ELEMENTS {
+        return Err(invalid(
+            path,
+            line,
+            format!("a transform array of more than {MAX_ARRAY_ELEMENTS} elements"),
+        ));
+    }
+    Ok(())
 }
 
 /// Parse transform arguments (`args` excludes the keyword).
@@ -379,6 +403,8 @@ impl Reader {
     fn new() -> Self {
         Self {
             open: Vec::new(),
+            open_canonical: Vec::new(),
+            statements: 0,
             cache: HashMap::new(),
             colours: HashMap::new(),
             colour: Chroma::WHITE,
@@ -536,7 +562,16 @@ impl Reader {
                 l
             }
         };
+        if self.open.len() >= MAX_INCLUDE_DEPTH {
+            return Err(invalid(
+                path,
+                0,
+                format!("includes nest deeper than {MAX_INCLUDE_DEPTH} files"),
+            ));
+        }
         self.open.push(path.to_path_buf());
+        self.open_canonical
+            .push(path.canonicalize().unwrap_or_else(|_| path.to_path_buf()));
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let mut frames: Vec<Frame> = Vec::new();
         let mut xf = base;
@@ -554,6 +589,16 @@ impl Reader {
                 continue;
             }
             let args = &toks[1..];
+            self.statements += 1;
+            if self.statements > MAX_STATEMENTS {
+                return Err(invalid(
+                    path,
+                    line,
+                    format!(
+                        "the scene expands to more than {MAX_STATEMENTS} statements through its arrays and includes"
+                    ),
+                ));
+            }
             self.note_origin(path);
             match key {
                 "xf" => {
@@ -571,6 +616,21 @@ impl Reader {
                         frames.pop();
                     } else {
                         let spec = parse_xf(path, line, args)?;
+                        check_elements(path, line, &spec)?;
+                        // Nested arrays multiply: bound the product of the open blocks' counts.
+                        let nested = frames
+                            .iter()
+                            .map(|f| f.spec.elements())
+                            .fold(spec.elements(), usize::saturating_mul);
+                        if nested > MAX_ARRAY_ELEMENTS {
+                            return Err(invalid(
+                                path,
+                                line,
+                                format!(
+                                    "nested transform arrays of more than {MAX_ARRAY_ELEMENTS} elements in all"
+                                ),
+                            ));
+                        }
                         let m = spec.matrix(0);
                         frames.push(Frame {
                             begin: i,
@@ -594,11 +654,7 @@ impl Reader {
                         ));
                     }
                     let canon = target.canonicalize().unwrap_or(target.clone());
-                    if self
-                        .open
-                        .iter()
-                        .any(|p| p.canonicalize().ok().as_ref() == Some(&canon))
-                    {
+                    if self.open_canonical.contains(&canon) {
                         let chain: Vec<String> = self
                             .open
                             .iter()
@@ -612,6 +668,7 @@ impl Reader {
                         ));
                     }
                     let spec = parse_xf(path, line, &args[1..])?;
+                    check_elements(path, line, &spec)?;
                     for e in 0..spec.elements() {
                         self.parse_file(&target, Xf::new(xf.m * spec.matrix(e)))?;
                     }
@@ -821,6 +878,7 @@ impl Reader {
             ));
         }
         self.open.pop();
+        self.open_canonical.pop();
         Ok(())
     }
 
@@ -1199,11 +1257,11 @@ pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
     if nlossy > 0 {
         let worst = r.dropped.iter().copied().fold(0.0, f64::max);
         warnings.push(format!(
-            "{}: specular and transmission components (rs, ts, td) dropped from {nlossy} of {} materials: up to {:.0}% of the light falling on a surface, {:.1}% averaged over the scene's area",
+            "{}: specular and transmission components (rs, ts, td) dropped from {nlossy} of {} materials: up to {} of the light falling on a surface, {} averaged over the scene's area",
             path.display(),
             r.materials.len(),
-            100.0 * worst,
-            100.0 * lost / total.max(f64::MIN_POSITIVE)
+            crate::loc::percent(worst, 1.0, 0),
+            crate::loc::percent(lost, total, 1)
         ));
     }
     let mut skipped: Vec<String> = r.skipped.iter().map(|(k, n)| format!("{k} ×{n}")).collect();

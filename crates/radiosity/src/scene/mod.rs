@@ -153,6 +153,10 @@ pub struct Scene {
     pub up: Option<Vec3>,
 }
 
+/// Most vertices of one polygon: triangulating a non-convex polygon costs O(n²), so a polygon
+/// past this is refused rather than left to run for hours.
+pub const MAX_POLYGON_VERTICES: usize = 4096;
+
 /// Why a scene could not be loaded or is not fit to solve.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
@@ -259,6 +263,15 @@ impl Scene {
                     self.place_of(i),
                     format!(
                         "polygon has {} vertices; at least 3 needed",
+                        p.vertices.len()
+                    ),
+                ));
+            }
+            if p.vertices.len() > MAX_POLYGON_VERTICES {
+                return Err(bad(
+                    self.place_of(i),
+                    format!(
+                        "polygon has {} vertices; at most {MAX_POLYGON_VERTICES} are accepted (split it)",
                         p.vertices.len()
                     ),
                 ));

@@ -23,13 +23,13 @@ pub const DEFAULT_REFLECTANCE: f64 = 0.5;
 fn invalid(path: &Path, line: usize, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
         at: FileLoc::line(path, line),
-        message: message.into(),
+        message: crate::loc::shorten(message.into()),
     }
 }
 
 /// A text file, or an error naming it.
 pub(super) fn read(path: &Path) -> Result<String, SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+    let bytes = crate::io::read_input(path).map_err(|source| SceneError::Io {
         path: path.to_path_buf(),
         source,
     })?;
@@ -239,7 +239,14 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                         format!("material library '{}' not found", mtl.display()),
                     ));
                 }
-                load_mtl(&mtl, &mut materials, &mut names)?;
+                load_mtl(&mtl, &mut materials, &mut names).map_err(|e| match e {
+                    SceneError::Io { path: lib, source } => invalid(
+                        path,
+                        line,
+                        format!("material library {}: {source}", lib.display()),
+                    ),
+                    other => other,
+                })?;
             }
             "usemtl" => {
                 let name = s[key.len()..].trim();

@@ -136,7 +136,10 @@ impl<'a> Cursor<'a> {
             Format::Ascii => crate::loc::FileLoc::line(self.path, self.line),
             _ => crate::loc::FileLoc::file(self.path).with_item(crate::loc::Item::Byte(self.pos)),
         };
-        SceneError::Invalid { at, message }
+        SceneError::Invalid {
+            at,
+            message: crate::loc::shorten(message),
+        }
     }
 
     /// The next ASCII token, moving to further lines as needed; `None` at the end of the data.
@@ -214,7 +217,7 @@ impl<'a> Cursor<'a> {
 fn invalid(path: &Path, line: usize, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
         at: crate::loc::FileLoc::line(path, line),
-        message: message.into(),
+        message: crate::loc::shorten(message.into()),
     }
 }
 
@@ -448,7 +451,7 @@ fn says(cols: &Columns, i: usize) -> Says {
 
 /// Load a PLY file.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+    let bytes = crate::io::read_input(path).map_err(|source| SceneError::Io {
         path: path.to_path_buf(),
         source,
     })?;
@@ -553,7 +556,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             Format::Ascii => invalid(path, line, m),
             _ => SceneError::Invalid {
                 at: crate::loc::FileLoc::file(path).with_item(crate::loc::Item::Face(i)),
-                message: m,
+                message: crate::loc::shorten(m),
             },
         };
         if idx.len() < 3 {

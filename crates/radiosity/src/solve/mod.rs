@@ -381,6 +381,10 @@ pub fn run(
     observer: &mut dyn FnMut(&Status, &dyn SolverState),
 ) -> Info {
     let mut seconds = 0.0;
+    let cap =
+        params
+            .max_iterations
+            .min(default_iteration_cap(solver.method(), source.len(), params));
     loop {
         let status = Status {
             iterations: solver.iterations(),
@@ -389,7 +393,7 @@ pub fn run(
         };
         observer(&status, &*solver);
         let done = status.unshot_fraction <= params.tolerance;
-        if done || solver.iterations() >= params.max_iterations {
+        if done || solver.iterations() >= cap {
             let converged = done || solver.unshot_fraction(source, true) <= params.tolerance;
             let t = Instant::now();
             if solver.finish(source) {
@@ -428,6 +432,24 @@ pub fn run(
             );
             return info;
         }
+    }
+}
+
+/// The most iterations [`run`] lets a method take on N patches, whatever
+/// [`SolverParams::max_iterations`] says, so that every solve stops (a system with ρ → 1
+/// converges arbitrarily slowly): 10⁴ sweeps of N relaxations; 10⁴ × N shots of `photons`
+/// photons for photon shooting; 10⁴ iterations for stochastic Jacobi; one LU. A run that meets
+/// it reports `converged: false` with the unshot energy it reached.
+pub fn default_iteration_cap(solver: Solver, n: usize, params: &SolverParams) -> u64 {
+    const SWEEPS: u64 = 10_000;
+    let n = n.max(1) as u64;
+    match solver {
+        Solver::Gauss => 1,
+        Solver::StochasticJacobi => SWEEPS,
+        Solver::Stochastic => SWEEPS
+            .saturating_mul(n)
+            .saturating_mul(params.photons.max(1) as u64),
+        _ => SWEEPS.saturating_mul(n),
     }
 }
 
