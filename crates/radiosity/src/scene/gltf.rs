@@ -479,7 +479,7 @@ fn check_references(path: &Path, json: &[u8]) -> Result<(), SceneError> {
             let targets = prim.get("targets").and_then(Value::as_array);
             for (t, target) in targets.into_iter().flatten().enumerate() {
                 for (name, index) in target.as_object().into_iter().flatten() {
-                    if !index.as_u64().is_some_and(|i| (i as usize) < accessors) {
+                    if index.as_u64().is_none_or(|i| (i as usize) >= accessors) {
                         return Err(invalid(
                             path,
                             format!(
