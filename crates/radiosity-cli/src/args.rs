@@ -182,6 +182,32 @@ pub enum Command {
     /// grows). Writes CSVs, plots (SVG and PNG) and a Markdown summary.
     #[command(after_help = EXAMPLES_EXPERIMENT)]
     Experiment(ExperimentArgs),
+    /// Fuzz every input parser and the option parser with seeded mutations of valid files:
+    /// panics, cases over 10 s or over 1 GiB of heap fail the run.
+    #[command(after_help = EXAMPLES_FUZZ)]
+    Fuzz(FuzzArgs),
+}
+
+const EXAMPLES_FUZZ: &str = "Examples:
+  radiosity fuzz --cases 1000000 --out fuzz-out
+  radiosity fuzz --cases 10000 --targets gltf,glb --seed 7";
+
+/// `radiosity fuzz`.
+#[derive(Debug, Args)]
+pub struct FuzzArgs {
+    /// Cases per parser.
+    #[arg(long, value_name = "N", default_value_t = 10_000, help_heading = RUN)]
+    pub cases: u64,
+    /// Seed of the mutations.
+    #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]
+    pub seed: u64,
+    /// Only these parsers: obj, mtl, mgf, gltf, glb, ply-ascii, ply-binary, matrix-market,
+    /// patches-csv, options (default: all).
+    #[arg(long, value_name = "P,P,…", value_delimiter = ',', help_heading = RUN)]
+    pub targets: Vec<String>,
+    /// Scratch folder for the cases (inputs that made a parser panic are kept there).
+    #[arg(long, value_name = "DIR", default_value = "fuzz-out", help_heading = OUTPUT)]
+    pub out: std::path::PathBuf,
 }
 
 /// Which experiment.

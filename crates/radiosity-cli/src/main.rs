@@ -4,6 +4,7 @@ mod alloc;
 mod args;
 mod bench;
 mod experiment;
+mod fuzz;
 mod report;
 mod scale;
 mod settings;
@@ -43,6 +44,7 @@ fn main() -> ExitCode {
         Command::SolveSystem(a) => solve_system(a),
         Command::FormFactors(a) => view_factors::run(a),
         Command::Experiment(a) => experiment::run(a),
+        Command::Fuzz(a) => fuzz::run_all(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

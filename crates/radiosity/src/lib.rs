@@ -24,6 +24,7 @@ pub mod color;
 pub mod experiment;
 pub mod export;
 pub mod formfactor;
+pub mod fuzz;
 pub mod geom;
 pub mod io;
 pub mod loc;

@@ -1,0 +1,311 @@
+//! A mutation fuzzer for every input parser, on the stable toolchain: valid seed files of each
+//! format (OBJ with MTL, MGF, glTF, GLB, PLY in three encodings, Matrix Market with a patches
+//! CSV) are mutated by a seeded random stream (bit flips, byte runs replaced, inserted,
+//! deleted, duplicated or truncated, and tokens swapped for hostile ones: huge counts, `nan`,
+//! `1e309`, `-1`), written to a scratch folder and parsed, then validated and, when valid,
+//! meshed. A case passes when it returns, an error or a scene, without panicking; the caller
+//! bounds time and memory ([`Report::slowest`]; the `radiosity fuzz` command also counts the
+//! heap). The corpus is built in, so the fuzzer runs anywhere.
+
+use crate::io::{matrix_market, patches_csv};
+use crate::mesh::{Mesh, MeshParams};
+use crate::sampling::{stream, uniform, Rng64};
+use crate::scene::{load_with, LoadOptions};
+use rand::Rng;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// The parsers fuzzed, each with its seed file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target {
+    /// Wavefront OBJ (its MTL beside it, unmutated).
+    Obj,
+    /// An MTL library, mutated, under a fixed OBJ.
+    Mtl,
+    /// MGF.
+    Mgf,
+    /// glTF JSON (its `.bin` and texture beside it).
+    Gltf,
+    /// Binary glTF.
+    Glb,
+    /// PLY, ASCII.
+    PlyAscii,
+    /// PLY, binary big-endian.
+    PlyBinary,
+    /// Matrix Market (with a valid patches CSV).
+    MatrixMarket,
+    /// Patches CSV (with a valid matrix).
+    PatchesCsv,
+}
+
+impl Target {
+    /// Every target.
+    pub const ALL: [Target; 9] = [
+        Target::Obj,
+        Target::Mtl,
+        Target::Mgf,
+        Target::Gltf,
+        Target::Glb,
+        Target::PlyAscii,
+        Target::PlyBinary,
+        Target::MatrixMarket,
+        Target::PatchesCsv,
+    ];
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Target::Obj => "obj",
+            Target::Mtl => "mtl",
+            Target::Mgf => "mgf",
+            Target::Gltf => "gltf",
+            Target::Glb => "glb",
+            Target::PlyAscii => "ply-ascii",
+            Target::PlyBinary => "ply-binary",
+            Target::MatrixMarket => "matrix-market",
+            Target::PatchesCsv => "patches-csv",
+        }
+    }
+}
+
+const OBJ: &str = "mtllib box.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nusemtl white\nf 1 2 3 4\nf 5 8 7 6\nusemtl light\nf 1 5 6 2\nf 2 6 7 3\nf 3 7 8 4\nf 4 8 5 1\n";
+const MTL: &str = "newmtl white\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0.5 0.5 0.5\nKe 4 4 4\n";
+const MGF: &str = "# a lit room\nm white =\n\tc\n\t\tcxy 0.33 0.33\n\trd 0.6\nm lamp =\n\tc\n\ted 100\nv a =\n\tp 0 0 0\nv b =\n\tp 1 0 0\nv c =\n\tp 1 1 0\nv d =\n\tp 0 1 0\nv e =\n\tp 0 0 1\nm white\nf a b c d\nxf -a 3 -t 0 0 0.3\nm lamp\nf a d c b\nxf\ncyl white e 0.2 a\nsph e 0.1\n";
+const MTX: &str = "%%MatrixMarket matrix coordinate real general\n% a closed pair\n3 3 5\n1 2 0.5\n1 3 0.5\n2 1 0.5\n2 3 0.5\n3 1 1\n";
+const CSV: &str = "area,reflectance,emission\n1,0.5,1\n1,0.5,0\n2,0.25,0\n";
+
+/// The outcome of a run.
+#[derive(Clone, Debug, Default)]
+pub struct Report {
+    /// Cases run.
+    pub cases: u64,
+    /// Cases that loaded (the rest gave an error).
+    pub accepted: u64,
+    /// Cases that panicked, with the file kept for each (empty when none did).
+    pub panics: Vec<PathBuf>,
+    /// The slowest case and its time.
+    pub slowest: Duration,
+}
+
+/// The seed files of `target`: (file name, bytes), the first one mutated.
+fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
+    let room = |name: &str| -> Vec<u8> {
+        match name {
+            "room.gltf" => include_bytes!("../tests/data/room.gltf").to_vec(),
+            "room.bin" => include_bytes!("../tests/data/room.bin").to_vec(),
+            "checker.png" => include_bytes!("../tests/data/checker.png").to_vec(),
+            "room.ply" => include_bytes!("../tests/data/room.ply").to_vec(),
+            _ => include_bytes!("../tests/data/room_be.ply").to_vec(),
+        }
+    };
+    let s = |n: &str, t: &str| (n.to_string(), t.as_bytes().to_vec());
+    match target {
+        Target::Obj => vec![s("box.obj", OBJ), s("box.mtl", MTL)],
+        Target::Mtl => vec![s("box.mtl", MTL), s("box.obj", OBJ)],
+        Target::Mgf => vec![s("room.mgf", MGF)],
+        Target::Gltf => vec![
+            ("room.gltf".into(), room("room.gltf")),
+            ("room.bin".into(), room("room.bin")),
+            ("checker.png".into(), room("checker.png")),
+        ],
+        Target::Glb => vec![("room.glb".into(), glb(scratch))],
+        Target::PlyAscii => vec![("room.ply".into(), room("room.ply"))],
+        Target::PlyBinary => vec![("room_be.ply".into(), room("room_be.ply"))],
+        Target::MatrixMarket => vec![s("f.mtx", MTX), s("p.csv", CSV)],
+        Target::PatchesCsv => vec![s("p.csv", CSV), s("f.mtx", MTX)],
+    }
+}
+
+/// A small binary glTF: the built-in furnace baked by our own writer.
+fn glb(scratch: &Path) -> Vec<u8> {
+    let scene = crate::scene::builtin::furnace();
+    let mesh = Mesh::build(&scene, MeshParams::Patches(30)).expect("the furnace meshes");
+    let values = vec![crate::color::Rgb::splat(1.0); mesh.vertices.len()];
+    let path = scratch.join("seed.glb");
+    crate::export::bake::write(
+        &path,
+        &crate::export::bake::Bake {
+            scene: &scene,
+            mesh: &mesh,
+            vertex_radiosity: &values,
+            scale: 1.0,
+            camera: None,
+        },
+    )
+    .expect("the seed bakes");
+    std::fs::read(&path).expect("the seed reads")
+}
+
+const TOKENS: [&str; 14] = [
+    "-1",
+    "0",
+    "nan",
+    "inf",
+    "1e309",
+    "4294967296",
+    "18446744073709551616",
+    "99999999999",
+    "\n",
+    " ",
+    "\"",
+    "{",
+    "]",
+    "\u{0}",
+];
+
+/// Mutate `bytes` in place by one to four random edits.
+fn mutate(bytes: &mut Vec<u8>, rng: &mut Rng64) {
+    let edits = 1 + (rng.random::<u32>() % 4);
+    for _ in 0..edits {
+        let n = bytes.len();
+        let at = if n == 0 {
+            0
+        } else {
+            rng.random::<u32>() as usize % n
+        };
+        match rng.random::<u32>() % 8 {
+            0 if n > 0 => bytes[at] ^= 1 << (rng.random::<u32>() % 8),
+            1 if n > 0 => bytes[at] = rng.random::<u8>(),
+            2 => {
+                let t = TOKENS[rng.random::<u32>() as usize % TOKENS.len()];
+                // Replace the token under `at` (up to the next space or newline).
+                let end = bytes[at..]
+                    .iter()
+                    .position(|b| b.is_ascii_whitespace() || *b == b',')
+                    .map_or(n, |k| at + k);
+                bytes.splice(at..end.max(at), t.bytes());
+            }
+            3 => {
+                let len = (rng.random::<u32>() % 64) as usize;
+                let junk: Vec<u8> = (0..len).map(|_| rng.random::<u8>()).collect();
+                bytes.splice(at..at, junk);
+            }
+            4 if n > 0 => {
+                let len = (rng.random::<u32>() as usize % 64).min(n - at);
+                bytes.drain(at..at + len);
+            }
+            5 if n > 0 => {
+                // Duplicate a run, up to a few times.
+                let len = (rng.random::<u32>() as usize % 256).min(n - at);
+                let run = bytes[at..at + len].to_vec();
+                for _ in 0..1 + rng.random::<u32>() % 4 {
+                    bytes.splice(at..at, run.iter().copied());
+                }
+            }
+            6 => bytes.truncate(at),
+            _ => {
+                let b = if uniform(rng) < 0.5 { b'9' } else { b'\n' };
+                bytes.splice(at..at, std::iter::repeat_n(b, 1 + at % 32));
+            }
+        }
+    }
+}
+
+/// Parse (and, when valid, mesh) the mutated file of `target` in `dir`.
+fn parse(target: Target, dir: &Path) -> bool {
+    let options = LoadOptions::default();
+    let scene = |name: &str| {
+        if let Ok(s) = load_with(dir.join(name).to_str().unwrap_or(""), &options) {
+            if s.validate_geometry().is_ok() {
+                // Bounded work: the mesher's own limits keep a valid scene small here.
+                let _ = Mesh::build(&s, MeshParams::Patches(64));
+            }
+            return true;
+        }
+        false
+    };
+    match target {
+        Target::Obj | Target::Mtl => scene("box.obj"),
+        Target::Mgf => scene("room.mgf"),
+        Target::Gltf => scene("room.gltf"),
+        Target::Glb => scene("room.glb"),
+        Target::PlyAscii => scene("room.ply"),
+        Target::PlyBinary => scene("room_be.ply"),
+        Target::MatrixMarket | Target::PatchesCsv => {
+            let m = matrix_market::read(&dir.join("f.mtx"));
+            let p = patches_csv::read(&dir.join("p.csv"));
+            m.is_ok() && p.is_ok()
+        }
+    }
+}
+
+/// Run `cases` mutations of `target`'s seed with seed `seed`, in `scratch` (created; a file
+/// that made a parser panic is kept there as `panic-K.EXT`). `progress` is called after each
+/// case with the case and its time.
+pub fn run(
+    target: Target,
+    cases: u64,
+    seed: u64,
+    scratch: &Path,
+    progress: &mut dyn FnMut(u64, Duration),
+) -> std::io::Result<Report> {
+    let dir = scratch.join(target.name());
+    std::fs::create_dir_all(&dir)?;
+    let files = corpus(target, &dir);
+    for (name, bytes) in &files {
+        std::fs::write(dir.join(name), bytes)?;
+    }
+    let (name, original) = &files[0];
+    let mut report = Report::default();
+    let mut bytes = Vec::new();
+    for case in 0..cases {
+        let mut rng = stream(seed, 0xF022, target as u64, case);
+        bytes.clone_from(original);
+        mutate(&mut bytes, &mut rng);
+        std::fs::write(dir.join(name), &bytes)?;
+        let t = Instant::now();
+        let outcome = std::panic::catch_unwind(|| parse(target, &dir));
+        let took = t.elapsed();
+        report.slowest = report.slowest.max(took);
+        report.cases += 1;
+        match outcome {
+            Ok(loaded) => report.accepted += u64::from(loaded),
+            Err(_) => {
+                let keep = dir.join(format!("panic-{case}-{name}"));
+                std::fs::write(&keep, &bytes)?;
+                report.panics.push(keep);
+            }
+        }
+        progress(case, took);
+    }
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A short fixed-seed run of every parser: no panic, and every case within seconds.
+    #[test]
+    fn every_parser_survives_a_short_fuzz() {
+        let scratch = std::env::temp_dir().join(format!("radiosity-fuzz-{}", std::process::id()));
+        for target in Target::ALL {
+            let r = run(target, 300, 1, &scratch, &mut |_, _| {}).unwrap();
+            assert!(
+                r.panics.is_empty(),
+                "{}: panics on {:?}",
+                target.name(),
+                r.panics
+            );
+            assert!(
+                r.slowest < Duration::from_secs(10),
+                "{}: a case took {:?}",
+                target.name(),
+                r.slowest
+            );
+        }
+        let _ = std::fs::remove_dir_all(&scratch);
+    }
+
+    /// Mutations are reproducible from the seed.
+    #[test]
+    fn mutations_follow_the_seed() {
+        let m = |seed| {
+            let mut b = OBJ.as_bytes().to_vec();
+            mutate(&mut b, &mut stream(seed, 1, 2, 3));
+            b
+        };
+        assert_eq!(m(4), m(4));
+        assert_ne!(m(4), m(5));
+    }
+}
