@@ -5,7 +5,8 @@
 //! fixed budget of R rays, in parallel.
 //!
 //! **Incremental shooting iterations.** With unshot radiosity ΔB_i and p_i = |ΔB_i|₁ A_i, P =
-//! Σ p_i, ray k of the iteration leaves the patch i whose cumulative share of P contains
+//! Σ p_i, an iteration casts R = `iteration_rays` · N · P/P₀ rays (P₀ the emitted energy: each
+//! ray carries about the same power in every iteration; at least N/4), and ray k leaves the patch i whose cumulative share of P contains
 //! (k + ξ)/R (systematic sampling: patch i gets n_i = ⌊R p_i/P⌋ or ⌈R p_i/P⌉ rays; in the first
 //! iteration every emitter at least one), from a uniform point in a cosine direction
 //! ([`PhotonSampler`]), and carries the power w_i = ΔB_i A_i / n_i. A ray landing on j adds
@@ -64,6 +65,8 @@ pub struct StochasticJacobi<'s> {
     seed: u64,
     emitted: Rgb,
     emitted_total: f64,
+    /// Σ |E_i|₁ A_i: the unshot energy of the first iteration.
+    emitted_energy: f64,
     absorbed: Rgb,
     escaped: Rgb,
     iterations: u64,
@@ -94,6 +97,12 @@ impl<'s> StochasticJacobi<'s> {
             seed: params.seed,
             emitted,
             emitted_total: emitted.sum(),
+            emitted_energy: system
+                .emission
+                .iter()
+                .zip(&system.area)
+                .map(|(e, a)| (e.r.abs() + e.g.abs() + e.b.abs()) * a)
+                .sum(),
             absorbed: Rgb::BLACK,
             escaped: Rgb::BLACK,
             iterations: 0,
@@ -130,7 +139,10 @@ impl<'s> StochasticJacobi<'s> {
         // Rays per source by systematic sampling: patch i gets the k with (k + ξ)/R · P in its
         // slice of the cumulative unshot energy, ⌊R p_i/P⌋ or ⌈R p_i/P⌉ of them. In the first
         // iteration every emitter shoots at least once, so that all emitted light leaves in it.
-        let r = self.budget() as f64;
+        // Rays in proportion to the power left (Bekaert's advice: every ray then carries about
+        // the same power in every iteration, so later, weaker iterations cost fewer rays), at
+        // least a quarter ray a patch.
+        let r = (self.budget() as f64 * (total / self.emitted_energy)).max(n as f64 * 0.25);
         let mut rng = stream(self.seed, self.iterations, u64::MAX, 0);
         let xi = uniform(&mut rng) as f64;
         let first = self.iterations == 0;
