@@ -1792,3 +1792,51 @@ fn outputs_through_links_keep_the_link() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("symbolic link to nothing"));
 }
+
+/// More hostile-input classes: a face whose repeated vertex makes a zero-area patch is named
+/// by its file and line; a missing file gives the operating system's message once; the
+/// summary reports resident memory first; and a short seeded fuzz of the option parser runs
+/// clean.
+#[test]
+fn located_errors_os_messages_once_resident_memory_and_option_fuzz() {
+    let dir = scratch("hostile2");
+    write(&dir, "l.mtl", "newmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+    write(
+        &dir,
+        "deg.obj",
+        "mtllib l.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl light\nf 1 2 4 3\nf 1 2 2 3\n",
+    );
+    let out = run(
+        &["solve", "deg.obj", "--patches", "100", "-o", "x.csv"],
+        &dir,
+    );
+    assert_fails(&out, &["deg.obj:8", "area 0"], &dir, &["l.mtl", "deg.obj"]);
+    let out = run(&["solve", "missing.obj", "-o", "x.csv"], &dir);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
+    assert!(err.contains("cannot read missing.obj"), "{err}");
+    let out = run(
+        &["solve", "furnace", "--patches", "50", "-o", "x.csv"],
+        &dir,
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("memory      peak resident"), "{text}");
+    let out = run(
+        &[
+            "fuzz",
+            "--cases",
+            "500",
+            "--targets",
+            "options",
+            "--out",
+            "fz",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("options"));
+}
