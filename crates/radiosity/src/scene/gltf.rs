@@ -446,8 +446,10 @@ pub fn load_vertex_colours(path: &Path) -> Result<(Scene, Vec<[Rgb; 3]>), SceneE
 /// JSON first, each refused with its JSON path.
 fn check_references(path: &Path, json: &[u8]) -> Result<(), SceneError> {
     use serde_json::Value;
-    // Malformed JSON is left to the glTF parser, whose message is better.
-    let Ok(root) = serde_json::from_slice::<Value>(json) else {
+    // Invalid UTF-8 inside a string that the typed parser skips would fail a `Value` parse:
+    // read the text lossily, so that the structure is checked all the same. JSON that does not
+    // parse at all is left to the glTF parser, whose message is better.
+    let Ok(root) = serde_json::from_str::<Value>(&String::from_utf8_lossy(json)) else {
         return Ok(());
     };
     let count = |key: &str| root.get(key).and_then(Value::as_array).map_or(0, Vec::len);
@@ -877,4 +879,24 @@ fn read_scene(
         origins: vec![],
         up: Some(Vec3::Y),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    /// Found by the fuzzer: invalid UTF-8 inside a string the typed parser skips, and a
+    /// POSITION naming an accessor that is not there, made the `gltf` crate's validation
+    /// index out of bounds. The reference check must see through the bad byte.
+    #[test]
+    fn invalid_utf8_does_not_hide_a_missing_accessor() {
+        let dir = std::env::temp_dir().join(format!("radiosity-gltf-utf8-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut json = br#"{"asset":{"version":"2.0","generator":"x"#.to_vec();
+        json.push(0xf5);
+        json.extend_from_slice(br#""},"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}]}"#);
+        let path = dir.join("bad.gltf");
+        std::fs::write(&path, &json).unwrap();
+        let err = super::load_with(&path, false).unwrap_err().to_string();
+        assert!(err.contains("no accessor 0"), "{err}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
