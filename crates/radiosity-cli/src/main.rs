@@ -205,7 +205,7 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
         100.0 * info.unshot.sum() / e
     );
     println!("wrote       {}", a.out.display());
-    Ok(())
+    capped_at(a.max_iterations, info, &a.out)
 }
 
 fn render(a: RenderArgs) -> Result<()> {
@@ -246,7 +246,30 @@ fn render(a: RenderArgs) -> Result<()> {
         params.height,
         params.samples_per_pixel
     );
-    Ok(())
+    capped(&a.solve, &solution.info, &out)
+}
+
+/// A solve that the default iteration cap stopped before it converged (the user gave no
+/// `--max-iterations`) is an error once its result is written: a non-zero exit, and a line
+/// saying what was reached and what to change.
+fn capped(a: &SolveArgs, info: &radiosity::solve::Info, out: &std::path::Path) -> Result<()> {
+    capped_at(a.max_iterations, info, out)
+}
+
+fn capped_at(
+    max_iterations: Option<u64>,
+    info: &radiosity::solve::Info,
+    out: &std::path::Path,
+) -> Result<()> {
+    if info.converged || max_iterations.is_some() {
+        return Ok(());
+    }
+    anyhow::bail!(
+        "{}: the solve did not converge within the default cap of {} iterations (unshot energy left {:.3e} of emitted); the result written is unconverged: give --max-iterations to go further or a larger --tolerance",
+        out.display(),
+        info.iterations,
+        info.unshot_fraction
+    )
 }
 
 fn solve(a: SolveCmdArgs) -> Result<()> {
@@ -292,7 +315,7 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
         a.out.display(),
         solution.mesh.len()
     );
-    Ok(())
+    capped(&a.solve, &solution.info, &a.out)
 }
 
 /// Show a baked glTF's vertex colours from its camera (or `--eye`/`--target`), as an unlit

@@ -1594,7 +1594,12 @@ fn hostile_inputs_get_one_line_errors_quickly() {
     write(
         &dir,
         "long.obj",
-        &format!("v 0 0 {}\n", "9".repeat(1 << 20) + "x"),
+        &format!("v 0 0 {}\n", "9".repeat(1 << 19) + "x"),
+    );
+    write(
+        &dir,
+        "longline.obj",
+        &format!("# {}\n", "y".repeat(2 << 20)),
     );
     // Matrix Market whose size line promises more than the file holds.
     write(
@@ -1635,6 +1640,10 @@ fn hostile_inputs_get_one_line_errors_quickly() {
         (solve("repeat.obj"), vec!["repeat.obj:4", "at most 4096"]),
         (solve("zero.obj"), vec!["zero.obj:1", "not a regular file"]),
         (solve("long.obj"), vec!["long.obj:1", "…"]),
+        (
+            solve("longline.obj"),
+            vec!["longline.obj:1", "longer than 1 MiB"],
+        ),
         (
             args(&["solve", "cornell", "--max-edge", "0.00001", "-o", "out.csv"]),
             vec!["patches would need", "--max-edge"],
@@ -1716,7 +1725,8 @@ fn hostile_inputs_get_one_line_errors_quickly() {
 }
 
 /// A system whose reflectance is nearly 1 converges arbitrarily slowly: the default iteration
-/// cap stops it, saying so, with the unshot energy it reached.
+/// cap stops it, saying so, with the unshot energy it reached, and the exit is non-zero (the
+/// result is written, marked unconverged).
 #[test]
 fn iterative_solves_always_stop() {
     let dir = scratch("cap");
@@ -1747,10 +1757,13 @@ fn iterative_solves_always_stop() {
         ],
         &dir,
     );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert_ne!(out.status.code(), Some(101), "panicked: {err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
     assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        err.contains("b.csv") && err.contains("default cap of 20000 iterations"),
+        "{err}"
     );
     assert!(t.elapsed().as_secs_f64() < 10.0);
     let text = String::from_utf8_lossy(&out.stdout);

@@ -48,7 +48,7 @@ pub(crate) fn read_text(path: &Path) -> Result<String, InputError> {
         path: path.to_path_buf(),
         source,
     })?;
-    String::from_utf8(bytes).map_err(|e| {
+    let text = String::from_utf8(bytes).map_err(|e| {
         at(
             path,
             0,
@@ -57,7 +57,26 @@ pub(crate) fn read_text(path: &Path) -> Result<String, InputError> {
                 e.utf8_error().valid_up_to()
             ),
         )
-    })
+    })?;
+    if let Some(line) = overlong_line(&text) {
+        return Err(at(
+            path,
+            line,
+            format!("a line longer than {} MiB", MAX_LINE_BYTES >> 20),
+        ));
+    }
+    Ok(text)
+}
+
+/// Longest line of a text input (OBJ, MTL, MGF, Matrix Market, CSV), bytes: far past any real
+/// line (an OBJ face of 4,096 vertices with texture and normal indices is under 100 KiB).
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// The 1-based number of the first line longer than [`MAX_LINE_BYTES`], if any.
+pub fn overlong_line(text: &str) -> Option<usize> {
+    text.split('\n')
+        .position(|l| l.len() > MAX_LINE_BYTES)
+        .map(|k| k + 1)
 }
 
 /// Largest input file read, bytes.

@@ -33,13 +33,21 @@ pub(super) fn read(path: &Path) -> Result<String, SceneError> {
         path: path.to_path_buf(),
         source,
     })?;
-    String::from_utf8(bytes).map_err(|e| SceneError::Invalid {
+    let text = String::from_utf8(bytes).map_err(|e| SceneError::Invalid {
         at: FileLoc::file(path),
         message: format!(
             "not UTF-8 text (invalid byte at offset {})",
             e.utf8_error().valid_up_to()
         ),
-    })
+    })?;
+    if let Some(line) = crate::io::overlong_line(&text) {
+        return Err(invalid(
+            path,
+            line,
+            format!("a line longer than {} MiB", crate::io::MAX_LINE_BYTES >> 20),
+        ));
+    }
+    Ok(text)
 }
 
 /// A finite number, or an error naming the file, line and token.
