@@ -66,15 +66,39 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     let memory = radiosity::pipeline::MemoryCheck {
         limit: radiosity::pipeline::available_memory().unwrap_or(u64::MAX),
         stored_rows: true,
-        rays: if method == radiosity::formfactor::FormFactorMethod::MonteCarlo {
-            a.rays
-        } else {
-            u32::MAX
+        // Entries a row can hold at most: one per ray; one per pixel (or disc cell) of each
+        // sample point; every other patch for the analytic method.
+        rays: {
+            use radiosity::formfactor::FormFactorMethod as M;
+            let pixels = (a.resolution as u64).pow(2) * 3 * a.samples as u64;
+            match method {
+                M::MonteCarlo => a.rays,
+                M::Hemicube | M::Tetrahedron | M::Hemisphere => pixels.min(u32::MAX as u64) as u32,
+                M::Analytic => u32::MAX,
+            }
         },
     };
-    memory.before_meshing(&scene, mesh_params)?;
+    // A view-factor matrix is stored whatever the method: the remedy is fewer patches.
+    let too_big = |e: radiosity::Error| {
+        match e {
+        radiosity::Error::OutOfMemory {
+            what,
+            needed,
+            limit,
+            ..
+        } => anyhow::anyhow!(
+            "{what} would need about {} MiB but only {} MiB are available; use fewer patches (--patches N, a larger --max-edge, or --faces)",
+            needed >> 20,
+            limit >> 20
+        ),
+        e => e.into(),
+    }
+    };
+    memory
+        .before_meshing(&scene, mesh_params)
+        .map_err(too_big)?;
     let mesh = Mesh::build(&scene, mesh_params)?;
-    memory.check(mesh.len() as u64)?;
+    memory.check(mesh.len() as u64).map_err(too_big)?;
     let bvh = Bvh::build(&mesh);
     let params = Params {
         method,

@@ -1660,6 +1660,19 @@ fn hostile_inputs_get_one_line_errors_quickly() {
             vec!["1000000000000 patches would need"],
         ),
         (
+            args(&[
+                "form-factors",
+                "cornell",
+                "--method",
+                "hemicube",
+                "--max-edge",
+                "0.01",
+                "-o",
+                "F.mtx",
+            ]),
+            vec!["patches with every form-factor row stored", "--faces"],
+        ),
+        (
             args(&["render", "cornell", "--width", "100000", "-o", "out.png"]),
             vec!["--width 100000", "at most 32768"],
         ),

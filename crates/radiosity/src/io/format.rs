@@ -46,22 +46,9 @@ impl FileFormat {
         })
     }
 
-    /// True for the formats a scene can be read from.
-    pub fn is_scene(self) -> bool {
-        matches!(
-            self,
-            Self::Obj | Self::Mgf | Self::Gltf | Self::Glb | Self::Ply
-        )
-    }
-
     /// True for the formats a baked mesh can be written to.
     pub fn is_baked_mesh(self) -> bool {
         matches!(self, Self::Gltf | Self::Glb | Self::Ply)
-    }
-
-    /// True for image formats.
-    pub fn is_image(self) -> bool {
-        matches!(self, Self::Png | Self::Exr | Self::Pfm)
     }
 }
 
@@ -81,7 +68,6 @@ mod tests {
         );
         assert_eq!(FileFormat::from_path(Path::new("noext")), None);
         assert_eq!(FileFormat::from_path(Path::new("x.txt")), None);
-        assert!(FileFormat::Ply.is_scene() && FileFormat::Ply.is_baked_mesh());
-        assert!(!FileFormat::Csv.is_scene() && FileFormat::Exr.is_image());
+        assert!(FileFormat::Ply.is_baked_mesh() && !FileFormat::Obj.is_baked_mesh());
     }
 }
