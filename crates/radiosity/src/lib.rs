@@ -36,6 +36,7 @@ pub mod sampling;
 pub mod scene;
 pub mod solve;
 pub mod system;
+pub mod thermal;
 
 pub use color::Rgb;
 
