@@ -149,7 +149,8 @@ const EXAMPLES_SOLVE_SYSTEM: &str = "Examples:
 
 const EXAMPLES_FORM_FACTORS: &str = "Examples:
   radiosity form-factors room.obj --faces --rays 1000000 -o F.mtx --patches-out faces.csv
-  radiosity form-factors cube-dim --method hemicube --resolution 256 --symmetrize -o F.mtx";
+  radiosity form-factors cube-dim --method hemicube --resolution 256 --symmetrize -o F.mtx
+  radiosity form-factors room.vs3 --format view3d -o room.vf";
 
 const EXAMPLES_EXPERIMENT: &str = "Examples:
   radiosity experiment convergence --out docs/experiments
@@ -186,6 +187,137 @@ pub enum Command {
     /// panics, cases over 10 s or over 1 GiB of heap fail the run.
     #[command(after_help = EXAMPLES_FUZZ)]
     Fuzz(FuzzArgs),
+    /// Radiative heat transfer between grey diffuse surfaces: temperatures, net heat flux and
+    /// power per surface, from a boundary-condition table (net-radiation method).
+    #[command(after_help = EXAMPLES_THERMAL)]
+    Thermal(ThermalArgs),
+}
+
+const EXAMPLES_THERMAL: &str = "Examples:
+  radiosity thermal examples/hot-plate.obj --boundary examples/hot-plate-bc.csv --out surfaces.csv
+  radiosity thermal room.vs3 --boundary bc.csv --out surfaces.csv --unit mm --environment 293.15";
+
+/// How a view-factor matrix is written (`form-factors --format`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MatrixFormatArg {
+    /// Matrix Market, coordinate real general.
+    Mtx,
+    /// NIST View3D's text output (areas, N rows of factors, emissivities).
+    View3d,
+}
+
+/// A length unit (`thermal --unit`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum UnitArg {
+    /// Metre.
+    M,
+    /// Centimetre.
+    Cm,
+    /// Millimetre.
+    Mm,
+    /// Inch (25.4 mm).
+    In,
+    /// Foot (0.3048 m).
+    Ft,
+}
+
+impl UnitArg {
+    /// Metres per unit.
+    pub fn metres(self) -> f64 {
+        match self {
+            UnitArg::M => 1.0,
+            UnitArg::Cm => 0.01,
+            UnitArg::Mm => 0.001,
+            UnitArg::In => 0.0254,
+            UnitArg::Ft => 0.3048,
+        }
+    }
+}
+
+/// Whether the surfaces form a closed enclosure (`thermal --enclosure`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum EnclosureArg {
+    /// Closed when a View3D file says `encl=1`, or when every row of F sums to at least 0.99
+    /// (what is missing is then estimation error); open otherwise.
+    Auto,
+    /// Every row is rescaled to sum to 1: nothing escapes.
+    Closed,
+    /// What a row misses reaches the surroundings at --environment.
+    Open,
+}
+
+/// How the net-radiation system is solved (`thermal --linear-solver`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum LinearSolverArg {
+    /// Dense LU up to 3,000 patches, BiCGSTAB beyond.
+    Auto,
+    /// Dense LU (O(N²) memory, O(N³) time), exact to rounding.
+    Direct,
+    /// BiCGSTAB on the sparse F, to a relative residual of 1e-12.
+    Iterative,
+}
+
+/// `radiosity thermal`.
+#[derive(Debug, Args)]
+pub struct ThermalArgs {
+    /// A scene file (.obj, .mgf, .gltf, .glb, .ply, View3D's .vs3) or a built-in scene.
+    pub scene: String,
+    /// Boundary conditions: CSV with the header `name,emissivity,temperature,flux`, one row
+    /// per surface name (material name, or View3D surface name). Emissivity in (0, 1] (empty:
+    /// the scene's own); temperature in K or flux in W/m² (net, leaving), or neither for an
+    /// adiabatic surface.
+    #[arg(long, value_name = "bc.csv", help_heading = SCENE)]
+    pub boundary: PathBuf,
+    /// What a scene unit is.
+    #[arg(long, value_enum, default_value = "m", help_heading = SCENE)]
+    pub unit: UnitArg,
+    /// Temperature of the surroundings seen through openings, K.
+    #[arg(long, value_name = "K", default_value_t = 0.0, help_heading = SCENE)]
+    pub environment: f64,
+    /// Closed enclosure or open to the surroundings.
+    #[arg(long, value_enum, default_value = "auto", help_heading = SCENE)]
+    pub enclosure: EnclosureArg,
+    /// MGF and glTF: treat two-sided surfaces as one-sided.
+    #[arg(long, help_heading = SCENE)]
+    pub one_sided: bool,
+    /// One patch per input face (the default).
+    #[arg(long, conflicts_with_all = ["patches", "max_edge"], help_heading = MESHING)]
+    pub faces: bool,
+    /// Approximate number of patches (subdivides the faces).
+    #[arg(long, value_name = "N", conflicts_with = "max_edge", help_heading = MESHING)]
+    pub patches: Option<usize>,
+    /// Largest patch edge, scene units.
+    #[arg(long, value_name = "L", help_heading = MESHING)]
+    pub max_edge: Option<f32>,
+    /// The form-factor method.
+    #[arg(long = "form-factor-method", visible_alias = "form-factors", value_name = "M", value_enum, default_value = "monte-carlo", help_heading = FORM_FACTORS)]
+    pub method: FormFactorArg,
+    /// Monte Carlo rays per row (default: 10⁶ up to 100 patches, then 10⁸/N, at least 10⁴).
+    #[arg(long, value_name = "N", help_heading = FORM_FACTORS)]
+    pub rays: Option<u32>,
+    /// P: pixels along a hemicube/tetrahedron face, cells across the hemisphere's disc.
+    #[arg(long, value_name = "P", default_value_t = 256, help_heading = FORM_FACTORS)]
+    pub resolution: u32,
+    /// Points over each patch for the projection methods (rounded up to a square).
+    #[arg(long, value_name = "K", default_value_t = 16, help_heading = FORM_FACTORS)]
+    pub samples: u32,
+    /// Seed of Monte Carlo.
+    #[arg(long, value_name = "S", default_value_t = 1, help_heading = FORM_FACTORS)]
+    pub seed: u64,
+    /// How the net-radiation system is solved.
+    #[arg(long, value_enum, default_value = "auto", help_heading = SOLVER)]
+    pub linear_solver: LinearSolverArg,
+    /// Output: one row per boundary name, `name,area,emissivity,temperature,flux,power`
+    /// (m², K, W/m², W).
+    #[arg(long, short, value_name = "surfaces.csv", help_heading = OUTPUT)]
+    pub out: PathBuf,
+    /// Also one row per patch, with its centre (scene units):
+    /// `patch,name,x,y,z,area,emissivity,temperature,flux,power`.
+    #[arg(long, value_name = "patches.csv", help_heading = OUTPUT)]
+    pub patches_out: Option<PathBuf>,
+    /// Worker threads (default: one per core). Results do not depend on it.
+    #[arg(long, value_name = "T", help_heading = RUN)]
+    pub threads: Option<usize>,
 }
 
 const EXAMPLES_FUZZ: &str = "Examples:
@@ -250,7 +382,7 @@ pub struct ExperimentArgs {
 /// `radiosity form-factors`.
 #[derive(Debug, Args)]
 pub struct FormFactorsArgs {
-    /// A built-in scene or a scene file (.obj, .mgf, .gltf, .glb, .ply).
+    /// A built-in scene or a scene file (.obj, .mgf, .gltf, .glb, .ply, .vs3).
     pub scene: String,
     /// The form-factor method.
     #[arg(long, value_name = "M", value_enum, default_value = "monte-carlo", help_heading = FORM_FACTORS)]
@@ -288,9 +420,19 @@ pub struct FormFactorsArgs {
     /// Make A_i F_ij = A_j F_ji keeping row sums (symmetric matrix scaling, Knight 2008).
     #[arg(long, help_heading = FORM_FACTORS)]
     pub symmetrize: bool,
-    /// Output matrix (Matrix Market, coordinate real general, 1-based).
+    /// Output matrix (Matrix Market, coordinate real general, 1-based; or View3D's text format
+    /// with --format view3d).
     #[arg(long, short, value_name = "F.mtx", help_heading = OUTPUT)]
     pub out: PathBuf,
+    /// Output format (default: by the extension; .mtx is Matrix Market). `view3d`: NIST
+    /// View3D's view-factor file, one row per View3D surface (combined surfaces merged,
+    /// obstructions left out) or per input face, with areas and emissivities.
+    #[arg(long, value_enum, help_heading = OUTPUT)]
+    pub format: Option<MatrixFormatArg>,
+    /// With --format view3d: write Hottel's total exchange factors (script-F, View3D's
+    /// `emit=1`) instead of view factors (default: as the .vs3 file's `emit` says).
+    #[arg(long, help_heading = OUTPUT)]
+    pub script_f: bool,
     /// Also write the rows' patches (or faces) as CSV.
     #[arg(long, value_name = "patches.csv", help_heading = OUTPUT)]
     pub patches_out: Option<PathBuf>,
@@ -344,7 +486,7 @@ pub struct SolveSystemArgs {
 #[derive(Debug, Args)]
 pub struct SolveArgs {
     /// A built-in scene (cornell, cube-dim, cube-bright, furnace, office, city) or a scene file
-    /// (.obj, .mgf, .gltf, .glb, .ply).
+    /// (.obj, .mgf, .gltf, .glb, .ply, .vs3).
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// MGF and glTF scenes: keep every surface one-sided, ignoring MGF's `sides 2` (RenderPark's

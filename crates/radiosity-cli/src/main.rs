@@ -8,6 +8,7 @@ mod fuzz;
 mod report;
 mod scale;
 mod settings;
+mod thermal;
 mod view_factors;
 
 use anyhow::{Context, Result};
@@ -45,6 +46,7 @@ fn main() -> ExitCode {
         Command::FormFactors(a) => view_factors::run(a),
         Command::Experiment(a) => experiment::run(a),
         Command::Fuzz(a) => fuzz::run_all(a),
+        Command::Thermal(a) => thermal::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,6 +1,6 @@
 //! `radiosity form-factors`: a view-factor matrix for a scene, for radiative heat transfer.
 
-use crate::args::FormFactorsArgs;
+use crate::args::{FormFactorsArgs, MatrixFormatArg};
 use anyhow::{bail, Result};
 use radiosity::accel::Bvh;
 use radiosity::export::{write_patch_table, PatchRow};
@@ -9,7 +9,8 @@ use radiosity::geom::Vec3;
 use radiosity::io::{matrix_market, FileFormat};
 use radiosity::mesh::{check_planar, Mesh, MeshParams};
 use radiosity::observe::Event;
-use radiosity::scene::vector_area;
+use radiosity::scene::{vector_area, vs3, Scene};
+use std::path::Path;
 use std::time::Instant;
 
 fn ext_is(path: &std::path::Path, format: FileFormat) -> bool {
@@ -32,11 +33,20 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         bail!("--rays 0: at least one ray per row is needed");
     }
     let storage: Storage = a.storage.into();
-    if !ext_is(&a.out, FileFormat::MatrixMarket) {
-        bail!(
-            "{}: unsupported output format (use .mtx, Matrix Market)",
+    let view3d = match a.format {
+        Some(MatrixFormatArg::View3d) => true,
+        Some(MatrixFormatArg::Mtx) => false,
+        None if ext_is(&a.out, FileFormat::MatrixMarket) => false,
+        None => bail!(
+            "{}: unsupported output format (use .mtx, Matrix Market, or --format view3d)",
             a.out.display()
-        );
+        ),
+    };
+    if view3d && a.patches_out.is_some() {
+        bail!("--patches-out: not written with --format view3d (the View3D file holds the surfaces' areas)");
+    }
+    if a.script_f && !view3d {
+        bail!("--script-f: total exchange factors are written only with --format view3d");
     }
     crate::settings::check_output(&a.out)?;
     if let Some(p) = &a.patches_out {
@@ -45,6 +55,8 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         }
         crate::settings::check_output(p)?;
     }
+    let is_vs3 = FileFormat::from_path(Path::new(&a.scene)) == Some(FileFormat::Vs3)
+        && Path::new(&a.scene).exists();
     let mesh_params = match (a.faces, a.patches, a.max_edge) {
         (true, _, _) => MeshParams::Faces,
         (_, _, Some(l)) if !(l.is_finite() && l > 0.0) => {
@@ -53,53 +65,37 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         (_, _, Some(l)) => MeshParams::MaxEdge(l),
         (_, Some(0), _) => bail!("--patches 0: at least one patch is needed"),
         (_, Some(n), _) => MeshParams::Patches(n),
+        // View3D's users and output think in surfaces.
+        (false, None, None) if is_vs3 || view3d => MeshParams::Faces,
         (false, None, None) => MeshParams::default(),
     };
+    let faces = mesh_params == MeshParams::Faces;
     crate::settings::threads(a.threads)?;
-    let scene = crate::load_scene(&a.scene, false)?;
+    let vs3 = if is_vs3 {
+        let v = vs3::load(Path::new(&a.scene))?;
+        for w in &v.scene.warnings {
+            eprintln!("radiosity: warning: {w}");
+        }
+        if !v.control.unmapped.is_empty() {
+            eprintln!(
+                "radiosity: warning: {}: control {} ignored: parameters of View3D's own integrator (accuracy here is set by --method and --rays)",
+                a.scene,
+                v.control.unmapped.join(", ")
+            );
+        }
+        Some(v)
+    } else {
+        None
+    };
+    let scene = match &vs3 {
+        Some(v) => v.scene.clone(),
+        None => crate::load_scene(&a.scene, false)?,
+    };
     // View factors need geometry, not light.
     scene.validate_geometry()?;
-    if a.faces {
+    if faces {
         check_planar(&scene)?;
     }
-    let t = Instant::now();
-    let memory = radiosity::pipeline::MemoryCheck {
-        limit: radiosity::pipeline::available_memory().unwrap_or(u64::MAX),
-        stored_rows: true,
-        // Entries a row can hold at most: one per ray; one per pixel (or disc cell) of each
-        // sample point; every other patch for the analytic method.
-        rays: {
-            use radiosity::formfactor::FormFactorMethod as M;
-            let pixels = (a.resolution as u64).pow(2) * 3 * a.samples as u64;
-            match method {
-                M::MonteCarlo => a.rays,
-                M::Hemicube | M::Tetrahedron | M::Hemisphere => pixels.min(u32::MAX as u64) as u32,
-                M::Analytic => u32::MAX,
-            }
-        },
-    };
-    // A view-factor matrix is stored whatever the method: the remedy is fewer patches.
-    let too_big = |e: radiosity::Error| {
-        match e {
-        radiosity::Error::OutOfMemory {
-            what,
-            needed,
-            limit,
-            ..
-        } => anyhow::anyhow!(
-            "{what} would need about {} MiB but only {} MiB are available; use fewer patches (--patches N, a larger --max-edge, or --faces)",
-            needed >> 20,
-            limit >> 20
-        ),
-        e => e.into(),
-    }
-    };
-    memory
-        .before_meshing(&scene, mesh_params)
-        .map_err(too_big)?;
-    let mesh = Mesh::build(&scene, mesh_params)?;
-    memory.check(mesh.len() as u64).map_err(too_big)?;
-    let bvh = Bvh::build(&mesh);
     let params = Params {
         method,
         resolution: a.resolution,
@@ -108,28 +104,14 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         seed: a.seed,
         ..Params::default()
     };
-    let estimator = Estimator::new(&mesh, &bvh, params)?;
-    let bar = indicatif::ProgressBar::new(mesh.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} form factors {pos}/{len} rows [{bar:30}] {elapsed_precise} (eta {eta})",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
-    );
-    let matrix = estimator
-        .matrix(storage, &|e: Event<'_>| {
-            if let Event::Progress { done, .. } = e {
-                bar.set_position(done)
-            }
-        })
-        .into_sparse();
-    bar.finish_and_clear();
-    let compute_s = t.elapsed().as_secs_f64();
+    let (mesh, matrix, _, compute_s) = compute(&scene, mesh_params, params, storage, None)?;
     let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
+    if view3d {
+        return write_view3d(&a, &scene, vs3.as_ref(), &mesh, &matrix, &area, compute_s);
+    }
 
     // One row per face, or per patch.
-    let (matrix, area, rows) = if a.faces {
+    let (matrix, area, rows) = if faces {
         let group: Vec<u32> = mesh.patches.iter().map(|p| p.surface).collect();
         let (m, face_area) = aggregate(&matrix, &area, &group, scene.polygons.len());
         let rows = scene
@@ -189,7 +171,7 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
             a.samples,
             a.rays,
             a.seed,
-            if a.faces {
+            if faces {
                 "one row per face".to_string()
             } else {
                 format!("{} patches", mesh.len())
@@ -207,7 +189,7 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     println!(
         "rows        {} ({}), {} entries, fill {:.4}%",
         matrix.n(),
-        if a.faces { "faces" } else { "patches" },
+        if faces { "faces" } else { "patches" },
         matrix.nnz(),
         100.0 * s.fill
     );
@@ -221,5 +203,200 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     if let Some(p) = &a.patches_out {
         println!("wrote       {}", p.display());
     }
+    Ok(())
+}
+
+/// Mesh `scene` and compute every row of F by `params` (Monte Carlo's rays per row set by
+/// `rays_for(patches)` when given), with a progress bar and the memory checked before meshing
+/// and after: (mesh, F, the parameters used, seconds).
+pub fn compute(
+    scene: &radiosity::scene::Scene,
+    mesh_params: MeshParams,
+    mut params: Params,
+    storage: Storage,
+    rays_for: Option<&dyn Fn(usize) -> u32>,
+) -> Result<(Mesh, radiosity::system::SparseMatrix, Params, f64)> {
+    let t = Instant::now();
+    let memory = |params: &Params| radiosity::pipeline::MemoryCheck {
+        limit: radiosity::pipeline::available_memory().unwrap_or(u64::MAX),
+        stored_rows: true,
+        // Entries a row can hold at most: one per ray; one per pixel (or disc cell) of each
+        // sample point; every other patch for the analytic method.
+        rays: {
+            use radiosity::formfactor::FormFactorMethod as M;
+            let pixels = (params.resolution as u64).pow(2) * 3 * params.samples as u64;
+            match params.method {
+                M::MonteCarlo => params.rays,
+                M::Hemicube | M::Tetrahedron | M::Hemisphere => pixels.min(u32::MAX as u64) as u32,
+                M::Analytic => u32::MAX,
+            }
+        },
+    };
+    // A view-factor matrix is stored whatever the method: the remedy is fewer patches.
+    let too_big = |e: radiosity::Error| {
+        match e {
+        radiosity::Error::OutOfMemory {
+            what,
+            needed,
+            limit,
+            ..
+        } => anyhow::anyhow!(
+            "{what} would need about {} MiB but only {} MiB are available; use fewer patches (--patches N, a larger --max-edge, or --faces)",
+            needed >> 20,
+            limit >> 20
+        ),
+        e => e.into(),
+    }
+    };
+    memory(&params)
+        .before_meshing(scene, mesh_params)
+        .map_err(too_big)?;
+    let mesh = Mesh::build(scene, mesh_params)?;
+    if let Some(f) = rays_for {
+        params.rays = f(mesh.len());
+    }
+    memory(&params).check(mesh.len() as u64).map_err(too_big)?;
+    let bvh = Bvh::build(&mesh);
+    let estimator = Estimator::new(&mesh, &bvh, params)?;
+    let bar = indicatif::ProgressBar::new(mesh.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} form factors {pos}/{len} rows [{bar:30}] {elapsed_precise} (eta {eta})",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    let matrix = estimator
+        .matrix(storage, &|e: Event<'_>| {
+            if let Event::Progress { done, .. } = e {
+                bar.set_position(done)
+            }
+        })
+        .into_sparse();
+    bar.finish_and_clear();
+    drop(estimator);
+    drop(bvh);
+    Ok((mesh, matrix, params, t.elapsed().as_secs_f64()))
+}
+
+/// `--format view3d`: one row per View3D surface (combined pieces merged, obstructions left
+/// out) or per input face, enclosure and exchange factors as the .vs3 control line says.
+fn write_view3d(
+    a: &FormFactorsArgs,
+    scene: &Scene,
+    vs3: Option<&vs3::Vs3>,
+    mesh: &Mesh,
+    matrix: &radiosity::system::SparseMatrix,
+    area: &[f64],
+    compute_s: f64,
+) -> Result<()> {
+    // Output surface of each patch; `k` (one past the last) collects obstructions.
+    let (group_of_material, k): (Vec<Option<u32>>, usize) = match vs3 {
+        Some(v) => {
+            let mut g = vec![None; scene.materials.len()];
+            for (r, &m) in v.reported.iter().enumerate() {
+                g[m] = Some(r as u32);
+            }
+            (g, v.reported.len())
+        }
+        None => (Vec::new(), scene.polygons.len()),
+    };
+    let group: Vec<u32> = mesh
+        .patches
+        .iter()
+        .map(|p| match vs3 {
+            Some(_) => group_of_material[p.material as usize].unwrap_or(k as u32),
+            None => p.surface,
+        })
+        .collect();
+    let (grouped, group_area) = aggregate(matrix, area, &group, k + 1);
+    // Drop the obstruction group.
+    let rows: Vec<Vec<(u32, f32)>> = (0..k)
+        .map(|i| {
+            grouped
+                .row_entries(i)
+                .iter()
+                .copied()
+                .filter(|&(j, _)| (j as usize) < k)
+                .collect()
+        })
+        .collect();
+    let grouped = radiosity::system::SparseMatrix::from_rows(rows);
+    let group_area = group_area[..k].to_vec();
+    let enclosure = vs3.is_some_and(|v| v.control.enclosure) || a.normalize_rows;
+    let fix = Enforce {
+        clamp: a.clamp,
+        normalize_rows: enclosure,
+        symmetrize: a.symmetrize || enclosure,
+    };
+    let grouped = if fix != Enforce::default() {
+        enforce(grouped, &group_area, fix)
+    } else {
+        grouped
+    };
+    let s = summary(&grouped, &group_area);
+    let mut f = vec![0.0; k * k];
+    for (i, j, v) in grouped.triplets() {
+        f[i * k + j as usize] = v as f64;
+    }
+    let emissivity: Vec<f64> = match vs3 {
+        Some(v) => v
+            .reported
+            .iter()
+            .map(|&m| 1.0 - scene.materials[m].reflectance.r)
+            .collect(),
+        None => scene
+            .polygons
+            .iter()
+            .map(|p| {
+                let r = scene.materials[p.material].reflectance;
+                1.0 - (r.r + r.g + r.b) / 3.0
+            })
+            .collect(),
+    };
+    let emit = a.script_f || vs3.is_some_and(|v| v.control.emit);
+    if emit {
+        if let Some(i) = emissivity.iter().position(|&e| e <= 0.0) {
+            bail!("--script-f: surface {} has emissivity 0; total exchange factors need every emissivity in (0, 1]", i + 1);
+        }
+        let needed = 3 * 8 * (k as u64).pow(2);
+        let limit = radiosity::pipeline::available_memory().unwrap_or(u64::MAX);
+        if needed > limit {
+            bail!(
+                "total exchange factors for {k} surfaces need {} MiB of dense matrices but only {} MiB are available",
+                needed >> 20,
+                limit >> 20
+            );
+        }
+        f = radiosity::io::view3d::script_f(&f, &emissivity);
+    }
+    let table = radiosity::io::view3d::ViewFactorTable {
+        area: group_area,
+        f,
+        emissivity,
+        enclosure,
+        emit,
+    };
+    radiosity::io::view3d::write(&a.out, &table)?;
+    println!(
+        "rows        {k} ({}), View3D format{}",
+        if vs3.is_some() {
+            "View3D surfaces"
+        } else {
+            "faces"
+        },
+        if emit {
+            ", total exchange factors (script-F)"
+        } else {
+            ""
+        }
+    );
+    println!("method      {} in {compute_s:.3} s", a.method.0);
+    println!("row sums    {:.6} … {:.6}", s.min_row_sum, s.max_row_sum);
+    println!(
+        "reciprocity worst |A_i F_ij − A_j F_ji| / mean area = {:.3e}",
+        s.worst_reciprocity
+    );
+    println!("wrote       {}", a.out.display());
     Ok(())
 }

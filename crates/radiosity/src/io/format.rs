@@ -25,6 +25,8 @@ pub enum FileFormat {
     Csv,
     /// Matrix Market: form-factor matrices.
     MatrixMarket,
+    /// NIST View3D input: view-factor geometry in.
+    Vs3,
 }
 
 impl FileFormat {
@@ -42,6 +44,7 @@ impl FileFormat {
             "pfm" => Self::Pfm,
             "csv" => Self::Csv,
             "mtx" => Self::MatrixMarket,
+            "vs3" => Self::Vs3,
             _ => return None,
         })
     }

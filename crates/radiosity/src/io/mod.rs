@@ -8,6 +8,7 @@ mod format;
 pub mod matrix_market;
 mod output;
 pub mod patches_csv;
+pub mod view3d;
 
 pub use format::FileFormat;
 pub use output::{write_atomic, OutputError};

@@ -14,6 +14,7 @@ pub mod mgf;
 pub mod obj;
 pub mod ply;
 pub mod spectrum;
+pub mod vs3;
 
 use crate::color::Rgb;
 use crate::geom::{Aabb, Vec3};
@@ -354,7 +355,8 @@ pub struct LoadOptions {
     pub one_sided: bool,
 }
 
-/// Load a scene by built-in name or from a file (`.obj`, `.mgf`, `.gltf`, `.glb`, `.ply`).
+/// Load a scene by built-in name or from a file (`.obj`, `.mgf`, `.gltf`, `.glb`, `.ply`, View3D's
+/// `.vs3`).
 pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
     load_with(name_or_path, &LoadOptions::default())
 }
@@ -370,11 +372,12 @@ pub fn load_with(name_or_path: &str, options: &LoadOptions) -> Result<Scene, Sce
         Some(FileFormat::Mgf) => mgf::load_with(path, options.one_sided),
         Some(FileFormat::Gltf | FileFormat::Glb) => gltf::load_with(path, options.one_sided),
         Some(FileFormat::Ply) => ply::load(path),
+        Some(FileFormat::Vs3) => vs3::load(path).map(|v| v.scene),
         _ if !path.exists() => Err(SceneError::Unknown(name_or_path.to_string())),
         _ => Err(SceneError::Invalid {
             at: FileLoc::file(path),
             message:
-                "unsupported scene format (supported: .obj with .mtl, .mgf, .gltf, .glb, .ply)"
+                "unsupported scene format (supported: .obj with .mtl, .mgf, .gltf, .glb, .ply, .vs3)"
                     .into(),
         }),
     }

@@ -1,0 +1,153 @@
+//! NIST View3D's view-factor output file (text form, `out=0`; View3D manual, "View Factor
+//! Output File"), and Hottel's total exchange factors that View3D reports with `emit=1`.
+//!
+//! ```text
+//! View3D 3.2 0 encl emit N        header: program, format version, out, encl, emit, N
+//! A_1 A_2 … A_N                   areas
+//! F_11 F_12 … F_1N                N rows of F_mn (row m, column n), %.6f
+//! …
+//! ε_1 ε_2 … ε_N                   emissivities, %.3f
+//! ```
+//!
+//! The header is padded to 30 characters as View3D's `SaveVF` writes it, so its own readers
+//! (ViewHT's `ReadVF`, which reads the first 35 characters) take the file.
+
+use super::output::{write_atomic, OutputError};
+use std::io::Write;
+use std::path::Path;
+
+/// A dense square table of factors with the surfaces' areas and emissivities.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewFactorTable {
+    /// Areas, in the scene's units squared.
+    pub area: Vec<f64>,
+    /// Row-major N × N factors: `f[m * n + k]` from surface m to surface k.
+    pub f: Vec<f64>,
+    /// Emissivities.
+    pub emissivity: Vec<f64>,
+    /// The enclosure flag written in the header.
+    pub enclosure: bool,
+    /// True when `f` holds total exchange factors ([`script_f`]).
+    pub emit: bool,
+}
+
+impl ViewFactorTable {
+    /// Number of surfaces.
+    pub fn n(&self) -> usize {
+        self.area.len()
+    }
+}
+
+/// Write `t` in View3D's text format.
+pub fn write(path: &Path, t: &ViewFactorTable) -> Result<(), OutputError> {
+    let n = t.n();
+    write_atomic(path, |w| {
+        let header = format!("View3D 3.2 0 {} {} {}", t.enclosure as u8, t.emit as u8, n);
+        writeln!(w, "{header:<30}")?;
+        let line =
+            |w: &mut dyn Write, v: &mut dyn Iterator<Item = String>| -> std::io::Result<()> {
+                let mut first = true;
+                for s in v {
+                    if !first {
+                        w.write_all(b" ")?;
+                    }
+                    first = false;
+                    w.write_all(s.as_bytes())?;
+                }
+                w.write_all(b"\n")
+            };
+        line(w, &mut t.area.iter().map(|a| format_g(*a)))?;
+        for m in 0..n {
+            line(
+                w,
+                &mut t.f[m * n..(m + 1) * n].iter().map(|v| format!("{v:.6}")),
+            )?;
+        }
+        line(w, &mut t.emissivity.iter().map(|e| format!("{e:.3}")))
+    })
+}
+
+/// C's `%g`: six significant digits, trailing zeros dropped, exponent form outside 1e-4…1e6.
+fn format_g(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let e = v.abs().log10().floor() as i32;
+    if (-4..6).contains(&e) {
+        let decimals = (5 - e).max(0) as usize;
+        let s = format!("{v:.decimals$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    } else {
+        let s = format!("{v:.5e}");
+        let (m, x) = s.split_once('e').unwrap_or((&s, "0"));
+        let m = if m.contains('.') {
+            m.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            m
+        };
+        let x: i32 = x.parse().unwrap_or(0);
+        format!("{m}e{}{:02}", if x < 0 { '-' } else { '+' }, x.abs())
+    }
+}
+
+/// Hottel's total exchange factors from view factors `f` (row-major N × N) and emissivities:
+/// `ε_m [(I − F R)⁻¹ F]_mk ε_k` with R = diag(1 − ε), the fraction of what m would emit as a
+/// black body that k absorbs after any number of diffuse reflections (Hottel & Sarofim,
+/// *Radiative Transfer*, 1967, ch. 3; the "script-F" of View3D's `emit=1`). In a closed
+/// enclosure row m sums to ε_m. Dense LU: O(N³).
+pub fn script_f(f: &[f64], emissivity: &[f64]) -> Vec<f64> {
+    use faer::linalg::solvers::Solve;
+    let n = emissivity.len();
+    // (I − F R) X = F.
+    let m = faer::Mat::<f64>::from_fn(n, n, |i, j| {
+        (i == j) as u8 as f64 - f[i * n + j] * (1.0 - emissivity[j])
+    });
+    let rhs = faer::Mat::<f64>::from_fn(n, n, |i, j| f[i * n + j]);
+    let x = m.partial_piv_lu().solve(&rhs);
+    let mut out = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..n {
+            out[i * n + j] = emissivity[i] * x[(i, j)] * emissivity[j];
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn g_format_matches_c() {
+        for (v, s) in [
+            (1.0, "1"),
+            (9.0, "9"),
+            (0.25, "0.25"),
+            (123456.0, "123456"),
+            (1234567.0, "1.23457e+06"),
+            (0.0001, "0.0001"),
+            (0.00001234, "1.234e-05"),
+            (3.14159265, "3.14159"),
+        ] {
+            assert_eq!(format_g(v), s, "{v}");
+        }
+    }
+
+    /// Two infinite parallel plates (F = 1 each way): the total exchange factor from plate 1
+    /// absorbed by plate 2 is the classic 1 / (1/ε₁ + 1/ε₂ − 1); each row sums to ε.
+    #[test]
+    fn script_f_of_parallel_plates() {
+        let f = [0.0, 1.0, 1.0, 0.0];
+        let e = [0.8, 0.3];
+        let s = script_f(&f, &e);
+        let exchange = 1.0 / (1.0 / 0.8 + 1.0 / 0.3 - 1.0);
+        assert!((s[1] - exchange).abs() < 1e-12);
+        assert!((s[2] - exchange).abs() < 1e-12);
+        assert!((s[0] + s[1] - 0.8).abs() < 1e-12);
+        assert!((s[2] + s[3] - 0.3).abs() < 1e-12);
+    }
+}
