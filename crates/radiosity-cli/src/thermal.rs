@@ -210,6 +210,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             .collect(),
         boundaries: boundaries.clone(),
         environment: a.environment,
+        closed,
     };
     let linear = match a.linear_solver {
         LinearSolverArg::Auto => LinearSolver::Auto,

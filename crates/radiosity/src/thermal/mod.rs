@@ -73,6 +73,9 @@ pub struct ThermalSystem {
     pub boundaries: Vec<Boundary>,
     /// Temperature of the surroundings seen through openings, K.
     pub environment: f64,
+    /// A closed enclosure: every non-empty row of F is rescaled (in f64) to sum to exactly 1,
+    /// so nothing reaches the surroundings, not even the rounding of F's f32 entries.
+    pub closed: bool,
 }
 
 /// How the linear system is solved.
@@ -293,8 +296,13 @@ fn assemble(system: &ThermalSystem, f: &SparseMatrix) -> Assembled {
     let mut scale = vec![1.0; n];
     for i in 0..n {
         let s = f.row_sum(i);
-        scale[i] = 1.0 / s.max(1.0);
-        open[i] = (1.0 - s).max(0.0);
+        if system.closed && s > 0.0 {
+            scale[i] = 1.0 / s;
+            open[i] = 0.0;
+        } else {
+            scale[i] = 1.0 / s.max(1.0);
+            open[i] = (1.0 - s).max(0.0);
+        }
         let bd = system.boundaries[system.group[i] as usize];
         let ge = open[i] * sigma_te4;
         match bd.condition {
@@ -626,6 +634,7 @@ mod tests {
                 },
             ],
             environment: 0.0,
+            closed: false,
         };
         let network = (sigma_t4(1200.0) - sigma_t4(500.0))
             / (0.2 / 0.8 + 1.0 / (0.5 + 1.0 / (2.0 + 2.0)) + 0.6 / 0.4);
@@ -683,6 +692,7 @@ mod tests {
                 })
                 .collect(),
             environment: 0.0,
+            closed: false,
         };
         for s in both(&system, &f) {
             for i in 0..6 {
@@ -718,6 +728,7 @@ mod tests {
                 },
             ],
             environment: 0.0,
+            closed: false,
         };
         // Not reciprocal (areas differ): the balance must hold anyway.
         let first = solve(&system, &f, ThermalParams::default()).unwrap();
@@ -745,6 +756,7 @@ mod tests {
                 condition: Condition::Temperature(500.0),
             }],
             environment: 300.0,
+            closed: false,
         };
         for s in both(&system, &f) {
             let q = 0.6 * (sigma_t4(500.0) - sigma_t4(300.0));
@@ -770,6 +782,7 @@ mod tests {
                 },
             ],
             environment: 0.0,
+            closed: false,
         };
         assert_eq!(
             solve(&system, &f, ThermalParams::default()),
@@ -795,6 +808,7 @@ mod tests {
                 },
             ],
             environment: 0.0,
+            closed: false,
         };
         assert!(matches!(
             solve(&system, &f, ThermalParams::default()),
