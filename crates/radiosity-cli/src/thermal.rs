@@ -327,7 +327,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
     );
     let width = rows.iter().map(|r| r.name.len()).max().unwrap_or(4).max(7);
     println!(
-        "{:width$}  {:>12}  {:>5}  {:>10}  {:>13}  {:>13}",
+        "{:width$}  {:>14}  {:>5}  {:>10}  {:>13}  {:>13}",
         "surface", "area m²", "ε", "T K", "flux W/m²", "power W"
     );
     for (k, r) in rows.iter().enumerate().take(40) {
@@ -338,7 +338,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             Condition::Adiabatic => "0",
         };
         println!(
-            "{:width$}  {:>12.5}  {:>5.3}  {:>9.2}{}  {:>13.5e}  {:>13.5e}",
+            "{:width$}  {:>14.4}  {:>5.3}  {:>9.2}{}  {:>13.5e}  {:>13.5e}",
             r.name,
             ar,
             boundaries[k].emissivity,

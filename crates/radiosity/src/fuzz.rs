@@ -36,11 +36,17 @@ pub enum Target {
     MatrixMarket,
     /// Patches CSV (with a valid matrix).
     PatchesCsv,
+    /// NIST View3D input (`.vs3`), vertex-and-surface form (`F 3`).
+    Vs3,
+    /// NIST View3D input, surfaces with their own geometry (`F 3a`).
+    Vs3a,
+    /// The thermal boundary-condition table (`bc.csv`).
+    BoundaryCsv,
 }
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 9] = [
+    pub const ALL: [Target; 12] = [
         Target::Obj,
         Target::Mtl,
         Target::Mgf,
@@ -50,6 +56,9 @@ impl Target {
         Target::PlyBinary,
         Target::MatrixMarket,
         Target::PatchesCsv,
+        Target::Vs3,
+        Target::Vs3a,
+        Target::BoundaryCsv,
     ];
 
     /// Its name.
@@ -64,6 +73,9 @@ impl Target {
             Target::PlyBinary => "ply-binary",
             Target::MatrixMarket => "matrix-market",
             Target::PatchesCsv => "patches-csv",
+            Target::Vs3 => "vs3",
+            Target::Vs3a => "vs3a",
+            Target::BoundaryCsv => "bc-csv",
         }
     }
 }
@@ -73,6 +85,9 @@ const MTL: &str = "newmtl white\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0.5 0.5 0.5\nK
 const MGF: &str = "# a lit room\nm white =\n\tc\n\t\tcxy 0.33 0.33\n\trd 0.6\nm lamp =\n\tc\n\ted 100\nv a =\n\tp 0 0 0\nv b =\n\tp 1 0 0\nv c =\n\tp 1 1 0\nv d =\n\tp 0 1 0\nv e =\n\tp 0 0 1\nm white\nf a b c d\nxf -a 3 -t 0 0 0.3\nm lamp\nf a d c b\nxf\ncyl white e 0.2 a\nsph e 0.1\n";
 const MTX: &str = "%%MatrixMarket matrix coordinate real general\n% a closed pair\n3 3 5\n1 2 0.5\n1 3 0.5\n2 1 0.5\n2 3 0.5\n3 1 1\n";
 const CSV: &str = "area,reflectance,emission\n1,0.5,1\n1,0.5,0\n2,0.25,0\n";
+const VS3: &str = "T two forms\nC encl=1 list=2 eps=1.e-4 maxu=8\nF 3\n! a box\nV 1 0. 0. 0.\nV 2 1. 0. 0.\nV 3 1. 1. 0.\nV 4 0. 1. 0.\nV 5 0. 0. 1.\nV 6 1. 0. 1.\nV 7 1. 1. 1.\nV 8 0. 1. 1.\nS 1 1 2 3 4 0 0 0.50 floor\nS 2 1 4 8 5 0 0 0.50 xeq0\nS 3 1 5 6 2 0 0 0.50 yeq0\nS 4 7 6 5 8 0 0 0.90 top\nS 5 7 3 2 0 0 2 0.50 xeq1a ! combined\nS 6 7 2 6 0 0 2 0.50 xeq1b\nS 7 7 8 4 3 0 0 0.50 yeq1\nO 8 1 2 7 8\nEnd of data\n";
+const VS3A: &str = "T L room\nC encl=1\nF 3a\nS 1 R 0 0 0.90 s1\n  3. 0. 0. 0 90 3. 3.\nS 2 Q 0 0 0.90 s2\n  3. 0. 3. 0 180\n  2. 0. 3. 0. 3. 1. 2. 1.\nS 3 T 0 1 0.90 s3\n 0. 0. 0. 180 0 0. 0. 1. 0. 1. 1.\nO 4 R 1. 1. 1. 45 30 1. 1.\nE\n";
+const BC: &str = "name,emissivity,temperature,flux\nfloor,0.9,300,\ntop,,,-20.5\n\"xeq0\",1,,\n# comment\nyeq0,0.5,0,\n";
 
 /// The outcome of a run.
 #[derive(Clone, Debug, Default)]
@@ -113,6 +128,9 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
         Target::PlyBinary => vec![("room_be.ply".into(), room("room_be.ply"))],
         Target::MatrixMarket => vec![s("f.mtx", MTX), s("p.csv", CSV)],
         Target::PatchesCsv => vec![s("p.csv", CSV), s("f.mtx", MTX)],
+        Target::Vs3 => vec![s("box.vs3", VS3)],
+        Target::Vs3a => vec![s("room.vs3", VS3A)],
+        Target::BoundaryCsv => vec![s("bc.csv", BC)],
     }
 }
 
@@ -221,6 +239,9 @@ fn parse(target: Target, dir: &Path) -> bool {
         Target::Glb => scene("room.glb"),
         Target::PlyAscii => scene("room.ply"),
         Target::PlyBinary => scene("room_be.ply"),
+        Target::Vs3 => scene("box.vs3"),
+        Target::Vs3a => scene("room.vs3"),
+        Target::BoundaryCsv => crate::thermal::read_boundary_csv(&dir.join("bc.csv")).is_ok(),
         Target::MatrixMarket | Target::PatchesCsv => {
             let m = matrix_market::read(&dir.join("f.mtx"));
             let p = patches_csv::read(&dir.join("p.csv"));
