@@ -484,20 +484,19 @@ pub fn parse(path: &Path, text: &str) -> Result<Vs3, SceneError> {
     let mut materials: Vec<Material> = Vec::new();
     let mut material_of = vec![usize::MAX; surfaces.len()];
     let mut reported = Vec::new();
+    // Reported name → its line: a repeated name is found in O(1).
+    let mut named: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
     for (k, s) in surfaces.iter().enumerate() {
         material_of[k] = match (s.kind, s.combined_into) {
             (SurfaceKind::Radiating, Some(t)) => material_of[t],
             (SurfaceKind::Radiating, None) => {
-                if let Some(other) = surfaces[..k]
-                    .iter()
-                    .find(|o| o.name == s.name && o.combined_into.is_none())
-                {
+                if let Some(other) = named.insert(&s.name, s.line) {
                     return Err(invalid(
                         path,
                         s.line,
                         format!(
-                            "surface name '{}' is also the name of the surface on line {}; names must differ",
-                            s.name, other.line
+                            "surface name '{}' is also the name of the surface on line {other}; names must differ",
+                            s.name
                         ),
                     ));
                 }
@@ -506,6 +505,17 @@ pub fn parse(path: &Path, text: &str) -> Result<Vs3, SceneError> {
                 materials.len() - 1
             }
             (SurfaceKind::Obstruction, _) => {
+                if let Some(other) = named.insert(&s.name, s.line) {
+                    return Err(invalid(
+                        path,
+                        s.line,
+                        format!(
+                            "obstruction {} is named '{}' here, as is the surface on line {other}; rename that surface",
+                            k + 1,
+                            s.name
+                        ),
+                    ));
+                }
                 materials.push(Material::diffuse(&s.name, Rgb::BLACK));
                 materials.len() - 1
             }

@@ -49,6 +49,8 @@ fn unquote(s: &str) -> &str {
 pub fn parse_boundary_csv(path: &Path, text: &str) -> Result<Vec<BoundaryRow>, InputError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut rows: Vec<BoundaryRow> = Vec::new();
+    // Name → line of its row: duplicates found in O(1) each, whatever the file's length.
+    let mut seen: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
     let mut header_seen = false;
     for (k, raw) in text.lines().enumerate() {
         let line = k + 1;
@@ -83,13 +85,14 @@ pub fn parse_boundary_csv(path: &Path, text: &str) -> Result<Vec<BoundaryRow>, I
         if name.is_empty() {
             return Err(at(path, line, "the name is empty"));
         }
-        if let Some(first) = rows.iter().find(|r| r.name == name) {
+        if let Some(first) = seen.get(name) {
             return Err(at(
                 path,
                 line,
-                format!("'{name}' is given twice (first on line {})", first.line),
+                format!("'{name}' is given twice (first on line {first})"),
             ));
         }
+        seen.insert(name.to_string(), line);
         let number = |field: &str, what: &str| -> Result<Option<f64>, InputError> {
             if field.is_empty() {
                 return Ok(None);
