@@ -183,6 +183,7 @@ pub fn load(path: &Path) -> Result<Vs3, SceneError> {
 /// [`load`] on text already read.
 pub fn parse(path: &Path, text: &str) -> Result<Vs3, SceneError> {
     let lines = words(text);
+    let raw: Vec<&str> = text.lines().collect();
     let mut format: Option<bool> = None; // Some(true) = 3a
     let mut control = Control::default();
     let mut title = String::new();
@@ -206,10 +207,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Vs3, SceneError> {
         };
         match key {
             'T' => {
-                title = text
-                    .lines()
-                    .nth(line - 1)
-                    .unwrap_or("")
+                title = raw[line - 1]
                     .trim_start()
                     .get(1..)
                     .unwrap_or("")
