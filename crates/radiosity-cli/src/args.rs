@@ -110,6 +110,7 @@ const SOLVER: &str = "Solver";
 const OUTPUT: &str = "Output";
 const CAMERA: &str = "Camera";
 const RUN: &str = "Run";
+const PICTURE: &str = "Picture";
 
 /// Diffuse global illumination by the radiosity method: baked light, view factors and heat
 /// transfer, and every classic solver side by side.
@@ -129,7 +130,9 @@ const EXAMPLES_TOP: &str = "Examples:
 
 const EXAMPLES_RENDER: &str = "Examples:
   radiosity render cornell --patches 4000 -o cornell.png
-  radiosity render hosp.mgf --one-sided --solver overshoot-ambient --width 1024 --height 768";
+  radiosity render hosp.mgf --one-sided --solver overshoot-ambient --width 1024 --height 768
+  radiosity render cornell --gather --spp 16 -o gathered.png
+  radiosity render cornell --integrator path --spp 1024 -o reference.exr";
 
 const EXAMPLES_SOLVE: &str = "Examples:
   radiosity solve cornell -o cornell.csv
@@ -519,9 +522,14 @@ pub struct SolveArgs {
     /// The solution method.
     #[arg(long, value_name = "M", value_enum, default_value = "progressive", help_heading = SOLVER)]
     pub solver: SolverArg,
-    /// Stop when the unshot energy is at most this fraction of the emitted energy.
-    #[arg(long, value_name = "F", default_value_t = 0.01, help_heading = SOLVER)]
-    pub tolerance: f64,
+    /// Stop when the unshot energy is at most this fraction of the emitted energy (default
+    /// 0.01; `render` 0.0003, where the display's ambient term changes no part of the Cornell
+    /// box's picture by more than 1 %).
+    #[arg(long, value_name = "F", help_heading = SOLVER)]
+    pub tolerance: Option<f64>,
+    /// Set by `render`: the solve is for a picture (its default tolerance is tighter).
+    #[arg(skip)]
+    pub picture: bool,
     /// Stop after this many iterations (shots, rows, photons) at the latest.
     #[arg(long, value_name = "K", help_heading = SOLVER)]
     pub max_iterations: Option<u64>,
@@ -587,6 +595,44 @@ pub struct RenderArgs {
         help_heading = OUTPUT
     )]
     pub exposure: f32,
+    /// How pixels are computed: `radiosity` shows the solution (Gouraud-interpolated, with the
+    /// display ambient term); `gather` computes direct light per pixel with exact shadows and
+    /// gathers the indirect from the solution (no ambient term); `path` path-traces the scene
+    /// without solving (the reference).
+    #[arg(long, value_enum, default_value = "radiosity", help_heading = PICTURE)]
+    pub integrator: IntegratorArg,
+    /// Same as --integrator gather.
+    #[arg(long, conflicts_with = "integrator", help_heading = PICTURE)]
+    pub gather: bool,
+    /// Gather: shadow rays to the emitters per camera sample.
+    #[arg(long, value_name = "N", default_value_t = 4, help_heading = PICTURE)]
+    pub direct_samples: u32,
+    /// Gather: rays into the solution per camera sample, where the irradiance cache is off or
+    /// has no record.
+    #[arg(long, value_name = "N", default_value_t = 16, help_heading = PICTURE)]
+    pub indirect_samples: u32,
+    /// Gather: a gather ray hitting closer than this many patch sizes is followed one level
+    /// deeper (direct light with a shadow ray, indirect from the solution); 0 turns it off.
+    #[arg(long, value_name = "F", default_value_t = 1.0, help_heading = PICTURE)]
+    pub gather_near: f32,
+    /// Gather: sample pairs per irradiance-cache record (the indirect light is gathered at
+    /// sparse points and interpolated; Ward et al. 1988); 0 gathers at every camera sample.
+    #[arg(long, value_name = "N", default_value_t = 1024, help_heading = PICTURE)]
+    pub cache_samples: u32,
+    /// Gather: the irradiance cache's accuracy a (smaller: more records).
+    #[arg(long, value_name = "A", default_value_t = 0.1, help_heading = PICTURE)]
+    pub cache_accuracy: f32,
+}
+
+/// How `render` computes pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorArg {
+    /// The radiosity solution shown directly (Gouraud shading, display ambient term).
+    Radiosity,
+    /// Final gather over the solution: exact direct light, one gathered bounce.
+    Gather,
+    /// Brute-force path tracing with next-event estimation and Russian roulette (no solve).
+    Path,
 }
 
 /// `radiosity solve`.
@@ -686,7 +732,8 @@ pub struct ImageArgs {
     /// Image height in pixels.
     #[arg(long, value_name = "H", default_value_t = 512, help_heading = OUTPUT)]
     pub height: u32,
-    /// Camera rays per pixel.
-    #[arg(long, value_name = "N", default_value_t = 4, help_heading = OUTPUT)]
-    pub spp: u32,
+    /// Camera rays per pixel, stratified when a square (default 4; 16 with --gather; 256
+    /// paths with --integrator path).
+    #[arg(long, value_name = "N", help_heading = OUTPUT)]
+    pub spp: Option<u32>,
 }

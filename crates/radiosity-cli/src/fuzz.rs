@@ -140,7 +140,7 @@ fn options(cases: u64, seed: u64) -> (u64, u64) {
                 // The cross-flag checks that run before any work.
                 if let crate::args::Command::Render(r) = &cli.command {
                     refused += u64::from(crate::settings::settings(&r.solve).is_err());
-                    let _ = crate::settings::image(&r.image, 1);
+                    let _ = crate::settings::image(&r.image, 1, 4);
                 }
             }
         }

@@ -210,7 +210,9 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
     capped_at(a.max_iterations, info, &a.out)
 }
 
-fn render(a: RenderArgs) -> Result<()> {
+fn render(mut a: RenderArgs) -> Result<()> {
+    use args::IntegratorArg;
+    a.solve.picture = true;
     let out = a
         .out
         .clone()
@@ -220,20 +222,83 @@ fn render(a: RenderArgs) -> Result<()> {
     if let Some(t) = &a.solve.trace {
         settings::check_output(t)?;
     }
+    let integrator = if a.gather {
+        IntegratorArg::Gather
+    } else {
+        a.integrator
+    };
     let settings = settings::settings(&a.solve)?;
-    let params = settings::image(&a.image, a.solve.seed)?;
+    let default_spp = match integrator {
+        IntegratorArg::Path => 256,
+        IntegratorArg::Gather => 16,
+        IntegratorArg::Radiosity => 4,
+    };
+    let params = settings::image(&a.image, a.solve.seed, default_spp)?;
     if !a.exposure.is_finite() {
         anyhow::bail!(
             "--exposure {}: must be a finite number of stops",
             a.exposure
         );
     }
+    if a.direct_samples == 0 {
+        anyhow::bail!("--direct-samples 0: at least one shadow ray per sample is needed");
+    }
+    if !(a.cache_accuracy.is_finite() && a.cache_accuracy > 0.0) {
+        anyhow::bail!(
+            "--cache-accuracy {}: must be a positive number",
+            a.cache_accuracy
+        );
+    }
+    if !(a.gather_near.is_finite() && a.gather_near >= 0.0) {
+        anyhow::bail!(
+            "--gather-near {}: a number of patch sizes, at least 0",
+            a.gather_near
+        );
+    }
     settings::threads(a.solve.threads)?;
+    if integrator == IntegratorArg::Path {
+        let scene = load_scene(&a.solve.scene, a.solve.one_sided)?;
+        let camera = settings::camera(default_camera_unsolved(&scene), &a.camera)?;
+        let t = Instant::now();
+        let progress = report::Progress::new(settings.params.tolerance);
+        let image = pipeline::path_trace(&scene, &camera, &params, &progress);
+        progress.finish();
+        let image = image?;
+        let render_s = t.elapsed().as_secs_f64();
+        let scale = auto_exposure(&image) * 2f32.powf(a.exposure);
+        write_image(&out, &image, scale).context("writing the image")?;
+        println!(
+            "path traced {} in {render_s:.2} s ({} paths per pixel)",
+            scene.place(),
+            params.samples_per_pixel
+        );
+        println!(
+            "wrote       {} ({}×{})",
+            out.display(),
+            params.width,
+            params.height
+        );
+        return Ok(());
+    }
     let (scene, solution) = solve_scene(&a.solve)?;
     let camera = settings::camera(solution.default_camera(&scene), &a.camera)?;
     let t = Instant::now();
     let progress = report::Progress::new(settings.params.tolerance);
-    let image = solution.render(&camera, &params, &progress);
+    let image = match integrator {
+        IntegratorArg::Gather => solution.render_gather(
+            &camera,
+            &params,
+            radiosity::render::gather::GatherParams {
+                direct: a.direct_samples,
+                indirect: a.indirect_samples,
+                near: a.gather_near,
+                cache_samples: a.cache_samples,
+                cache_accuracy: a.cache_accuracy,
+            },
+            &progress,
+        ),
+        _ => solution.render(&camera, &params, &progress),
+    };
     progress.finish();
     let render_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
@@ -242,13 +307,39 @@ fn render(a: RenderArgs) -> Result<()> {
     let write_s = t.elapsed().as_secs_f64();
     report::summary(&scene, &solution, Some((render_s, write_s)));
     println!(
-        "wrote       {} ({}×{}, {} samples per pixel)",
+        "wrote       {} ({}×{}, {} samples per pixel{})",
         out.display(),
         params.width,
         params.height,
-        params.samples_per_pixel
+        params.samples_per_pixel,
+        if integrator == IntegratorArg::Gather {
+            format!(
+                ", gather {} direct + {} indirect rays each",
+                a.direct_samples, a.indirect_samples
+            )
+        } else {
+            String::new()
+        }
     );
     capped(&a.solve, &solution.info, &out)
+}
+
+/// The camera for a scene rendered without a solution: its own, else from inside when it is
+/// an interior with a known vertical, else framing it (as [`Solution::default_camera`]).
+fn default_camera_unsolved(scene: &Scene) -> radiosity::scene::Camera {
+    match (scene.camera, scene.up) {
+        (Some(c), _) => c,
+        (None, Some(up)) => {
+            match radiosity::mesh::Mesh::build(scene, radiosity::mesh::MeshParams::Faces) {
+                Ok(mesh) => {
+                    let bvh = radiosity::accel::Bvh::build(&mesh);
+                    radiosity::render::camera::default_camera(&bvh, up)
+                }
+                Err(_) => scene.camera_or_default(),
+            }
+        }
+        (None, None) => scene.camera_or_default(),
+    }
 }
 
 /// A solve that the default iteration cap stopped before it converged (the user gave no
@@ -329,7 +420,7 @@ fn view(a: ViewArgs) -> Result<()> {
         .unwrap_or_else(|| default_output(&a.file.to_string_lossy(), "png"));
     ImageFormat::from_path(&out)?;
     settings::check_output(&out)?;
-    let params = settings::image(&a.image, 1)?;
+    let params = settings::image(&a.image, 1, 4)?;
     if !matches!(
         FileFormat::from_path(&a.file),
         Some(FileFormat::Glb | FileFormat::Gltf)

@@ -10,6 +10,14 @@ use radiosity::scene::Camera;
 use radiosity::solve::{Parameter as SolverParameter, SolveError, SolverParams};
 use std::path::Path;
 
+/// The solve's default tolerance (unshot fraction of the emitted energy).
+pub const DEFAULT_TOLERANCE: f64 = 0.01;
+
+/// `render`'s default tolerance: measured on the Cornell box (256×256, 16 × 16-pixel blocks
+/// against a solve to 1e-5), the display ambient term's bias is at most 28 % of a block at
+/// 0.01, 2.8 % at 0.001 and 0.8 % at 0.0003, for 3 % more CPU time than at 0.01.
+pub const PICTURE_TOLERANCE: f64 = 3e-4;
+
 /// Library settings from the shared solve options.
 pub fn settings(a: &SolveArgs) -> Result<Settings> {
     let mesh = match (a.patches, a.max_edge) {
@@ -51,7 +59,11 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
         rows: a.rows.into(),
         solver: a.solver.0,
         params: solver_params(
-            a.tolerance,
+            a.tolerance.unwrap_or(if a.picture {
+                PICTURE_TOLERANCE
+            } else {
+                DEFAULT_TOLERANCE
+            }),
             a.max_iterations,
             a.omega,
             a.photons,
@@ -170,7 +182,12 @@ pub fn camera(base: Camera, a: &CameraArgs) -> Result<Camera> {
 }
 
 /// Render parameters from `--width`, `--height` and `--spp` (each at least 1).
-pub fn image(a: &ImageArgs, seed: u64) -> Result<radiosity::render::RenderParams> {
+pub fn image(
+    a: &ImageArgs,
+    seed: u64,
+    default_spp: u32,
+) -> Result<radiosity::render::RenderParams> {
+    let spp = a.spp.unwrap_or(default_spp);
     if a.width == 0 || a.height == 0 {
         bail!(
             "--width {} --height {}: the image needs at least one pixel",
@@ -178,7 +195,7 @@ pub fn image(a: &ImageArgs, seed: u64) -> Result<radiosity::render::RenderParams
             a.height
         );
     }
-    if a.spp == 0 {
+    if spp == 0 {
         bail!("--spp 0: at least one sample per pixel is needed");
     }
     if a.width > MAX_IMAGE_SIDE || a.height > MAX_IMAGE_SIDE {
@@ -204,7 +221,7 @@ pub fn image(a: &ImageArgs, seed: u64) -> Result<radiosity::render::RenderParams
     Ok(radiosity::render::RenderParams {
         width: a.width,
         height: a.height,
-        samples_per_pixel: a.spp,
+        samples_per_pixel: spp,
         seed,
     })
 }

@@ -150,6 +150,30 @@ impl Solution {
         crate::render::auto_exposure_patches(&self.display_radiosity(), &self.system.area)
     }
 
+    /// Render by final gather over the solution's radiosity (no ambient term):
+    /// [`crate::render::gather`].
+    pub fn render_gather(
+        &self,
+        camera: &Camera,
+        params: &RenderParams,
+        gather: crate::render::gather::GatherParams,
+        observer: &dyn Observer,
+    ) -> Image {
+        let vertex = vertex_radiosity(&self.mesh, &self.radiosity);
+        let g = crate::render::gather::Gather::new(self.surfaces(), &vertex, gather);
+        g.render(camera, params, observer)
+    }
+
+    /// The solution's surfaces for the ray-traced integrators.
+    pub fn surfaces(&self) -> crate::render::light::Surfaces<'_> {
+        crate::render::light::Surfaces {
+            mesh: &self.mesh,
+            bvh: &self.bvh,
+            reflectance: &self.system.reflectance,
+            emission: &self.system.emission,
+        }
+    }
+
     /// Render the display radiosity, Gouraud-interpolated within surfaces.
     pub fn render(&self, camera: &Camera, params: &RenderParams, observer: &dyn Observer) -> Image {
         let vertex = vertex_radiosity(&self.mesh, &self.display_radiosity());
@@ -471,4 +495,27 @@ pub fn solve_system(
         info,
         trace,
     })
+}
+
+/// Path-trace `scene` ([`crate::render::path`]): no radiosity solution, one patch per planar
+/// piece of each face (the finest geometry the scene has; shading does not depend on it).
+pub fn path_trace(
+    scene: &Scene,
+    camera: &Camera,
+    params: &RenderParams,
+    observer: &dyn Observer,
+) -> Result<Image, Error> {
+    scene.validate()?;
+    let mesh = Mesh::build(scene, crate::mesh::MeshParams::Faces)?;
+    let bvh = Bvh::build(&mesh);
+    let system = patch_system(scene, &mesh);
+    let surfaces = crate::render::light::Surfaces {
+        mesh: &mesh,
+        bvh: &bvh,
+        reflectance: &system.reflectance,
+        emission: &system.emission,
+    };
+    Ok(crate::render::path::render(
+        &surfaces, camera, params, observer,
+    ))
 }

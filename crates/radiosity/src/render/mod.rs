@@ -6,17 +6,21 @@
 //! that linear radiance. The back side of a patch is one-sided and renders black, as does the
 //! background.
 
-use crate::accel::Bvh;
+use crate::accel::{Bvh, Hit};
 use crate::color::Rgb;
 use crate::geom::{Ray, Vec3};
 use crate::mesh::Mesh;
 use crate::observe::{Event, Observer, Stage};
-use crate::sampling::{stream, uniform};
+use crate::sampling::{stream, uniform, Rng64};
 use crate::scene::Camera;
 use rayon::prelude::*;
 
 pub mod baked;
 pub mod camera;
+pub mod compare;
+pub mod gather;
+pub mod light;
+pub mod path;
 
 /// Image size and sampling.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -157,44 +161,81 @@ pub fn render(
     params: &RenderParams,
     observer: &dyn Observer,
 ) -> Image {
+    render_with(
+        bvh,
+        camera,
+        params,
+        observer,
+        std::f64::consts::FRAC_1_PI,
+        |_, hit, _, _, _| gouraud(mesh, vertex_values, hit),
+    )
+}
+
+/// The value at a hit point interpolated from the patch's vertex values.
+#[inline]
+pub(crate) fn gouraud(mesh: &Mesh, vertex_values: &[Rgb], hit: &Hit) -> Rgb {
+    let p = &mesh.patches[hit.patch as usize];
+    let [a, b, c, dd] = p.vertices;
+    let (b, c) = if hit.sub == 0 { (b, c) } else { (c, dd) };
+    let (u, v) = (hit.u as f64, hit.v as f64);
+    vertex_values[a as usize] * (1.0 - u - v)
+        + vertex_values[b as usize] * u
+        + vertex_values[c as usize] * v
+}
+
+/// The pixel loop every integrator shares: jittered camera rays through each pixel (stratified
+/// when the count is a square; streams
+/// keyed by row, so the image does not depend on the thread count), `shade` called for every
+/// front-side hit with the ray, the hit, the pixel, (sample index, samples per pixel) and the
+/// row's shading stream; the mean of the
+/// samples times `scale` is the pixel. Back sides and the background are black.
+pub(crate) fn render_with<F>(
+    bvh: &Bvh,
+    camera: &Camera,
+    params: &RenderParams,
+    observer: &dyn Observer,
+    scale: f64,
+    shade: F,
+) -> Image
+where
+    F: Fn(&Ray, &Hit, (u32, u32), (u32, u32), &mut Rng64) -> Rgb + Sync,
+{
     observer.event(Event::Stage(Stage::Render));
     let (w, h) = (params.width.max(1), params.height.max(1));
     let spp = params.samples_per_pixel.max(1);
-    let (forward, right, up) = frame(camera);
-    let tan_y = (camera.fov_y_deg.to_radians() * 0.5).tan();
-    let tan_x = tan_y * w as f32 / h as f32;
+    let strata = (spp as f64).sqrt().round() as u32;
+    let rays = CameraRays::new(camera, w, h);
     let done = std::sync::atomic::AtomicU32::new(0);
-    let inv_pi = std::f64::consts::FRAC_1_PI;
     let mut pixels = vec![[0.0f32; 3]; (w * h) as usize];
     pixels
         .par_chunks_mut(w as usize)
         .enumerate()
         .for_each(|(y, row)| {
             let mut rng = stream(params.seed, 0x5245_4e44, y as u64, 0);
+            let mut shading = stream(params.seed, 0x5348_4144, y as u64, 0);
             for (x, px) in row.iter_mut().enumerate() {
                 let mut acc = Rgb::BLACK;
-                for _ in 0..spp {
+                for k in 0..spp {
+                    // Stratified: a jittered k × k grid when spp is a square, so edges converge
+                    // as n^(-3/4) rather than n^(-1/2).
                     let (jx, jy) = if spp == 1 {
                         (0.5, 0.5)
+                    } else if strata * strata == spp {
+                        (
+                            ((k % strata) as f32 + uniform(&mut rng)) / strata as f32,
+                            ((k / strata) as f32 + uniform(&mut rng)) / strata as f32,
+                        )
                     } else {
                         (uniform(&mut rng), uniform(&mut rng))
                     };
-                    let sx = (2.0 * (x as f32 + jx) / w as f32 - 1.0) * tan_x;
-                    let sy = (1.0 - 2.0 * (y as f32 + jy) / h as f32) * tan_y;
-                    let d = (forward + right * sx + up * sy).normalize();
-                    if let Some(hit) = bvh.closest_hit(&Ray::new(camera.eye, d), f32::INFINITY) {
+                    let ray = rays.ray(x as f32 + jx, y as f32 + jy);
+                    if let Some(hit) = bvh.closest_hit(&ray, f32::INFINITY) {
                         if hit.front {
-                            let p = &mesh.patches[hit.patch as usize];
-                            let [a, b, c, dd] = p.vertices;
-                            let (b, c) = if hit.sub == 0 { (b, c) } else { (c, dd) };
-                            let (u, v) = (hit.u as f64, hit.v as f64);
-                            acc += vertex_values[a as usize] * (1.0 - u - v)
-                                + vertex_values[b as usize] * u
-                                + vertex_values[c as usize] * v;
+                            acc += shade(&ray, &hit, (x as u32, y as u32), (k, spp), &mut shading);
                         }
                     }
                 }
-                let l = acc * (inv_pi / spp as f64);
+                let l = acc * (scale / spp as f64);
                 *px = [l.r as f32, l.g as f32, l.b as f32];
             }
             observer.event(Event::Progress {
@@ -207,6 +248,45 @@ pub fn render(
         width: w,
         height: h,
         pixels,
+    }
+}
+
+/// Rays through points of the image plane of a pinhole camera.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CameraRays {
+    eye: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    tan_x: f32,
+    tan_y: f32,
+    w: f32,
+    h: f32,
+}
+
+impl CameraRays {
+    pub(crate) fn new(camera: &Camera, w: u32, h: u32) -> Self {
+        let (forward, right, up) = frame(camera);
+        let tan_y = (camera.fov_y_deg.to_radians() * 0.5).tan();
+        Self {
+            eye: camera.eye,
+            forward,
+            right,
+            up,
+            tan_x: tan_y * w as f32 / h as f32,
+            tan_y,
+            w: w as f32,
+            h: h as f32,
+        }
+    }
+
+    /// The ray through image point `(px, py)` in pixels from the top-left corner.
+    #[inline]
+    pub(crate) fn ray(&self, px: f32, py: f32) -> Ray {
+        let sx = (2.0 * px / self.w - 1.0) * self.tan_x;
+        let sy = (1.0 - 2.0 * py / self.h) * self.tan_y;
+        let d = (self.forward + self.right * sx + self.up * sy).normalize();
+        Ray::new(self.eye, d)
     }
 }
 
