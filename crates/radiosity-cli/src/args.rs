@@ -705,6 +705,24 @@ pub struct BenchArgs {
     /// `--scale`, `stochastic-jacobi`: rays per patch and iteration.
     #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
     pub iteration_rays: u32,
+    /// Time against error of the three ways to make a picture (radiosity shown directly, the
+    /// final gather, the path tracer) on SCENE, against a path-traced reference; writes
+    /// pictures.csv, pictures.svg/.png and the images to --out.
+    #[arg(long, value_name = "SCENE", help_heading = SCENE)]
+    pub pictures: Option<String>,
+    /// `--pictures`: the reference image (.pfm) to compare against; without it one is path
+    /// traced with --reference-spp paths a pixel.
+    #[arg(long, value_name = "REF.pfm", help_heading = SCENE)]
+    pub reference: Option<PathBuf>,
+    /// `--pictures`: paths per pixel of the reference when it is made.
+    #[arg(long, value_name = "N", default_value_t = 16384, help_heading = SCENE)]
+    pub reference_spp: u32,
+    /// `--pictures`: image size (square).
+    #[arg(long, value_name = "PX", default_value_t = 256, help_heading = SCENE)]
+    pub size: u32,
+    /// `--pictures`: folder for the results.
+    #[arg(long, value_name = "DIR", default_value = "pictures", help_heading = OUTPUT)]
+    pub out: PathBuf,
 }
 
 /// `radiosity view`.

@@ -91,6 +91,9 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if let Some(scene) = &a.scale {
         return crate::scale::run(&a, scene);
     }
+    if let Some(scene) = &a.pictures {
+        return crate::pictures::run(&a, scene);
+    }
     crate::settings::threads(a.threads)?;
     if a.form_factors {
         return form_factor_table(a.runs);

@@ -5,6 +5,7 @@ mod args;
 mod bench;
 mod experiment;
 mod fuzz;
+mod pictures;
 mod report;
 mod scale;
 mod settings;
@@ -272,6 +273,9 @@ fn render(mut a: RenderArgs) -> Result<()> {
             scene.place(),
             params.samples_per_pixel
         );
+        if let Some((cpu, _)) = report::resources() {
+            println!("cpu         {cpu:.2} s (user and system, all threads)");
+        }
         println!(
             "wrote       {} ({}×{})",
             out.display(),

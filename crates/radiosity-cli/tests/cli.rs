@@ -2478,3 +2478,114 @@ fn thermal_concentric_spheres() {
         s["inner"][3]
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// Pictures: final gather and path tracer.
+
+/// Pixels of a PFM the CLI wrote (rows bottom to top; order does not matter here).
+fn read_pfm_pixels(path: &Path) -> Vec<[f32; 3]> {
+    let bytes = std::fs::read(path).unwrap();
+    let mut parts = bytes.splitn(4, |&b| b == b'\n');
+    assert_eq!(parts.next(), Some(&b"PF"[..]));
+    let _size = parts.next().unwrap();
+    let _scale = parts.next().unwrap();
+    parts
+        .next()
+        .unwrap()
+        .chunks_exact(12)
+        .map(|c| {
+            let f = |k: usize| f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().unwrap());
+            [f(0), f(1), f(2)]
+        })
+        .collect()
+}
+
+/// The furnace (closed, every surface emits E = 1 and reflects ρ): every pixel's radiance is
+/// E/(π(1 − ρ)). The path tracer and the gather both give it: the mean over the picture
+/// within 4 standard errors (from the pixels' own spread) and 1 %.
+#[test]
+fn furnace_pictures_by_path_and_gather() {
+    let dir = scratch("furnace-pictures");
+    let rho = [0.3, 0.5, 0.7];
+    for args in [
+        &["--integrator", "path", "--spp", "64"][..],
+        &["--gather", "--spp", "4", "--tolerance", "0.0001"],
+    ] {
+        let mut all = vec![
+            "render", "furnace", "--width", "24", "--height", "24", "-o", "f.pfm",
+        ];
+        all.extend_from_slice(args);
+        let out = run(&all, &dir);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let px = read_pfm_pixels(&dir.join("f.pfm"));
+        for c in 0..3 {
+            let exact = 1.0 / (std::f64::consts::PI * (1.0 - rho[c]));
+            let v: Vec<f64> = px.iter().map(|p| p[c] as f64).collect();
+            let n = v.len() as f64;
+            let mean = v.iter().sum::<f64>() / n;
+            let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+            assert!(
+                (mean - exact).abs() < 4.0 * sd / n.sqrt() + 1e-9
+                    && (mean - exact).abs() < 0.01 * exact,
+                "{args:?} channel {c}: {mean} vs {exact} (sd {sd})"
+            );
+        }
+    }
+}
+
+/// Gather and path pictures are the same bytes whatever the thread count.
+#[test]
+fn gather_and_path_do_not_depend_on_threads() {
+    let dir = scratch("picture-threads");
+    for args in [
+        &["--gather", "--spp", "4", "--patches", "500"][..],
+        &["--integrator", "path", "--spp", "8"],
+    ] {
+        let mut bytes = Vec::new();
+        for t in ["1", "2"] {
+            let mut all = vec![
+                "render",
+                "cornell",
+                "--width",
+                "32",
+                "--height",
+                "32",
+                "-o",
+                "c.pfm",
+                "--threads",
+                t,
+            ];
+            all.extend_from_slice(args);
+            let out = run(&all, &dir);
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            bytes.push(std::fs::read(dir.join("c.pfm")).unwrap());
+        }
+        assert_eq!(bytes[0], bytes[1], "{args:?}");
+    }
+}
+
+#[test]
+fn picture_options_are_checked() {
+    let dir = scratch("picture-options");
+    for (args, needle) in [
+        (
+            &["--gather", "--direct-samples", "0"][..],
+            "--direct-samples 0",
+        ),
+        (&["--gather", "--cache-accuracy", "0"], "--cache-accuracy 0"),
+        (&["--gather", "--gather-near=-1"], "--gather-near -1"),
+        (&["--gather", "--integrator", "path"], "cannot be used with"),
+    ] {
+        let mut all = vec!["render", "cornell", "-o", "x.png"];
+        all.extend_from_slice(args);
+        assert_fails(&run(&all, &dir), &[needle], &dir, &[]);
+    }
+}

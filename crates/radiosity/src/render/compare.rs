@@ -25,7 +25,11 @@ pub struct Difference {
 /// The pixels that are compared: not an emitter, not within two pixels of one.
 pub fn mask(reference: &Image) -> Vec<bool> {
     let (w, h) = (reference.width as usize, reference.height as usize);
-    let lum: Vec<f32> = reference.pixels.iter().map(|p| p[0] + p[1] + p[2]).collect();
+    let lum: Vec<f32> = reference
+        .pixels
+        .iter()
+        .map(|p| p[0] + p[1] + p[2])
+        .collect();
     let mut sorted = lum.clone();
     sorted.sort_by(f32::total_cmp);
     let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
@@ -42,7 +46,7 @@ pub fn mask(reference: &Image) -> Vec<bool> {
         }
     }
     for (k, l) in keep.iter_mut().zip(&lum) {
-        if !(*l > 0.0) {
+        if l.is_nan() || *l <= 0.0 {
             *k = false;
         }
     }
@@ -106,7 +110,10 @@ pub fn read_pfm(path: &Path) -> Result<Image, InputError> {
         return Err(at(
             path,
             1,
-            format!("not a colour PFM file (starts with '{}', not 'PF')", fields[0]),
+            format!(
+                "not a colour PFM file (starts with '{}', not 'PF')",
+                fields[0]
+            ),
         ));
     }
     let dim = |s: &str| -> Result<u32, InputError> {
@@ -120,7 +127,13 @@ pub fn read_pfm(path: &Path) -> Result<Image, InputError> {
         .parse()
         .ok()
         .filter(|v: &f32| v.is_finite() && *v != 0.0)
-        .ok_or_else(|| at(path, 3, format!("scale '{}' is not a non-zero number", fields[3])))?;
+        .ok_or_else(|| {
+            at(
+                path,
+                3,
+                format!("scale '{}' is not a non-zero number", fields[3]),
+            )
+        })?;
     let need = w as usize * h as usize * 12;
     let data = bytes.get(pos..).unwrap_or(&[]);
     if data.len() != need {
@@ -167,7 +180,14 @@ mod tests {
         let image = Image {
             width: 3,
             height: 2,
-            pixels: vec![[1.0, 2.0, 3.0], [0.5, 0.5, 0.5], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [0.25, 0.5, 1.0], [1.0, 1.0, 1.0]],
+            pixels: vec![
+                [1.0, 2.0, 3.0],
+                [0.5, 0.5, 0.5],
+                [1.0, 1.0, 1.0],
+                [2.0, 2.0, 2.0],
+                [0.25, 0.5, 1.0],
+                [1.0, 1.0, 1.0],
+            ],
         };
         crate::export::write_image(&p, &image, 1.0).unwrap();
         let back = read_pfm(&p).unwrap();
@@ -175,7 +195,10 @@ mod tests {
         let d = difference(&image, &back);
         assert_eq!((d.rmse, d.bias), (0.0, 0.0));
         std::fs::write(&p, b"PF\n3 2\n-1.0\n\0\0").unwrap();
-        assert!(read_pfm(&p).unwrap_err().to_string().contains("bytes of pixels"));
+        assert!(read_pfm(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("bytes of pixels"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

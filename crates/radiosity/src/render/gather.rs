@@ -24,13 +24,13 @@
 
 use super::light::{Lights, Surfaces};
 use super::{gouraud, render_with, CameraRays, Image, RenderParams};
-use rayon::prelude::*;
 use crate::accel::Hit;
 use crate::color::Rgb;
 use crate::geom::{orthonormal_basis, Ray, Vec3};
 use crate::observe::Observer;
 use crate::sampling::{cosine_direction_in, stream, uniform, Rng64};
 use crate::scene::Camera;
+use rayon::prelude::*;
 
 /// Samples of the gather.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,6 +84,9 @@ struct Cache {
     tiles_y: u32,
     a: f32,
 }
+
+/// The cache as one camera sample sees it: the cache, the pixel, (sample, samples a pixel).
+type CacheAt<'c> = (&'c Cache, (u32, u32), (u32, u32));
 
 /// Screen tile size of the cache's index, pixels (the coarsest record spacing).
 const TILE: u32 = 16;
@@ -313,7 +316,10 @@ impl<'a> Gather<'a> {
             let u = if i < k * k {
                 let gx = ((i % k) as f32 + uniform(rng)) / k as f32 + sx;
                 let gy = ((i / k) as f32 + uniform(rng)) / k as f32 + sy;
-                ((gx - gx.floor()).min(0.999_999_9), (gy - gy.floor()).min(0.999_999_9))
+                (
+                    (gx - gx.floor()).min(0.999_999_9),
+                    (gy - gy.floor()).min(0.999_999_9),
+                )
             } else {
                 (uniform(rng), uniform(rng))
             };
@@ -371,7 +377,10 @@ impl<'a> Gather<'a> {
     ) -> Rgb {
         let s = &self.surfaces;
         let src = &self.sources;
-        let idx = src.cdf.partition_point(|&c| c <= u).min(src.patches.len() - 1);
+        let idx = src
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(src.patches.len() - 1);
         let k = src.patches[idx] as usize;
         let (u1, u2, u3) = (uniform(rng), uniform(rng), uniform(rng));
         if k as u32 == own {
@@ -422,7 +431,7 @@ impl<'a> Gather<'a> {
         &self,
         ray: &Ray,
         hit: &Hit,
-        cache: Option<(&Cache, (u32, u32), (u32, u32))>,
+        cache: Option<CacheAt<'_>>,
         rng: &mut Rng64,
     ) -> Rgb {
         let s = &self.surfaces;
@@ -579,7 +588,11 @@ mod tests {
         let sys = crate::pipeline::patch_system(&scene, &mesh);
         let rho = crate::scene::builtin::FURNACE_REFLECTANCE;
         let e = crate::scene::builtin::FURNACE_EMISSION;
-        let b = Rgb::new(e.r / (1.0 - rho.r), e.g / (1.0 - rho.g), e.b / (1.0 - rho.b));
+        let b = Rgb::new(
+            e.r / (1.0 - rho.r),
+            e.g / (1.0 - rho.g),
+            e.b / (1.0 - rho.b),
+        );
         let vertex = vec![b; mesh.vertices.len()];
         let s = Surfaces {
             mesh: &mesh,
@@ -593,7 +606,10 @@ mod tests {
         for i in (0..mesh.len()).step_by(101) {
             let x = mesh.patches[i].centre;
             let (m, se) = mean_and_se(400, || g.radiance_at(x, i as u32, &mut rng).g);
-            assert!((m - exact).abs() < 4.0 * se + 1e-12, "patch {i}: {m} vs {exact} ± {se}");
+            assert!(
+                (m - exact).abs() < 4.0 * se + 1e-12,
+                "patch {i}: {m} vs {exact} ± {se}"
+            );
         }
         let image = g.render(
             &scene.camera.unwrap(),
@@ -633,7 +649,9 @@ mod tests {
             emission: &sys.emission,
         };
         let g = Gather::new(s, &vertex, GatherParams::default());
-        let floor = (0..mesh.len()).find(|&i| mesh.patches[i].normal.y > 0.5).unwrap() as u32;
+        let floor = (0..mesh.len())
+            .find(|&i| mesh.patches[i].normal.y > 0.5)
+            .unwrap() as u32;
         let exact = 0.5 / std::f64::consts::PI * 10.0 * 4.0 * corner_factor(0.5, 0.5, 0.8);
         let mut rng = stream(4, 0, 0, 0);
         let (m, se) = mean_and_se(20_000, || g.radiance_at(Vec3::ZERO, floor, &mut rng).g);

@@ -73,14 +73,7 @@ impl Lights {
 
     /// One-sample estimate of the irradiance the emitters give point `x` (normal `n`, on patch
     /// `own`, which is skipped: a planar patch does not light itself).
-    pub fn irradiance(
-        &self,
-        s: &Surfaces<'_>,
-        x: Vec3,
-        n: Vec3,
-        own: u32,
-        rng: &mut Rng64,
-    ) -> Rgb {
+    pub fn irradiance(&self, s: &Surfaces<'_>, x: Vec3, n: Vec3, own: u32, rng: &mut Rng64) -> Rgb {
         let u = uniform(rng) as f64;
         self.irradiance_with(s, x, n, own, u, rng)
     }
@@ -100,7 +93,10 @@ impl Lights {
         if self.patches.is_empty() {
             return Rgb::BLACK;
         }
-        let k = self.cdf.partition_point(|&c| c <= u).min(self.patches.len() - 1);
+        let k = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(self.patches.len() - 1);
         let j = self.patches[k];
         let (u1, u2, u3) = (uniform(rng), uniform(rng), uniform(rng));
         if j == own {
@@ -203,7 +199,9 @@ pub(crate) mod tests {
         let n = 200_000;
         let (mut s1, mut s2) = (0.0, 0.0);
         for _ in 0..n {
-            let v = lights.irradiance(&s, Vec3::ZERO, Vec3::Y, floor, &mut rng).g;
+            let v = lights
+                .irradiance(&s, Vec3::ZERO, Vec3::Y, floor, &mut rng)
+                .g;
             s1 += v;
             s2 += v * v;
         }

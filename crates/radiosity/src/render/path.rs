@@ -70,9 +70,14 @@ pub fn render(
     observer: &dyn Observer,
 ) -> Image {
     let lights = Lights::new(s.mesh, s.emission);
-    render_with(s.bvh, camera, params, observer, 1.0, |ray, hit, _, _, rng| {
-        radiance(s, &lights, ray, hit, rng)
-    })
+    render_with(
+        s.bvh,
+        camera,
+        params,
+        observer,
+        1.0,
+        |ray, hit, _, _, rng| radiance(s, &lights, ray, hit, rng),
+    )
 }
 
 /// Radiosity at point `x` (normal `n`, on `patch`) estimated with `paths` paths: the emission
@@ -150,7 +155,12 @@ mod tests {
         for i in (0..mesh.len()).step_by(97) {
             let p = &mesh.patches[i];
             let (b, se) = radiosity_at(&s, &lights, p.centre, p.normal, i as u32, 4000, &mut rng);
-            assert!((b.g - exact).abs() < 4.0 * se.g + 1e-9, "patch {i}: {} vs {exact} ± {}", b.g, se.g);
+            assert!(
+                (b.g - exact).abs() < 4.0 * se.g + 1e-9,
+                "patch {i}: {} vs {exact} ± {}",
+                b.g,
+                se.g
+            );
         }
     }
 
@@ -167,10 +177,25 @@ mod tests {
             emission: &sys.emission,
         };
         let lights = Lights::new(&mesh, &sys.emission);
-        let floor = (0..mesh.len()).find(|&i| mesh.patches[i].normal.y > 0.5).unwrap();
+        let floor = (0..mesh.len())
+            .find(|&i| mesh.patches[i].normal.y > 0.5)
+            .unwrap();
         let exact = 0.5 * 10.0 * 4.0 * corner_factor(0.5, 0.5, 0.8);
         let mut rng = stream(6, 0, 0, 0);
-        let (b, se) = radiosity_at(&s, &lights, Vec3::ZERO, Vec3::Y, floor as u32, 100_000, &mut rng);
-        assert!((b.g - exact).abs() < 4.0 * se.g, "{} vs {exact} ± {}", b.g, se.g);
+        let (b, se) = radiosity_at(
+            &s,
+            &lights,
+            Vec3::ZERO,
+            Vec3::Y,
+            floor as u32,
+            100_000,
+            &mut rng,
+        );
+        assert!(
+            (b.g - exact).abs() < 4.0 * se.g,
+            "{} vs {exact} ± {}",
+            b.g,
+            se.g
+        );
     }
 }
