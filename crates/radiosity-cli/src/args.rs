@@ -739,6 +739,17 @@ pub struct ViewArgs {
     pub out: Option<PathBuf>,
     #[command(flatten)]
     pub image: ImageArgs,
+    /// Final gather over the baked `_RADIOSITY` (exact direct light, indirect gathered from
+    /// the bake; reflectance and emission from the materials `solve` baked) instead of
+    /// showing COLOR_0; automatic exposure as `render`.
+    #[arg(long, help_heading = PICTURE)]
+    pub gather: bool,
+    /// Gather: shadow rays to the emitters per camera sample.
+    #[arg(long, value_name = "N", default_value_t = 4, help_heading = PICTURE)]
+    pub direct_samples: u32,
+    /// Gather: sample pairs per irradiance-cache record.
+    #[arg(long, value_name = "N", default_value_t = 1024, help_heading = PICTURE)]
+    pub cache_samples: u32,
 }
 
 /// Picture size and sampling, shared by `render` and `view`.

@@ -424,7 +424,7 @@ fn view(a: ViewArgs) -> Result<()> {
         .unwrap_or_else(|| default_output(&a.file.to_string_lossy(), "png"));
     ImageFormat::from_path(&out)?;
     settings::check_output(&out)?;
-    let params = settings::image(&a.image, 1, 4)?;
+    let params = settings::image(&a.image, 1, if a.gather { 16 } else { 4 })?;
     if !matches!(
         FileFormat::from_path(&a.file),
         Some(FileFormat::Glb | FileFormat::Gltf)
@@ -434,11 +434,40 @@ fn view(a: ViewArgs) -> Result<()> {
             a.file.display()
         );
     }
-    let baked = BakedView::load(&a.file)?;
+    if a.gather && a.direct_samples == 0 {
+        anyhow::bail!("--direct-samples 0: at least one shadow ray per sample is needed");
+    }
+    let which = if a.gather {
+        radiosity::scene::gltf::VertexValues::Radiosity
+    } else {
+        radiosity::scene::gltf::VertexValues::Colour
+    };
+    let baked = BakedView::load_values(&a.file, which)?;
     for w in &baked.scene.warnings {
         eprintln!("radiosity: warning: {w}");
     }
     let camera = settings::camera(baked.default_camera(), &a.camera)?;
+    if a.gather {
+        let image = baked.render_gather(
+            &camera,
+            &params,
+            radiosity::render::gather::GatherParams {
+                direct: a.direct_samples,
+                cache_samples: a.cache_samples,
+                ..Default::default()
+            },
+            &Silent,
+        );
+        write_image(&out, &image, auto_exposure(&image)).context("writing the image")?;
+        println!(
+            "wrote       {} ({}×{}, final gather over the baked radiosity of {} triangles)",
+            out.display(),
+            params.width,
+            params.height,
+            baked.mesh.patches.len()
+        );
+        return Ok(());
+    }
     let image = baked.render(&camera, &params, &Silent);
     write_image(&out, &image, 1.0).context("writing the image")?;
     println!(

@@ -9,6 +9,7 @@ use crate::color::Rgb;
 use crate::geom::Vec3;
 use crate::mesh::{Mesh, MeshParams};
 use crate::observe::Observer;
+use crate::scene::gltf::VertexValues;
 use crate::scene::{Camera, Scene};
 use crate::Error;
 use std::path::Path;
@@ -29,7 +30,18 @@ pub struct BakedView {
 impl BakedView {
     /// Read a baked `.glb` or `.gltf` whose primitives all carry `COLOR_0`.
     pub fn load(path: &Path) -> Result<Self, Error> {
-        let (scene, colours) = crate::scene::gltf::load_vertex_colours(path)?;
+        Self::load_values(path, VertexValues::Colour)
+    }
+
+    /// Read a baked file's `COLOR_0` (shown as is) or its `_RADIOSITY` (for the final
+    /// gather: [`BakedView::render_gather`]).
+    pub fn load_values(path: &Path, which: VertexValues) -> Result<Self, Error> {
+        let (scene, colours) = crate::scene::gltf::load_vertex_values(path, which)?;
+        // Shown as is, COLOR_0 is a radiance times π; the radiosity is used as it is.
+        let scale = match which {
+            VertexValues::Colour => std::f64::consts::PI,
+            VertexValues::Radiosity => 1.0,
+        };
         scene.validate_geometry()?;
         let mesh = Mesh::build(&scene, MeshParams::Faces)?;
         // Each triangle is one patch; give its vertices the colours of the polygon's corners.
@@ -40,7 +52,7 @@ impl BakedView {
                 let at = mesh.vertices[v as usize];
                 let j = poly.vertices.iter().position(|q| *q == at).unwrap_or(0);
                 // The renderer shows radiance B/π; scale by π so that pixels are COLOR_0.
-                values[v as usize] = colours[p.surface as usize][j] * std::f64::consts::PI;
+                values[v as usize] = colours[p.surface as usize][j] * scale;
             }
         }
         let bvh = Bvh::build(&mesh);
@@ -57,6 +69,27 @@ impl BakedView {
         self.scene
             .camera
             .unwrap_or_else(|| super::camera::default_camera(&self.bvh, Vec3::Y))
+    }
+
+    /// Final gather over the baked radiosity (a file read with [`VertexValues::Radiosity`]):
+    /// reflectance and emission from the materials `solve` baked, the indirect light from the
+    /// baked `_RADIOSITY` ([`crate::render::gather`]).
+    pub fn render_gather(
+        &self,
+        camera: &Camera,
+        params: &RenderParams,
+        gather: super::gather::GatherParams,
+        observer: &dyn Observer,
+    ) -> Image {
+        let system = crate::pipeline::patch_system(&self.scene, &self.mesh);
+        let surfaces = super::light::Surfaces {
+            mesh: &self.mesh,
+            bvh: &self.bvh,
+            reflectance: &system.reflectance,
+            emission: &system.emission,
+        };
+        super::gather::Gather::new(surfaces, &self.vertex_values, gather)
+            .render(camera, params, observer)
     }
 
     /// Render the vertex colours from `camera`.

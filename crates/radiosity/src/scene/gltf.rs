@@ -435,9 +435,43 @@ pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
 /// `COLOR_0` of its three corners, in the polygon's vertex order. Every primitive must have
 /// `COLOR_0` (VEC3 or VEC4; alpha is ignored).
 pub fn load_vertex_colours(path: &Path) -> Result<(Scene, Vec<[Rgb; 3]>), SceneError> {
-    let mut colours = Vec::new();
-    let scene = read_scene(path, false, Some(&mut colours))?;
-    Ok((scene, colours))
+    load_vertex_values(path, VertexValues::Colour)
+}
+
+/// Which per-vertex values of a baked file to read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VertexValues {
+    /// `COLOR_0`: the display colour.
+    Colour,
+    /// `_RADIOSITY`: the linear radiosity B that `radiosity solve` bakes beside it.
+    Radiosity,
+}
+
+impl VertexValues {
+    fn name(self) -> &'static str {
+        match self {
+            VertexValues::Colour => "COLOR_0",
+            VertexValues::Radiosity => "_RADIOSITY",
+        }
+    }
+
+    fn semantic(self) -> ::gltf::Semantic {
+        match self {
+            VertexValues::Colour => ::gltf::Semantic::Colors(0),
+            VertexValues::Radiosity => ::gltf::Semantic::Extras("RADIOSITY".into()),
+        }
+    }
+}
+
+/// The scene of a baked file and, for each of its triangles (polygons), the values at its
+/// three corners.
+pub fn load_vertex_values(
+    path: &Path,
+    which: VertexValues,
+) -> Result<(Scene, Vec<[Rgb; 3]>), SceneError> {
+    let mut values = Vec::new();
+    let scene = read_scene(path, false, Some((&mut values, which)))?;
+    Ok((scene, values))
 }
 
 /// What the `gltf` crate's validation lets through and its accessors then unwrap (a panic on a
@@ -517,8 +551,12 @@ fn check_references(path: &Path, json: &[u8]) -> Result<(), SceneError> {
 fn read_scene(
     path: &Path,
     one_sided: bool,
-    mut colours: Option<&mut Vec<[Rgb; 3]>>,
+    colours: Option<(&mut Vec<[Rgb; 3]>, VertexValues)>,
 ) -> Result<Scene, SceneError> {
+    let (mut colours, which) = match colours {
+        Some((c, w)) => (Some(c), w),
+        None => (None, VertexValues::Colour),
+    };
     let bytes = crate::io::read_input(path).map_err(|source| SceneError::Io {
         path: path.to_path_buf(),
         source,
@@ -704,32 +742,32 @@ fn read_scene(
                     .map(|i| [indices[0], indices[i], indices[i + 1]])
                     .collect(),
             };
-            let corner_colours: Option<Vec<Rgb>> =
-                match (&colours, prim.get(&::gltf::Semantic::Colors(0))) {
-                    (None, _) => None,
-                    (Some(_), None) => {
+            let corner_colours: Option<Vec<Rgb>> = match (&colours, prim.get(&which.semantic())) {
+                (None, _) => None,
+                (Some(_), None) => {
+                    return Err(invalid(
+                        path,
+                        format!("{what} has no {} vertex values to show", which.name()),
+                    ))
+                }
+                (Some(_), Some(acc)) => {
+                    let (c, dims) = r.read(&acc, &format!("{what}.{}", which.name()))?;
+                    if c.len() / dims.max(1) != nverts || dims < 3 {
                         return Err(invalid(
                             path,
-                            format!("{what} has no COLOR_0 vertex colours to show"),
-                        ))
-                    }
-                    (Some(_), Some(acc)) => {
-                        let (c, dims) = r.read(&acc, &format!("{what}.COLOR_0"))?;
-                        if c.len() / dims.max(1) != nverts || dims < 3 {
-                            return Err(invalid(
-                                path,
-                                format!(
-                                "{what}: COLOR_0 must be VEC3 or VEC4 with one colour per vertex"
+                            format!(
+                                "{what}: {} must be VEC3 or VEC4 with one value per vertex",
+                                which.name()
                             ),
-                            ));
-                        }
-                        Some(
-                            c.chunks_exact(dims)
-                                .map(|c| Rgb::new(c[0], c[1], c[2]))
-                                .collect(),
-                        )
+                        ));
                     }
-                };
+                    Some(
+                        c.chunks_exact(dims)
+                            .map(|c| Rgb::new(c[0], c[1], c[2]))
+                            .collect(),
+                    )
+                }
+            };
             // A baked or unlit material's COLOR_0 is light, not reflectance: expected, not lost.
             let baked = prim.material().unlit() || baked_material(&prim.material()).is_some();
             if colours.is_none() && !baked && prim.get(&::gltf::Semantic::Colors(0)).is_some() {
