@@ -337,7 +337,7 @@ pub struct FuzzArgs {
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]
     pub seed: u64,
     /// Only these parsers: obj, mtl, mgf, gltf, glb, ply-ascii, ply-binary, matrix-market,
-    /// patches-csv, vs3, vs3a, bc-csv, options (default: all).
+    /// patches-csv, vs3, vs3a, bc-csv, pfm, options (default: all).
     #[arg(long, value_name = "P,P,…", value_delimiter = ',', help_heading = RUN)]
     pub targets: Vec<String>,
     /// Scratch folder for the cases (inputs that made a parser panic are kept there).

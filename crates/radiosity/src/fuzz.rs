@@ -42,11 +42,13 @@ pub enum Target {
     Vs3a,
     /// The thermal boundary-condition table (`bc.csv`).
     BoundaryCsv,
+    /// A PFM image (a picture benchmark's reference).
+    Pfm,
 }
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 12] = [
+    pub const ALL: [Target; 13] = [
         Target::Obj,
         Target::Mtl,
         Target::Mgf,
@@ -59,6 +61,7 @@ impl Target {
         Target::Vs3,
         Target::Vs3a,
         Target::BoundaryCsv,
+        Target::Pfm,
     ];
 
     /// Its name.
@@ -76,6 +79,7 @@ impl Target {
             Target::Vs3 => "vs3",
             Target::Vs3a => "vs3a",
             Target::BoundaryCsv => "bc-csv",
+            Target::Pfm => "pfm",
         }
     }
 }
@@ -131,6 +135,13 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
         Target::Vs3 => vec![s("box.vs3", VS3)],
         Target::Vs3a => vec![s("room.vs3", VS3A)],
         Target::BoundaryCsv => vec![s("bc.csv", BC)],
+        Target::Pfm => vec![("ref.pfm".into(), {
+            let mut b = b"PF\n2 2\n-1.0\n".to_vec();
+            for k in 0..12u32 {
+                b.extend_from_slice(&(k as f32 * 0.25).to_le_bytes());
+            }
+            b
+        })],
     }
 }
 
@@ -242,6 +253,7 @@ fn parse(target: Target, dir: &Path) -> bool {
         Target::Vs3 => scene("box.vs3"),
         Target::Vs3a => scene("room.vs3"),
         Target::BoundaryCsv => crate::thermal::read_boundary_csv(&dir.join("bc.csv")).is_ok(),
+        Target::Pfm => crate::render::compare::read_pfm(&dir.join("ref.pfm")).is_ok(),
         Target::MatrixMarket | Target::PatchesCsv => {
             let m = matrix_market::read(&dir.join("f.mtx"));
             let p = patches_csv::read(&dir.join("p.csv"));
