@@ -1,0 +1,154 @@
+"""Diffuse global illumination and view factors by the radiosity method, from Python.
+
+The engine is the Rust library `radiosity`; this package drives it and hands results to NumPy.
+Meshing, form factors, solves and rendering run with the GIL released.
+
+    import radiosity
+    s = radiosity.solve(radiosity.builtin("cornell"), patches=2000)
+    s.radiosity          # (N, 3) NumPy array
+    s.render(256, 256)   # (256, 256, 3) float32 radiance
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Optional, Tuple, Union
+
+import numpy as np
+
+from . import _native
+from ._native import Scene, Solution, builtin, load, methods
+
+__all__ = [
+    "Scene",
+    "Solution",
+    "builtin",
+    "load",
+    "solve",
+    "form_factors",
+    "solve_system",
+    "methods",
+]
+
+Progress = Optional[Callable[[str, int, int], Any]]
+
+
+def solve(
+    scene: Scene,
+    solver: str = "progressive",
+    patches: int = 10000,
+    tolerance: float = 0.01,
+    seed: int = 1,
+    threads: Optional[int] = None,
+    form_factor_method: str = "monte-carlo",
+    rays: int = 256,
+    max_iterations: Optional[int] = None,
+    trace: bool = False,
+    progress: Progress = None,
+) -> Solution:
+    """Solve `scene` as `radiosity solve` does: about `patches` patches, form factors by
+    `form_factor_method` (Monte Carlo rows on demand with `rays` rays for an average shooter),
+    `solver` until the unshot energy is `tolerance` of the emitted energy. Same seed, same
+    numbers as the CLI. `progress(stage, done, total)` is called now and then."""
+    return _native.solve(
+        scene,
+        solver=solver,
+        patches=patches,
+        tolerance=tolerance,
+        seed=seed,
+        threads=threads,
+        form_factor_method=form_factor_method,
+        rays=rays,
+        max_iterations=max_iterations,
+        trace=trace,
+        progress=progress,
+    )
+
+
+def form_factors(
+    scene: Scene,
+    method: str = "monte-carlo",
+    patches: Optional[int] = None,
+    faces: bool = False,
+    rays: int = 1_000_000,
+    resolution: int = 128,
+    samples: int = 16,
+    seed: int = 1,
+    with_areas: bool = False,
+):
+    """The view-factor matrix F of `scene` (rows per patch, or per input face with
+    `faces=True`): a `scipy.sparse.csr_matrix` when SciPy is installed, else the CSR arrays
+    `(data, indices, indptr, shape)`. With `with_areas=True`, `(F, areas)`."""
+    data, indices, indptr, shape, areas = _native.form_factors_csr(
+        scene,
+        method=method,
+        patches=patches,
+        faces=faces,
+        rays=rays,
+        resolution=resolution,
+        samples=samples,
+        seed=seed,
+    )
+    try:
+        import scipy.sparse as sp
+
+        f: Any = sp.csr_matrix((data, indices.astype(np.int64), indptr.astype(np.int64)), shape=shape)
+    except ImportError:
+        f = (data, indices, indptr, shape)
+    return (f, areas) if with_areas else f
+
+
+def _csr(f: Any, n: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """CSR arrays (float64 data, int64 indices and indptr) of a SciPy sparse matrix or a dense
+    array."""
+    if hasattr(f, "tocsr"):
+        c = f.tocsr()
+        if c.shape != (n, n):
+            raise ValueError(f"F: shape {c.shape}; expected ({n}, {n}) for {n} areas")
+        return (
+            np.asarray(c.data, dtype=np.float64),
+            np.asarray(c.indices, dtype=np.int64),
+            np.asarray(c.indptr, dtype=np.int64),
+        )
+    a = np.asarray(f, dtype=np.float64)
+    if a.shape != (n, n):
+        raise ValueError(f"F: shape {a.shape}; expected ({n}, {n}) for {n} areas")
+    rows, cols = np.nonzero(a)
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.add.at(indptr, rows + 1, 1)
+    return a[rows, cols], cols.astype(np.int64), np.cumsum(indptr)
+
+
+def solve_system(
+    F: Any,
+    area: Any,
+    reflectance: Any,
+    emission: Any,
+    solver: str = "gauss-seidel",
+    tolerance: float = 1e-6,
+    max_iterations: Optional[int] = None,
+    seed: int = 1,
+    trace: bool = True,
+    progress: Progress = None,
+) -> Tuple[np.ndarray, Optional[dict]]:
+    """Solve `B = E + diag(ρ) F B` for a matrix you bring (SciPy sparse or dense NumPy, N × N),
+    areas (N,), reflectance and emission (N,) or (N, 3). Returns `B` (N, 3) and, with
+    `trace=True`, the eq. 22 trace as a dict of arrays (`iteration`, `seconds`, `error`,
+    `unshot`)."""
+    area = np.ascontiguousarray(area, dtype=np.float64)
+    if area.ndim != 1:
+        raise ValueError(f"area: shape {area.shape}; expected (N,)")
+    data, indices, indptr = _csr(F, area.shape[0])
+    return _native.solve_system_csr(
+        np.ascontiguousarray(data),
+        np.ascontiguousarray(indices),
+        np.ascontiguousarray(indptr),
+        area,
+        np.ascontiguousarray(reflectance, dtype=np.float64),
+        np.ascontiguousarray(emission, dtype=np.float64),
+        solver=solver,
+        tolerance=tolerance,
+        max_iterations=max_iterations,
+        seed=seed,
+        trace=trace,
+        progress=progress,
+    )

@@ -1,0 +1,94 @@
+from typing import Any, Callable, Optional, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+Progress = Optional[Callable[[str, int, int], Any]]
+
+class Scene:
+    @staticmethod
+    def from_arrays(
+        vertices: npt.ArrayLike,
+        faces: npt.ArrayLike,
+        reflectance: npt.ArrayLike,
+        emission: npt.ArrayLike,
+        name: str = "arrays",
+    ) -> Scene: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def polygons(self) -> int: ...
+    @property
+    def materials(self) -> list[str]: ...
+
+class Solution:
+    @property
+    def centres(self) -> np.ndarray: ...
+    @property
+    def normals(self) -> np.ndarray: ...
+    @property
+    def areas(self) -> np.ndarray: ...
+    @property
+    def radiosity(self) -> np.ndarray: ...
+    @property
+    def unshot(self) -> np.ndarray: ...
+    @property
+    def reflectance(self) -> np.ndarray: ...
+    @property
+    def emission(self) -> np.ndarray: ...
+    @property
+    def surfaces(self) -> np.ndarray: ...
+    @property
+    def info(self) -> dict[str, Any]: ...
+    @property
+    def trace(self) -> Optional[dict[str, np.ndarray]]: ...
+    def render(
+        self,
+        width: int = 512,
+        height: int = 512,
+        spp: Optional[int] = None,
+        integrator: str = "radiosity",
+        seed: int = 1,
+        progress: Progress = None,
+    ) -> np.ndarray: ...
+    def save(self, path: str) -> None: ...
+
+def builtin(name: str) -> Scene: ...
+def load(path: str, one_sided: bool = False) -> Scene: ...
+def methods() -> dict[str, list[str]]: ...
+def solve(
+    scene: Scene,
+    solver: str = "progressive",
+    patches: int = 10000,
+    tolerance: float = 0.01,
+    seed: int = 1,
+    threads: Optional[int] = None,
+    form_factor_method: str = "monte-carlo",
+    rays: int = 256,
+    max_iterations: Optional[int] = None,
+    trace: bool = False,
+    progress: Progress = None,
+) -> Solution: ...
+def form_factors(
+    scene: Scene,
+    method: str = "monte-carlo",
+    patches: Optional[int] = None,
+    faces: bool = False,
+    rays: int = 1_000_000,
+    resolution: int = 128,
+    samples: int = 16,
+    seed: int = 1,
+    with_areas: bool = False,
+) -> Any: ...
+def solve_system(
+    F: Any,
+    area: npt.ArrayLike,
+    reflectance: npt.ArrayLike,
+    emission: npt.ArrayLike,
+    solver: str = "gauss-seidel",
+    tolerance: float = 1e-6,
+    max_iterations: Optional[int] = None,
+    seed: int = 1,
+    trace: bool = True,
+    progress: Progress = None,
+) -> Tuple[np.ndarray, Optional[dict[str, np.ndarray]]]: ...

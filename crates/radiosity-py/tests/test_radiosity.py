@@ -1,0 +1,169 @@
+"""The Python bindings against closed forms, NumPy and the CLI."""
+
+import csv
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+import radiosity
+
+REPO = pathlib.Path(__file__).resolve().parents[3]
+FURNACE_RHO = np.array([0.3, 0.5, 0.7])
+
+
+def test_furnace_closed_form():
+    # Every surface emits 1 and reflects ρ in a closed box: B = E / (1 − ρ). Gathering by rows
+    # (Jacobi), whose Monte Carlo estimates each sum to 1 exactly in a closed box, has that
+    # as its fixed point for any such F: exact up to the tolerance.
+    s = radiosity.solve(radiosity.builtin("furnace"), solver="jacobi", patches=500, tolerance=1e-9)
+    assert s.info["converged"]
+    expected = 1.0 / (1.0 - FURNACE_RHO)
+    assert np.allclose(s.radiosity, expected, rtol=1e-6)
+    assert s.areas.shape == (s.radiosity.shape[0],)
+    assert s.centres.shape == s.normals.shape == s.radiosity.shape
+
+
+def random_reciprocal(n, seed):
+    # F_ij = A_j G_ij with G symmetric, rows scaled to sum below 1: reciprocal and
+    # diagonally dominant (the papers' row-dominant random systems).
+    rng = np.random.default_rng(seed)
+    area = rng.uniform(0.5, 2.0, n)
+    g = rng.uniform(0.0, 1.0, (n, n))
+    g = (g + g.T) / 2
+    np.fill_diagonal(g, 0.0)
+    f = g * area[None, :]
+    f /= f.sum(axis=1).max() * 1.05
+    rho = rng.uniform(0.1, 0.9, (n, 3))
+    e = np.zeros((n, 3))
+    e[: n // 10 + 1] = rng.uniform(0.5, 2.0, (n // 10 + 1, 3))
+    return f, area, rho, e
+
+
+@pytest.mark.parametrize(
+    "solver",
+    ["gauss", "jacobi", "gauss-seidel", "sor", "southwell", "progressive", "overshoot-ambient", "overshoot"],
+)
+def test_solve_system_matches_numpy(solver):
+    f, area, rho, e = random_reciprocal(60, 7)
+    b, trace = radiosity.solve_system(f, area, rho, e, solver=solver, tolerance=1e-10)
+    for c in range(3):
+        exact = np.linalg.solve(np.eye(60) - rho[:, c, None] * f, e[:, c])
+        # F is stored in f32: the solution is exact for the rounded matrix.
+        assert np.allclose(b[:, c], exact, rtol=1e-5, atol=1e-7), solver
+    assert trace is not None and len(trace["iteration"]) > 0
+    assert np.all(np.isfinite(trace["error"]))
+
+
+def test_solve_system_takes_scipy_sparse():
+    sp = pytest.importorskip("scipy.sparse", reason="SciPy is installed by .ci/run")
+    f, area, rho, e = random_reciprocal(40, 3)
+    b_dense, _ = radiosity.solve_system(f, area, rho, e, solver="gauss", trace=False)
+    b_sparse, t = radiosity.solve_system(sp.csr_matrix(f), area, rho, e, solver="gauss", trace=False)
+    assert t is None
+    assert np.array_equal(b_dense, b_sparse)
+
+
+def box(size=1.0):
+    # A closed cube, faces wound inward, the top face emitting.
+    v = np.array([[x, y, z] for z in (0, size) for y in (0, size) for x in (0, size)], dtype=float)
+    # Wound so that each normal (v1 − v0) × (v2 − v0) points into the box.
+    faces = np.array(
+        [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    )
+    rho = np.full(6, 0.5)
+    e = np.zeros(6)
+    e[1] = 1.0
+    return v, faces, rho, e
+
+
+def test_from_arrays_round_trip():
+    v, faces, rho, e = box(2.0)
+    scene = radiosity.Scene.from_arrays(v, faces, rho, e)
+    assert scene.polygons == 6
+    s = radiosity.solve(scene, patches=600, tolerance=1e-6)
+    # Every face is 2 × 2; the patches tile it.
+    assert np.isclose(s.areas.sum(), 24.0, rtol=1e-5)
+    per_face = np.bincount(s.surfaces, weights=s.areas, minlength=6)
+    assert np.allclose(per_face, 4.0, rtol=1e-5)
+    # Closed box: the emitted power is absorbed.
+    info = s.info
+    assert abs(info["absorbed"] + info["unshot"] - info["emitted"]) < 1e-6 * info["emitted"]
+    # The faces' inward normals.
+    assert np.allclose(np.linalg.norm(s.normals, axis=1), 1.0, atol=1e-6)
+
+
+def test_bad_input_raises_value_error_naming_the_argument():
+    v, faces, rho, e = box()
+    with pytest.raises(ValueError, match="vertices"):
+        radiosity.Scene.from_arrays(v[:, :2], faces, rho, e)
+    with pytest.raises(ValueError, match="reflectance"):
+        radiosity.Scene.from_arrays(v, faces, np.full(6, 1.0), e)
+    with pytest.raises(ValueError, match="emission"):
+        radiosity.Scene.from_arrays(v, faces, rho, np.zeros(5))
+    with pytest.raises(ValueError, match="faces"):
+        radiosity.Scene.from_arrays(v, faces + 10, rho, e)
+    f, area, rho3, e3 = random_reciprocal(10, 1)
+    with pytest.raises(ValueError, match="reflectance"):
+        radiosity.solve_system(f, area, np.full(10, 1.5), e3)
+    with pytest.raises(ValueError, match="F: shape"):
+        radiosity.solve_system(f[:5], area, rho3, e3)
+    with pytest.raises(ValueError, match="solver"):
+        radiosity.solve(radiosity.builtin("furnace"), solver="nope")
+    with pytest.raises(ValueError, match="not a built-in scene"):
+        radiosity.builtin("nope")
+
+
+def cli():
+    exe = os.environ.get("RADIOSITY_BIN", str(REPO / "target" / "release" / "radiosity"))
+    if not pathlib.Path(exe).exists():
+        pytest.fail(f"the CLI binary {exe} is missing: build it (cargo build --release) or set RADIOSITY_BIN")
+    return exe
+
+
+def test_same_numbers_as_the_cli(tmp_path):
+    out = tmp_path / "c.csv"
+    subprocess.run(
+        [cli(), "solve", "cornell", "--patches", "800", "--seed", "5", "--out", str(out)],
+        check=True,
+        capture_output=True,
+    )
+    with open(out) as fh:
+        rows = list(csv.DictReader(fh))
+    cli_b = np.array([[float(r[f"radiosity_{c}"]) for c in "rgb"] for r in rows])
+    s = radiosity.solve(radiosity.builtin("cornell"), patches=800, seed=5)
+    assert s.radiosity.shape == cli_b.shape
+    # The CSV holds shortest round-trip decimals: equal to the bit.
+    assert np.array_equal(s.radiosity, cli_b)
+
+
+def test_form_factors_rows_and_reciprocity():
+    v, faces, rho, e = box()
+    scene = radiosity.Scene.from_arrays(v, faces, rho, e)
+    f, areas = radiosity.form_factors(scene, method="analytic", faces=True, with_areas=True)
+    dense = f.toarray() if hasattr(f, "toarray") else None
+    assert dense is not None, "SciPy is installed by .ci/run"
+    # A cube's faces: opposite 0.1998248957, adjacent 0.2000437761 (Howell).
+    assert np.allclose(dense.sum(axis=1), 1.0, atol=1e-6)
+    assert np.isclose(dense[0, 1], 0.1998248957, atol=1e-6)
+    assert np.allclose(areas[:, None] * dense, (areas[:, None] * dense).T, atol=1e-6)
+
+
+def test_render_and_progress():
+    seen = []
+    s = radiosity.solve(radiosity.builtin("furnace"), patches=300, tolerance=1e-6)
+    img = s.render(16, 12, integrator="gather", spp=4, progress=lambda st, d, t: seen.append(st))
+    assert img.shape == (12, 16, 3) and img.dtype == np.float32
+    exact = 1.0 / (np.pi * (1.0 - FURNACE_RHO))
+    assert np.allclose(img.reshape(-1, 3).mean(axis=0), exact, rtol=0.02)
+    assert "render" in seen
+
+
+def test_progress_callback_exception_propagates():
+    def boom(stage, done, total):
+        raise KeyboardInterrupt("stop")
+
+    with pytest.raises(KeyboardInterrupt):
+        radiosity.solve(radiosity.builtin("cornell"), patches=300, progress=boom)
