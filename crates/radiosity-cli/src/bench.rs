@@ -64,7 +64,7 @@ fn solvers(sizes: &[usize], runs: usize) -> Result<()> {
             for _ in 0..runs {
                 let t = Instant::now();
                 let mut s = radiosity::solve::start(method, system, &mut f, &params)?;
-                let info = radiosity::solve::run(&mut *s, &mut f, &params, false, &mut |_, _| {});
+                let info = radiosity::solve::run(&mut *s, &mut f, &params, false, &mut |_, _| true);
                 times.push(t.elapsed().as_secs_f64());
                 done = info.iterations;
             }

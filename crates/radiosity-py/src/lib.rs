@@ -5,8 +5,9 @@
 //! Arrays go to NumPy with one copy (from the library's `Vec<Rgb>` into a fresh array); the
 //! GIL is released during meshing, form factors, solves and rendering; a progress callback,
 //! when given, is called with the GIL taken back, at most every 50 ms, and an exception it
-//! raises (KeyboardInterrupt included) is raised by the call; without one, Ctrl-C is noticed
-//! at the same points and raised when the stage returns. Library errors become `ValueError`
+//! raises (KeyboardInterrupt included) stops a solve at its next iteration and is raised by the
+//! call; without one, Ctrl-C is noticed at the same points and does the same. (Meshing, form
+//! factors computed up front and rendering run to their end first.) Library errors become `ValueError`
 //! (bad input), `MemoryError` (too large) or `RuntimeError`, with the library's one-line
 //! message.
 
@@ -24,6 +25,7 @@ use radiosity::pipeline::{self, Settings};
 use radiosity::scene::{Material, Polygon, Scene as RScene};
 use radiosity::solve::{Solver, SolverParams};
 use radiosity::system::{SparseMatrix, System};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -210,6 +212,8 @@ fn load(py: Python<'_>, path: &str, one_sided: bool) -> PyResult<Scene> {
 struct Progress {
     callback: Option<Py<PyAny>>,
     last: Mutex<(Instant, Option<PyErr>)>,
+    /// Set with the first exception: solves stop at their next iteration.
+    stop: AtomicBool,
 }
 
 impl Progress {
@@ -217,6 +221,7 @@ impl Progress {
         Self {
             callback,
             last: Mutex::new((Instant::now() - Duration::from_secs(1), None)),
+            stop: AtomicBool::new(false),
         }
     }
 
@@ -226,10 +231,17 @@ impl Progress {
 }
 
 impl Observer for Progress {
+    fn cancelled(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+
     fn event(&self, e: Event<'_>) {
         let (stage, done, total) = match e {
             Event::Progress { stage, done, total } => (stage, done, total),
             Event::Stage(stage) => (stage, 0, 0),
+            // A solve's iterations: reported as (solve, iterations, 0), and where Ctrl-C is
+            // noticed during a long solve.
+            Event::Solve(status, _) => (Stage::Solve, status.iterations.max(1), 0),
             _ => return,
         };
         let Ok(mut last) = self.last.lock() else {
@@ -247,6 +259,7 @@ impl Observer for Progress {
             Python::with_gil(|py| {
                 if let Err(err) = py.check_signals() {
                     last.1 = Some(err);
+                    self.stop.store(true, Ordering::Relaxed);
                 }
             });
             return;
@@ -262,6 +275,7 @@ impl Observer for Progress {
         Python::with_gil(|py| {
             if let Err(err) = cb.call1(py, (name, done, total)) {
                 last.1 = Some(err);
+                self.stop.store(true, Ordering::Relaxed);
             }
         });
     }
@@ -529,7 +543,7 @@ fn trace_dict<'py>(py: Python<'py>, csv: &str) -> PyResult<Bound<'py, PyDict>> {
 
 /// Solve a scene (the CLI's `solve`): mesh, form factors, the solver.
 #[pyfunction]
-#[pyo3(signature = (scene, solver = "progressive", patches = 10000, tolerance = 0.01, seed = 1, threads = None, form_factor_method = "monte-carlo", rays = 256, max_iterations = None, trace = false, progress = None))]
+#[pyo3(signature = (scene, solver = "progressive", patches = 10000, tolerance = 0.01, seed = 1, threads = None, form_factor_method = "monte-carlo", rays = 256, max_iterations = None, trace = false, progress = None, omega = 1.1, photons = 1000, iteration_rays = 16, resolution = 128, samples = 16))]
 #[allow(clippy::too_many_arguments)]
 fn solve(
     py: Python<'_>,
@@ -544,6 +558,11 @@ fn solve(
     max_iterations: Option<u64>,
     trace: bool,
     progress: Option<Py<PyAny>>,
+    omega: f64,
+    photons: u32,
+    iteration_rays: u32,
+    resolution: u32,
+    samples: u32,
 ) -> PyResult<Solution> {
     if patches == 0 {
         return Err(value_error("patches: at least one patch is needed"));
@@ -558,6 +577,8 @@ fn solve(
         form_factors: FormFactorParams {
             method: method_by_name(form_factor_method)?,
             rays,
+            resolution,
+            samples,
             seed,
             ..FormFactorParams::shooting()
         },
@@ -566,11 +587,15 @@ fn solve(
             tolerance,
             max_iterations: max_iterations.unwrap_or(u64::MAX),
             seed,
+            omega,
+            photons,
+            iteration_rays,
             ..SolverParams::default()
         },
         trace,
         ..Settings::default()
     };
+    settings.form_factors.validate().map_err(value_error)?;
     let observer = Progress::new(progress);
     let run = |s: &RScene| pipeline::solve(s, &settings, &observer);
     let result = match threads {

@@ -42,10 +42,14 @@ def random_reciprocal(n, seed):
     return f, area, rho, e
 
 
-@pytest.mark.parametrize(
-    "solver",
-    ["gauss", "jacobi", "gauss-seidel", "sor", "southwell", "progressive", "overshoot-ambient", "overshoot"],
-)
+DETERMINISTIC = [s for s in radiosity.methods()["solvers"] if not s.startswith("stochastic")]
+
+
+def test_every_deterministic_solver_is_listed():
+    assert len(DETERMINISTIC) == 10
+
+
+@pytest.mark.parametrize("solver", DETERMINISTIC)
 def test_solve_system_matches_numpy(solver):
     f, area, rho, e = random_reciprocal(60, 7)
     b, trace = radiosity.solve_system(f, area, rho, e, solver=solver, tolerance=1e-10)
@@ -161,9 +165,25 @@ def test_render_and_progress():
     assert "render" in seen
 
 
-def test_progress_callback_exception_propagates():
-    def boom(stage, done, total):
-        raise KeyboardInterrupt("stop")
+def test_an_interrupt_stops_a_long_solve():
+    # A solve that would run for minutes (a 1e-12 tolerance on 20,000 patches) stops at the
+    # first report after the callback raises, and the exception comes out.
+    import time
 
+    calls = []
+
+    def interrupt(stage, done, total):
+        calls.append(stage)
+        if stage == "solve" and done > 10:
+            raise KeyboardInterrupt("stop")
+
+    t = time.perf_counter()
     with pytest.raises(KeyboardInterrupt):
-        radiosity.solve(radiosity.builtin("cornell"), patches=300, progress=boom)
+        radiosity.solve(radiosity.builtin("cornell"), patches=20000, tolerance=1e-12, progress=interrupt)
+    assert time.perf_counter() - t < 30
+    assert "solve" in calls
+
+
+def test_method_parameters_reach_the_solver():
+    with pytest.raises(ValueError, match="ω|omega"):
+        radiosity.solve(radiosity.builtin("furnace"), solver="sor", omega=2.5, patches=100)

@@ -62,6 +62,12 @@ pub enum Event<'a> {
 pub trait Observer: Sync {
     /// Take one event.
     fn event(&self, event: Event<'_>);
+
+    /// True when the caller wants the work stopped: solves check it every iteration and stop
+    /// with the result so far (reported as not converged). Cheap: called often.
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
 
 impl<F: Fn(Event<'_>) + Sync> Observer for F {

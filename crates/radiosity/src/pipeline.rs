@@ -374,7 +374,8 @@ pub fn solve(
         if let Some(t) = trace.as_mut() {
             t.record(s, sv);
         }
-        observer.event(Event::Solve(s, sv))
+        observer.event(Event::Solve(s, sv));
+        !observer.cancelled()
     });
     let mut radiosity = Vec::new();
     solver.radiosity(&mut radiosity);
@@ -487,6 +488,7 @@ pub fn solve_system(
             t.record(s, sv);
         }
         observer.event(Event::Solve(s, sv));
+        !observer.cancelled()
     });
     let mut radiosity = Vec::new();
     state.radiosity(&mut radiosity);

@@ -136,7 +136,7 @@ fn error_after(m: Solver, r: &mut Random, iterations: u64) -> f64 {
         ..Default::default()
     };
     let mut s = start(m, sys, f, &params).unwrap();
-    run(&mut *s, f, &params, false, &mut |_, _| {});
+    run(&mut *s, f, &params, false, &mut |_, _| true);
     let mut b = Vec::new();
     s.radiosity(&mut b);
     relative_error(&exact, &sys.emission, &b)
@@ -220,6 +220,7 @@ fn progressive_attenuation_respects_eq25() {
             );
         }
         last = Some(st.unshot_fraction);
+        true
     });
     assert!(worst < bound);
 }

@@ -44,11 +44,19 @@ def solve(
     max_iterations: Optional[int] = None,
     trace: bool = False,
     progress: Progress = None,
+    omega: float = 1.1,
+    photons: int = 1000,
+    iteration_rays: int = 16,
+    resolution: int = 128,
+    samples: int = 16,
 ) -> Solution:
     """Solve `scene` as `radiosity solve` does: about `patches` patches, form factors by
-    `form_factor_method` (Monte Carlo rows on demand with `rays` rays for an average shooter),
-    `solver` until the unshot energy is `tolerance` of the emitted energy. Same seed, same
-    numbers as the CLI. `progress(stage, done, total)` is called now and then."""
+    `form_factor_method` (Monte Carlo rows on demand with `rays` rays for an average shooter;
+    `resolution` and `samples` for the projection methods), `solver` until the unshot energy is
+    `tolerance` of the emitted energy (`omega` for sor, `photons` for stochastic,
+    `iteration_rays` for stochastic-jacobi). Same seed, same numbers as the CLI.
+    `progress(stage, done, total)` is called now and then; an exception it raises, or Ctrl-C,
+    stops the solve at its next iteration and is raised."""
     return _native.solve(
         scene,
         solver=solver,
@@ -61,6 +69,11 @@ def solve(
         max_iterations=max_iterations,
         trace=trace,
         progress=progress,
+        omega=omega,
+        photons=photons,
+        iteration_rays=iteration_rays,
+        resolution=resolution,
+        samples=samples,
     )
 
 

@@ -68,6 +68,11 @@ def solve(
     max_iterations: Optional[int] = None,
     trace: bool = False,
     progress: Progress = None,
+    omega: float = 1.1,
+    photons: int = 1000,
+    iteration_rays: int = 16,
+    resolution: int = 128,
+    samples: int = 16,
 ) -> Solution: ...
 def form_factors(
     scene: Scene,

@@ -283,7 +283,7 @@ fn solve_to_tolerance(
     params: &SolverParams,
 ) -> Result<crate::solve::Info, ExperimentError> {
     let mut solver = start(method, system, source, params)?;
-    Ok(run(&mut *solver, source, params, false, &mut |_, _| {}))
+    Ok(run(&mut *solver, source, params, false, &mut |_, _| true))
 }
 
 struct Size {

@@ -371,14 +371,15 @@ pub fn start<'s>(
 
 /// Drive `solver` until the unshot energy is at most `params.tolerance` of the emitted energy,
 /// or `params.max_iterations`. `observer` sees the status and the solver before the first
-/// iteration and after each; with `exact_status` every status is exact (see
+/// iteration and after each, and returns false to stop there (the result so far, reported as
+/// not converged unless it is); with `exact_status` every status is exact (see
 /// [`SolverState::unshot_fraction`]), which costs `overshoot` a pass over F per iteration.
 pub fn run(
     solver: &mut dyn SolverState,
     source: &mut dyn Operator,
     params: &SolverParams,
     exact_status: bool,
-    observer: &mut dyn FnMut(&Status, &dyn SolverState),
+    observer: &mut dyn FnMut(&Status, &dyn SolverState) -> bool,
 ) -> Info {
     let mut seconds = 0.0;
     let cap =
@@ -391,9 +392,9 @@ pub fn run(
             unshot_fraction: solver.unshot_fraction(source, exact_status),
             seconds,
         };
-        observer(&status, &*solver);
+        let go_on = observer(&status, &*solver);
         let done = status.unshot_fraction <= params.tolerance;
-        if done || solver.iterations() >= cap {
+        if done || solver.iterations() >= cap || !go_on {
             let converged = done || solver.unshot_fraction(source, true) <= params.tolerance;
             let t = Instant::now();
             if solver.finish(source) {
@@ -461,7 +462,7 @@ pub fn solve(
     params: &SolverParams,
 ) -> Result<(Vec<Rgb>, Info), SolveError> {
     let mut solver = start(method, system, source, params)?;
-    let info = run(&mut *solver, source, params, false, &mut |_, _| {});
+    let info = run(&mut *solver, source, params, false, &mut |_, _| true);
     let mut b = Vec::new();
     solver.radiosity(&mut b);
     Ok((b, info))
