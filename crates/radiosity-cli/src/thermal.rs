@@ -2,23 +2,15 @@
 
 use crate::args::{EnclosureArg, LinearSolverArg, ThermalArgs};
 use anyhow::{bail, Result};
-use radiosity::formfactor::{enforce, summary, Enforce, FormFactorMethod, Params, Storage};
+use radiosity::formfactor::{FormFactorMethod, Params};
 use radiosity::io::FileFormat;
 use radiosity::mesh::MeshParams;
+use radiosity::observe::{Event, Stage};
+use radiosity::pipeline::{Enclosure, ThermalSettings};
 use radiosity::scene::vs3;
-use radiosity::thermal::{
-    self, read_boundary_csv, Boundary, Condition, LinearSolver, ThermalParams, ThermalSystem,
-};
-use std::collections::HashMap;
+use radiosity::thermal::{self, read_boundary_csv, Boundary, Condition, LinearSolver};
 use std::fmt::Write as _;
 use std::path::Path;
-
-/// Default Monte Carlo rays per row for `n` patches: 10⁶ up to 100 patches, then a total of
-/// 10⁸ rays shared out, but at least 10⁴ a row (each facet's irradiation then has a relative
-/// standard error of at most 1 % of the spread of the radiosities it sees).
-pub fn default_rays(n: usize) -> u32 {
-    (1e8 / n.max(1) as f64).clamp(1e4, 1e6) as u32
-}
 
 fn csv_name(name: &str) -> String {
     if name.contains([',', '"', '\n']) {
@@ -87,155 +79,127 @@ pub fn run(a: ThermalArgs) -> Result<()> {
 
     // Boundary conditions by material.
     let rows = read_boundary_csv(&a.boundary)?;
-    let mut used = vec![false; scene.materials.len()];
-    for p in &scene.polygons {
-        used[p.material] = true;
-    }
-    let by_name: HashMap<&str, usize> = scene
-        .materials
+    let boundaries: Vec<Boundary> = rows
         .iter()
-        .enumerate()
-        .filter(|(m, _)| used[*m])
-        .map(|(m, mat)| (mat.name.as_str(), m))
-        .collect();
-    let mut boundary_of = vec![usize::MAX; scene.materials.len()];
-    let mut boundaries = Vec::with_capacity(rows.len());
-    for (k, r) in rows.iter().enumerate() {
-        let Some(&m) = by_name.get(r.name.as_str()) else {
-            let combined = vs3.as_ref().and_then(|v| {
-                v.surfaces
+        .map(|r| {
+            // Empty emissivity: the scene's own (View3D's emit column, or 1 − mean ρ).
+            let emissivity = r.emissivity.unwrap_or_else(|| {
+                scene
+                    .materials
                     .iter()
-                    .find(|s| s.name == r.name && s.combined_into.is_some())
-                    .map(|s| v.surfaces[s.combined_into.unwrap_or(0)].name.clone())
+                    .find(|m| m.name == r.name)
+                    .map_or(1.0, |m| {
+                        let rho = m.reflectance;
+                        1.0 - (rho.r + rho.g + rho.b) / 3.0
+                    })
             });
-            let hint = match combined {
-                Some(t) => format!("it is combined into '{t}' (cmb); name that surface"),
-                None => {
-                    let mut names: Vec<&str> = by_name.keys().copied().collect();
-                    names.sort_unstable();
-                    let shown = names.len().min(20);
-                    format!(
-                        "the scene's surfaces are: {}{}",
-                        names[..shown].join(", "),
-                        if names.len() > shown {
-                            format!(" and {} more", names.len() - shown)
-                        } else {
-                            String::new()
-                        }
-                    )
-                }
-            };
-            bail!(
-                "{}:{}: unknown surface '{}'; {hint}",
-                a.boundary.display(),
-                r.line,
-                r.name
-            );
-        };
-        let mat = &scene.materials[m];
-        let emissivity = match r.emissivity {
-            Some(e) => e,
-            None => {
-                let rho = mat.reflectance;
-                1.0 - (rho.r + rho.g + rho.b) / 3.0
+            Boundary {
+                emissivity,
+                condition: r.condition,
             }
-        };
-        boundary_of[m] = k;
-        boundaries.push(Boundary {
-            emissivity,
-            condition: r.condition,
-        });
-    }
-    let mut missing: Vec<&str> = (0..scene.materials.len())
-        .filter(|&m| used[m] && boundary_of[m] == usize::MAX)
-        .map(|m| scene.materials[m].name.as_str())
+        })
         .collect();
-    if !missing.is_empty() {
-        missing.sort_unstable();
-        bail!(
-            "{}: no boundary condition for {} surface{}: {} (add a row for each; leave temperature and flux empty for an adiabatic surface)",
-            a.boundary.display(),
-            missing.len(),
-            if missing.len() == 1 { "" } else { "s" },
-            missing.join(", ")
-        );
-    }
+    let named: Vec<(String, Boundary)> = rows
+        .iter()
+        .zip(&boundaries)
+        .map(|(r, b)| (r.name.clone(), *b))
+        .collect();
+    let combined = |name: &str| {
+        vs3.as_ref().and_then(|v| {
+            v.surfaces
+                .iter()
+                .find(|s| s.name == name && s.combined_into.is_some())
+                .map(|s| v.surfaces[s.combined_into.unwrap_or(0)].name.clone())
+        })
+    };
+    let boundary_of = radiosity::pipeline::thermal_boundaries(&scene, &named, &combined)
+        .map_err(|(k, message)| match k {
+            Some(k) => anyhow::anyhow!("{}:{}: {message}", a.boundary.display(), rows[k].line),
+            None => anyhow::anyhow!("{}: {message}", a.boundary.display()),
+        })?;
 
-    // View factors.
+    // View factors and the solve.
     let method = a.method.0;
-    let params = Params {
-        method,
-        resolution: a.resolution,
-        samples: a.samples,
-        seed: a.seed,
-        rays: a.rays.unwrap_or(10_000),
-        ..Params::default()
-    };
-    let rays_for = |n: usize| a.rays.unwrap_or_else(|| default_rays(n));
-    let (mesh, matrix, params, ff_seconds) = crate::view_factors::compute(
-        &scene,
-        mesh_params,
-        params,
-        Storage::Sparse,
-        Some(&rays_for),
-    )?;
-    let n = mesh.len();
-    let unit2 = a.unit.metres().powi(2);
-    let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
-    let before = summary(&matrix, &area);
-    let closed = match a.enclosure {
-        EnclosureArg::Closed => true,
-        EnclosureArg::Open => false,
-        EnclosureArg::Auto => match &vs3 {
-            Some(v) => v.control.enclosure,
-            None => before.min_row_sum >= 0.99,
+    let settings = ThermalSettings {
+        mesh: mesh_params,
+        form_factors: Params {
+            method,
+            resolution: a.resolution,
+            samples: a.samples,
+            seed: a.seed,
+            rays: a.rays.unwrap_or(10_000),
+            ..Params::default()
         },
+        default_rays: a.rays.is_none(),
+        unit_metres: a.unit.metres(),
+        environment: a.environment,
+        enclosure: match a.enclosure {
+            EnclosureArg::Auto => Enclosure::Auto,
+            EnclosureArg::Closed => Enclosure::Closed,
+            EnclosureArg::Open => Enclosure::Open,
+        },
+        enclosure_hint: vs3.as_ref().map(|v| v.control.enclosure),
+        linear: match a.linear_solver {
+            LinearSolverArg::Auto => LinearSolver::Auto,
+            LinearSolverArg::Direct => LinearSolver::Direct,
+            LinearSolverArg::Iterative => LinearSolver::Iterative,
+        },
+        memory_limit: 0,
     };
-    let matrix = enforce(
-        matrix,
-        &area,
-        Enforce {
-            clamp: false,
-            normalize_rows: closed,
-            symmetrize: true,
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} form factors {pos}/{len} rows [{bar:30}] {elapsed_precise} (eta {eta})",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    let outcome = radiosity::pipeline::thermal(
+        &scene,
+        &boundary_of,
+        &boundaries,
+        &settings,
+        &|e: Event<'_>| {
+            if let Event::Progress {
+                stage: Stage::FormFactors,
+                done,
+                total,
+            } = e
+            {
+                bar.set_length(total);
+                bar.set_position(done)
+            }
         },
     );
-    let after = summary(&matrix, &area);
-    let system = ThermalSystem {
-        area: area.iter().map(|a| a * unit2).collect(),
-        group: mesh
-            .patches
-            .iter()
-            .map(|p| boundary_of[p.material as usize] as u32)
-            .collect(),
-        boundaries: boundaries.clone(),
-        environment: a.environment,
-        closed,
-    };
-    let linear = match a.linear_solver {
-        LinearSolverArg::Auto => LinearSolver::Auto,
-        LinearSolverArg::Direct => LinearSolver::Direct,
-        LinearSolverArg::Iterative => LinearSolver::Iterative,
-    };
-    let solution = thermal::solve(
-        &system,
-        &matrix,
-        ThermalParams {
-            linear,
-            memory_limit: radiosity::pipeline::available_memory().unwrap_or(u64::MAX),
-            ..ThermalParams::default()
-        },
-    )
-    .map_err(|e| match e {
-        thermal::ThermalError::Unphysical { group, value } => anyhow::anyhow!(
+    bar.finish_and_clear();
+    let outcome = outcome.map_err(|e| match e {
+        radiosity::Error::Thermal(thermal::ThermalError::Unphysical { group, value }) => anyhow::anyhow!(
             "{}:{}: the flux prescribed for '{}' cannot be met: part of it would need a negative black-body exitance ({value:.4e} W/m²); it takes out more heat than the enclosure can supply",
             a.boundary.display(),
             rows[group].line,
             rows[group].name
         ),
+        radiosity::Error::OutOfMemory { what, needed, limit, .. } => anyhow::anyhow!(
+            "{what} would need about {} MiB but only {} MiB are available; use fewer patches (--patches N, a larger --max-edge, or the default one patch per face)",
+            needed >> 20,
+            limit >> 20
+        ),
         e => e.into(),
     })?;
-    let per = solution.per_boundary(&system);
+    let (mesh, system, solution, per) = (
+        &outcome.mesh,
+        &outcome.system,
+        &outcome.solution,
+        &outcome.per_boundary,
+    );
+    let (params, ff_seconds, before, after, closed) = (
+        outcome.form_factors,
+        outcome.form_factor_seconds,
+        outcome.before,
+        outcome.after,
+        outcome.closed,
+    );
+    let n = mesh.len();
 
     // Outputs.
     let mut out = String::from("name,area,emissivity,temperature,flux,power\n");

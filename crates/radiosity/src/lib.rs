@@ -58,6 +58,9 @@ pub enum Error {
     /// An input file is malformed.
     #[error(transparent)]
     Input(#[from] io::InputError),
+    /// A heat-transfer problem could not be solved.
+    #[error(transparent)]
+    Thermal(#[from] thermal::ThermalError),
     /// The job would not fit in memory.
     #[error(
         "{what} would need about {} MiB but only {} MiB are available; use {}",
