@@ -112,11 +112,12 @@ pub fn run(a: ThermalArgs) -> Result<()> {
                 .map(|s| v.surfaces[s.combined_into.unwrap_or(0)].name.clone())
         })
     };
-    let boundary_of = radiosity::pipeline::thermal_boundaries(&scene, &named, &combined)
-        .map_err(|(k, message)| match k {
+    let boundary_of = radiosity::pipeline::thermal_boundaries(&scene, &named, &combined).map_err(
+        |(k, message)| match k {
             Some(k) => anyhow::anyhow!("{}:{}: {message}", a.boundary.display(), rows[k].line),
             None => anyhow::anyhow!("{}: {message}", a.boundary.display()),
-        })?;
+        },
+    )?;
 
     // View factors and the solve.
     let method = a.method.0;
@@ -154,12 +155,10 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         .expect("valid template")
         .progress_chars("=> "),
     );
-    let outcome = radiosity::pipeline::thermal(
-        &scene,
-        &boundary_of,
-        &boundaries,
-        &settings,
-        &|e: Event<'_>| {
+    let outcome =
+        radiosity::pipeline::thermal(&scene, &boundary_of, &boundaries, &settings, &|e: Event<
+            '_,
+        >| {
             if let Event::Progress {
                 stage: Stage::FormFactors,
                 done,
@@ -169,8 +168,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
                 bar.set_length(total);
                 bar.set_position(done)
             }
-        },
-    );
+        });
     bar.finish_and_clear();
     let outcome = outcome.map_err(|e| match e {
         radiosity::Error::Thermal(thermal::ThermalError::Unphysical { group, value }) => anyhow::anyhow!(

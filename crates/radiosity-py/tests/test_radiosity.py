@@ -187,3 +187,37 @@ def test_an_interrupt_stops_a_long_solve():
 def test_method_parameters_reach_the_solver():
     with pytest.raises(ValueError, match="ω|omega"):
         radiosity.solve(radiosity.builtin("furnace"), solver="sor", omega=2.5, patches=100)
+
+
+SIGMA = 5.670374419e-8
+
+
+def test_thermal_black_cube_and_the_cli_example():
+    # View3D's unit cube, every face black at its own temperature: Q_i = Σ_j F_ij σ(T_i⁴ − T_j⁴)
+    # with Howell's exact factors (opposite 0.1998248957, adjacent 0.2000437761).
+    cube = radiosity.load(str(REPO.parent / "shared" / "scenes" / "view3d" / "cube.vs3"))
+    names = ["zeq0", "xeq0", "yeq0", "zeq1", "xeq1", "yeq1"]
+    t = [300.0, 400.0, 500.0, 600.0, 700.0, 800.0]
+    r = radiosity.thermal(
+        cube,
+        {n: {"emissivity": 1.0, "temperature": tt} for n, tt in zip(names, t)},
+        form_factor_method="analytic",
+    )
+    opposite = [3, 4, 5, 0, 1, 2]
+    for i, n in enumerate(names):
+        q = sum(
+            (0.1998248957 if opposite[i] == j else 0.2000437761) * SIGMA * (t[i] ** 4 - t[j] ** 4)
+            for j in range(6)
+            if j != i
+        )
+        assert abs(r["surfaces"][n]["flux"] - q) < 1e-6 * SIGMA * 800**4
+    assert r["info"]["balance_error"] < 1e-9
+    # The README's hot plate from its bc.csv, as the CLI reports it.
+    ex = REPO / "examples"
+    r = radiosity.thermal(radiosity.load(str(ex / "hot-plate.obj")), str(ex / "hot-plate-bc.csv"))
+    assert abs(r["surfaces"]["plate"]["flux"] - 5800.370612334273) < 1e-6 * 5800
+    assert r["surfaces"]["floor"]["flux"] == pytest.approx(0.0, abs=1e-9)
+    with pytest.raises(ValueError, match="unknown surface 'nope'"):
+        radiosity.thermal(cube, {"nope": {"temperature": 300.0}})
+    with pytest.raises(ValueError, match="not both"):
+        radiosity.thermal(cube, {"zeq0": {"temperature": 300.0, "flux": 1.0}})

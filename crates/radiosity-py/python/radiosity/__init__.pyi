@@ -97,3 +97,17 @@ def solve_system(
     trace: bool = True,
     progress: Progress = None,
 ) -> Tuple[np.ndarray, Optional[dict[str, np.ndarray]]]: ...
+def thermal(
+    scene: Scene,
+    boundaries: Any,
+    unit: str = "m",
+    environment: float = 0.0,
+    enclosure: str = "auto",
+    patches: Optional[int] = None,
+    max_edge: Optional[float] = None,
+    form_factor_method: str = "monte-carlo",
+    rays: Optional[int] = None,
+    seed: int = 1,
+    linear_solver: str = "auto",
+    progress: Progress = None,
+) -> dict[str, Any]: ...
