@@ -663,9 +663,10 @@ pub struct BenchArgs {
     /// Patches of the Cornell box.
     #[arg(long, value_name = "N", default_value_t = 10_000, help_heading = MESHING)]
     pub patches: usize,
-    /// Rays per ray-casting measurement.
-    #[arg(long, value_name = "N", default_value_t = 2_000_000, help_heading = RUN)]
-    pub rays: usize,
+    /// Rays per ray-casting measurement (default 2,000,000); or a scene (built-in name or
+    /// file), which measures ray casting on it alone: `--rays SCENE [--rays N]`.
+    #[arg(long, value_name = "N|SCENE", action = clap::ArgAction::Append, help_heading = RUN)]
+    pub rays: Vec<String>,
     /// Repetitions of each measurement (the median is reported).
     #[arg(long, value_name = "K", default_value_t = 5, help_heading = RUN)]
     pub runs: usize,

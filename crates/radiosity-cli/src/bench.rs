@@ -85,8 +85,20 @@ fn solvers(sizes: &[usize], runs: usize) -> Result<()> {
 
 /// Run the benchmark and print its table.
 pub fn run(a: BenchArgs) -> Result<()> {
-    if a.runs == 0 || a.rays == 0 || a.patches == 0 {
+    // `--rays` is a count, a scene, or both (given twice).
+    let mut count = 2_000_000usize;
+    let mut ray_scene = None;
+    for v in &a.rays {
+        match v.parse::<usize>() {
+            Ok(n) => count = n,
+            Err(_) => ray_scene = Some(v.clone()),
+        }
+    }
+    if a.runs == 0 || count == 0 || a.patches == 0 {
         bail!("--runs, --rays and --patches must be positive");
+    }
+    if let Some(scene) = ray_scene {
+        return crate::rays::run(&a, &scene, count);
     }
     if let Some(scene) = &a.scale {
         return crate::scale::run(&a, scene);
@@ -123,13 +135,13 @@ pub fn run(a: BenchArgs) -> Result<()> {
         rayon::current_num_threads()
     );
     // Warm-up, then timed runs.
-    trace_random_rays(&mesh, &bvh, a.rays / 10, 0);
+    trace_random_rays(&mesh, &bvh, count / 10, 0);
     let mut rates = Vec::new();
     for r in 0..a.runs {
         let t = Instant::now();
-        let hits = trace_random_rays(&mesh, &bvh, a.rays, r as u64 + 1);
+        let hits = trace_random_rays(&mesh, &bvh, count, r as u64 + 1);
         let s = t.elapsed().as_secs_f64();
-        rates.push(a.rays as f64 / s);
+        rates.push(count as f64 / s);
         if hits == 0 {
             bail!("no ray hit anything: the benchmark scene is broken");
         }
@@ -138,7 +150,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
         "ray casting: {:.2} M rays/s (median of {}; {} incoherent closest-hit rays each)",
         median(rates) / 1e6,
         a.runs,
-        a.rays
+        count
     );
     let settings = Settings {
         mesh: MeshParams::Patches(a.patches),

@@ -3,9 +3,12 @@
 mod alloc;
 mod args;
 mod bench;
+#[cfg(feature = "embree")]
+mod embree;
 mod experiment;
 mod fuzz;
 mod pictures;
+mod rays;
 mod report;
 mod scale;
 mod settings;

@@ -2638,3 +2638,74 @@ fn gather_over_a_baked_gltf() {
         );
     }
 }
+
+/// `bench --rays SCENE`: the form-factor ray workload on a scene, with its figures.
+#[test]
+fn bench_rays_on_a_scene() {
+    let dir = scratch("bench-rays");
+    let out = run(
+        &[
+            "bench",
+            "--rays",
+            "cornell",
+            "--rays",
+            "20000",
+            "--runs",
+            "1",
+            "--patches",
+            "500",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("radiosity BVH"))
+        .expect("a BVH line");
+    // A closed box: every ray from a wall hits the front of another (the light's back is
+    // outside), so the hit rate is high.
+    let hit: f64 = line
+        .split_whitespace()
+        .nth(3)
+        .unwrap()
+        .trim_end_matches('%')
+        .parse()
+        .unwrap();
+    assert!(hit > 70.0, "{line}");
+}
+
+/// With the `embree` feature, Embree casts the same rays and hits the same patches (rounding
+/// may part them on a few rays that graze an edge: under 0.01 %).
+#[cfg(feature = "embree")]
+#[test]
+fn embree_agrees_with_the_bvh_hit_for_hit() {
+    let dir = scratch("bench-embree");
+    let out = run(
+        &[
+            "bench", "--rays", "cornell", "--rays", "200000", "--runs", "1",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.contains("hits differ on"))
+        .expect("a comparison line");
+    let differ: f64 = line
+        .split("differ on ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap();
+    assert!(differ / 200_000.0 < 1e-4, "{line}");
+}

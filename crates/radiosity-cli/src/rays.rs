@@ -1,0 +1,150 @@
+//! `radiosity bench --rays SCENE [--rays N] [--patches N] [--threads T]`: the ray-casting
+//! workload of form-factor estimation on any scene (a patch picked uniformly, a uniform point
+//! on it, a cosine-distributed direction, closest hit), the same rays for every backend: the
+//! engine's BVH, and Embree when the binary is built with the `embree` feature. Prints M rays/s
+//! (median of the runs), hit rate, nanoseconds per ray and thread, and the ratio.
+
+use crate::args::BenchArgs;
+use anyhow::{bail, Result};
+use radiosity::accel::Bvh;
+use radiosity::geom::{orthonormal_basis, Ray};
+use radiosity::mesh::{Mesh, MeshParams};
+use radiosity::sampling::{cosine_direction_in, stream, uniform};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// The workload: `count` rays, deterministic for `seed`, with the patch each starts from.
+pub fn workload(mesh: &Mesh, offset: f32, count: usize, seed: u64) -> Vec<(Ray, u32)> {
+    let n = mesh.len() as u64;
+    (0..count)
+        .into_par_iter()
+        .chunks(4096)
+        .enumerate()
+        .flat_map_iter(|(c, idx)| {
+            let mut rng = stream(seed, 0x5241_5953, c as u64, 0);
+            idx.into_iter()
+                .map(|_| {
+                    let r = (uniform(&mut rng) as f64 * n as f64) as u64;
+                    let i = r.min(n - 1) as usize;
+                    let p = mesh.sample_point(
+                        i,
+                        uniform(&mut rng),
+                        uniform(&mut rng),
+                        uniform(&mut rng),
+                    );
+                    let nn = mesh.patches[i].normal;
+                    let (t, b) = orthonormal_basis(nn);
+                    let d = cosine_direction_in(nn, t, b, uniform(&mut rng), uniform(&mut rng));
+                    (Ray::new(p + nn * offset, d), i as u32)
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// A closest-hit ray caster: for each ray, the patch whose front it hits first (or none).
+pub trait Caster: Sync {
+    /// Name in the table.
+    fn name(&self) -> &'static str;
+    /// The front-side patch hit first, if any (`u32::MAX` for none).
+    fn cast(&self, ray: &Ray) -> u32;
+}
+
+impl Caster for Bvh {
+    fn name(&self) -> &'static str {
+        "radiosity BVH"
+    }
+    fn cast(&self, ray: &Ray) -> u32 {
+        match self.closest_hit(ray, f32::INFINITY) {
+            Some(h) if h.front => h.patch,
+            _ => u32::MAX,
+        }
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Time `caster` over `rays`, `runs` times: (median rays/s, hits per patch result).
+fn measure(caster: &dyn Caster, rays: &[(Ray, u32)], runs: usize) -> (f64, Vec<u32>) {
+    let cast = || -> Vec<u32> { rays.par_iter().map(|(r, _)| caster.cast(r)).collect() };
+    let out = cast(); // warm-up, and the hits compared between backends
+    let mut rates = Vec::new();
+    for _ in 0..runs {
+        let t = Instant::now();
+        let h = cast();
+        rates.push(rays.len() as f64 / t.elapsed().as_secs_f64());
+        std::hint::black_box(h);
+    }
+    (median(rates), out)
+}
+
+/// Run the ray benchmark on `scene`.
+pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
+    crate::settings::threads(a.threads)?;
+    let scene = crate::load_scene(scene, a.one_sided)?;
+    scene.validate_geometry()?;
+    let mesh = Mesh::build(&scene, MeshParams::Patches(a.patches))?;
+    let t = Instant::now();
+    let bvh = Bvh::build(&mesh);
+    let build = t.elapsed().as_secs_f64();
+    let rays = workload(&mesh, bvh.ray_offset(), count, 1);
+    let threads = rayon::current_num_threads();
+    println!(
+        "{}: {} patches, {} rays (uniform patch, uniform point, cosine direction, closest hit), {} threads, median of {} runs",
+        scene.place(),
+        mesh.len(),
+        rays.len(),
+        threads,
+        a.runs
+    );
+    println!(
+        "{:<16} {:>10} {:>9} {:>14} {:>9}",
+        "backend", "M rays/s", "hit rate", "ns/ray/thread", "build s"
+    );
+    #[allow(unused_mut)]
+    let mut backends: Vec<(Box<dyn Caster>, f64)> = Vec::new();
+    #[cfg(feature = "embree")]
+    {
+        let t = Instant::now();
+        let e = crate::embree::Embree::new(&mesh)?;
+        backends.push((Box::new(e), t.elapsed().as_secs_f64()));
+    }
+    let mut results: Vec<(f64, Vec<u32>)> = Vec::new();
+    let ours = measure(&bvh, &rays, a.runs);
+    let show = |name: &str, rate: f64, hits: &[u32], build: f64| {
+        let hit = hits.iter().filter(|&&h| h != u32::MAX).count() as f64 / hits.len() as f64;
+        println!(
+            "{:<16} {:>10.2} {:>8.1}% {:>14.0} {:>9.3}",
+            name,
+            rate / 1e6,
+            100.0 * hit,
+            1e9 * threads as f64 / rate,
+            build
+        );
+    };
+    show(bvh.name(), ours.0, &ours.1, build);
+    for (b, build) in &backends {
+        let r = measure(b.as_ref(), &rays, a.runs);
+        show(b.name(), r.0, &r.1, *build);
+        results.push(r);
+    }
+    for ((b, _), (rate, hits)) in backends.iter().zip(&results) {
+        let differ = hits.iter().zip(&ours.1).filter(|(x, y)| x != y).count();
+        println!(
+            "{} / radiosity BVH: {:.2}×; hits differ on {differ} of {} rays ({:.4}%)",
+            b.name(),
+            rate / ours.0,
+            hits.len(),
+            100.0 * differ as f64 / hits.len() as f64
+        );
+    }
+    if ours.1.iter().all(|&h| h == u32::MAX) {
+        bail!("no ray hit a front side: is the scene one-sided and open?");
+    }
+    #[cfg(not(feature = "embree"))]
+    println!("(Embree: build with `--features embree` and Debian's libembree-dev to compare)");
+    Ok(())
+}
