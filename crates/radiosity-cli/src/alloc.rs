@@ -1,8 +1,8 @@
 //! The program's global allocator: the system allocator, counting the bytes in use and their
 //! peak, so that `radiosity experiment complexity` can report each case's peak heap memory
 //! exactly (the library cannot own the allocator). Two relaxed atomic operations per
-//! allocation; the engine's hot loops do not allocate. This is the only unsafe code in the
-//! project: `GlobalAlloc` is an unsafe trait.
+//! allocation; the engine's hot loops do not allocate. With the optional Embree binding
+//! (`embree.rs`), this is the only unsafe code in the project: `GlobalAlloc` is an unsafe trait.
 #![allow(unsafe_code)]
 
 use std::alloc::{GlobalAlloc, Layout, System};
