@@ -177,7 +177,7 @@ impl Caster for Embree {
         "Embree 3"
     }
 
-    fn cast(&self, ray: &Ray) -> u32 {
+    fn cast(&self, ray: &Ray) -> (u32, f32) {
         let mut rh = RtcRayHit {
             ray: RtcRay {
                 org: ray.origin.to_array(),
@@ -204,16 +204,17 @@ impl Caster for Embree {
         // SAFETY: the scene is committed; `ctx` and `rh` are valid, aligned as Embree requires.
         unsafe { rtcIntersect1(self.scene, &mut ctx, &mut rh) };
         if rh.hit.geom_id == INVALID_ID {
-            return u32::MAX;
+            return (u32::MAX, f32::INFINITY);
         }
         let patch = self.patch_of[rh.hit.prim_id as usize];
         let n = self.normal[patch as usize];
         let d = ray.direction;
         // Front side: the ray arrives against the patch's normal, as the engine's BVH decides.
+        let t = rh.ray.tfar;
         if n[0] * d.x + n[1] * d.y + n[2] * d.z < 0.0 {
-            patch
+            (patch, t)
         } else {
-            u32::MAX
+            (u32::MAX, t)
         }
     }
 }
