@@ -136,6 +136,29 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
     // Two surfaces at the same distance (coincident, overlapping polygons) are a tie either
     // backend may break its own way: counted apart from real disagreements.
     let tie = 1e-5 * mesh_diagonal(&mesh);
+    // Any-hit (occlusion) queries on the same rays, unbounded: what shadow rays cost.
+    let mut occ_rates = Vec::new();
+    let mut blocked = 0usize;
+    for _ in 0..a.runs.max(1) {
+        let t = Instant::now();
+        blocked = rays
+            .par_iter()
+            .filter(|(r, _)| bvh.occluded(r, f32::INFINITY))
+            .count();
+        occ_rates.push(rays.len() as f64 / t.elapsed().as_secs_f64());
+    }
+    let occ = median(occ_rates);
+    let any_hit = ours.1.iter().filter(|h| h.1.is_finite()).count();
+    println!(
+        "{:<16} {:>10.2} {:>8.1}% {:>14.0}    ({:.2}× closest-hit; agrees on {} of {} rays)",
+        "BVH any-hit",
+        occ / 1e6,
+        100.0 * blocked as f64 / rays.len() as f64,
+        1e9 * threads as f64 / occ,
+        occ / ours.0,
+        rays.len() - blocked.abs_diff(any_hit),
+        rays.len()
+    );
     for ((b, _), (rate, hits)) in backends.iter().zip(&results) {
         let differ: Vec<_> = hits
             .iter()

@@ -408,6 +408,90 @@ impl Bvh {
         }
     }
 
+    /// Whether anything (front or back side) lies on `ray` with `0 < t < t_max`: the any-hit
+    /// query of shadow rays. It stops at the first intersection found and visits children in
+    /// their stored order, so it does less work than [`Bvh::closest_hit`] on the same ray.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        if self.tris.is_empty() {
+            return false;
+        }
+        let o = ray.origin;
+        let d = ray.direction;
+        let safe_inv = |c: f32| {
+            if c.abs() > 1e-30 {
+                1.0 / c
+            } else {
+                1e30f32.copysign(c)
+            }
+        };
+        let inv = Vec3::new(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z));
+        let (ox, oy, oz) = (Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z));
+        let (ix, iy, iz) = (Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z));
+        let (dx, dy, dz) = (Vec4::splat(d.x), Vec4::splat(d.y), Vec4::splat(d.z));
+        let t_max4 = Vec4::splat(t_max);
+        let mut stack: [u32; 128] = [0; 128];
+        let mut sp = 0usize;
+        let mut cur = 0u32;
+        loop {
+            if cur & LEAF != 0 {
+                let b = &self.blocks[(cur & !LEAF) as usize];
+                let px = dy * b.e2[2] - dz * b.e2[1];
+                let py = dz * b.e2[0] - dx * b.e2[2];
+                let pz = dx * b.e2[1] - dy * b.e2[0];
+                let det = b.e1[0] * px + b.e1[1] * py + b.e1[2] * pz;
+                let inv_det = Vec4::ONE / det;
+                let sx = ox - b.v0[0];
+                let sy = oy - b.v0[1];
+                let sz = oz - b.v0[2];
+                let u = (sx * px + sy * py + sz * pz) * inv_det;
+                let qx = sy * b.e1[2] - sz * b.e1[1];
+                let qy = sz * b.e1[0] - sx * b.e1[2];
+                let qz = sx * b.e1[1] - sy * b.e1[0];
+                let v = (dx * qx + dy * qy + dz * qz) * inv_det;
+                let t = (b.e2[0] * qx + b.e2[1] * qy + b.e2[2] * qz) * inv_det;
+                let ok = u.cmpge(Vec4::splat(-EDGE_EPS))
+                    & v.cmpge(Vec4::splat(-EDGE_EPS))
+                    & (u + v).cmple(Vec4::splat(1.0 + EDGE_EPS))
+                    & t.cmpgt(Vec4::ZERO)
+                    & t.cmplt(t_max4);
+                // Padding lanes are zero triangles: det = 0 makes their lanes NaN, never a hit.
+                if ok.bitmask() != 0 {
+                    return true;
+                }
+            } else {
+                let n = &self.nodes[cur as usize];
+                let tx0 = (n.min_x - ox) * ix;
+                let tx1 = (n.max_x - ox) * ix;
+                let ty0 = (n.min_y - oy) * iy;
+                let ty1 = (n.max_y - oy) * iy;
+                let tz0 = (n.min_z - oz) * iz;
+                let tz1 = (n.max_z - oz) * iz;
+                let tmin = tx0
+                    .min(tx1)
+                    .max(ty0.min(ty1))
+                    .max(tz0.min(tz1))
+                    .max(Vec4::ZERO);
+                let tmax = tx0.max(tx1).min(ty0.max(ty1)).min(tz0.max(tz1)).min(t_max4);
+                let mut mask = tmin.cmple(tmax).bitmask();
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let c = n.child[lane];
+                    if c != EMPTY_LANE {
+                        stack[sp] = c;
+                        sp += 1;
+                    }
+                }
+            }
+            if sp == 0 {
+                return false;
+            }
+            sp -= 1;
+            cur = stack[sp];
+        }
+    }
+
     /// Check the hierarchy's invariants (children inside parents, triangles inside their
     /// leaf's box, every triangle in exactly one leaf). Tests call it.
     pub fn validate(&self) -> Result<(), String> {
@@ -717,5 +801,51 @@ mod tests {
             )
             .unwrap();
         assert!(!h.front);
+    }
+}
+
+#[cfg(test)]
+mod occlusion_tests {
+    use super::*;
+    use crate::mesh::{Mesh, MeshParams};
+    use crate::sampling::{stream, uniform};
+
+    /// The any-hit query agrees with the closest hit on random rays and bounds: something lies
+    /// on the ray before t_max exactly when the closest hit does.
+    #[test]
+    fn occluded_agrees_with_closest_hit() {
+        let scene = crate::scene::builtin::by_name("cornell").unwrap();
+        let mesh = Mesh::build(&scene, MeshParams::Patches(2000)).unwrap();
+        let bvh = Bvh::build(&mesh);
+        let mut rng = stream(3, 1, 4, 1);
+        let c = bvh.bounds().centre();
+        let size = bvh.bounds().diagonal();
+        let mut disagree = 0;
+        for _ in 0..20_000 {
+            let o = c + Vec3::new(
+                uniform(&mut rng) - 0.5,
+                uniform(&mut rng) - 0.5,
+                uniform(&mut rng) - 0.5,
+            ) * size
+                * 0.4;
+            let d = Vec3::new(
+                uniform(&mut rng) - 0.5,
+                uniform(&mut rng) - 0.5,
+                uniform(&mut rng) - 0.5,
+            )
+            .normalize();
+            let t_max = uniform(&mut rng) * size;
+            let ray = Ray::new(o, d);
+            let closest = bvh
+                .closest_hit(&ray, f32::INFINITY)
+                .map_or(f32::INFINITY, |h| h.t);
+            // Away from the bound (where rounding may decide), the two must agree.
+            if (closest - t_max).abs() > 1e-4 * size
+                && bvh.occluded(&ray, t_max) != (closest < t_max)
+            {
+                disagree += 1;
+            }
+        }
+        assert_eq!(disagree, 0);
     }
 }

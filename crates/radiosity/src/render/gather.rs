@@ -401,10 +401,8 @@ impl<'a> Gather<'a> {
         }
         let offset = s.bvh.ray_offset();
         let ray = Ray::new(x + n * offset, w);
-        if let Some(h) = s.bvh.closest_hit(&ray, dist - 4.0 * offset) {
-            if h.patch as usize != k {
-                return Rgb::BLACK;
-            }
+        if s.bvh.occluded(&ray, dist - 4.0 * offset) {
+            return Rgb::BLACK;
         }
         // The sampled point's own interpolated value, with sample_point's triangle choice.
         let (su, sv) = crate::sampling::uniform_triangle(u1, u2);

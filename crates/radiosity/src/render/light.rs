@@ -118,11 +118,9 @@ impl Lights {
         }
         let offset = s.bvh.ray_offset();
         let ray = Ray::new(x + n * offset, w);
-        // Anything hit short of the emitter (less the offsets at both ends) blocks it.
-        if let Some(h) = s.bvh.closest_hit(&ray, dist - 4.0 * offset) {
-            if h.patch != j {
-                return Rgb::BLACK;
-            }
+        // Anything short of the emitter (less the offsets at both ends) blocks it.
+        if s.bvh.occluded(&ray, dist - 4.0 * offset) {
+            return Rgb::BLACK;
         }
         let g = cos_x as f64 * cos_y as f64 / d2 as f64;
         s.emission[j as usize] * (std::f64::consts::FRAC_1_PI * g * patch.area as f64 / self.pdf[k])
