@@ -200,6 +200,17 @@ const EXAMPLES_THERMAL: &str = "Examples:
   radiosity thermal examples/hot-plate.obj --boundary examples/hot-plate-bc.csv --out surfaces.csv
   radiosity thermal room.vs3 --boundary bc.csv --out surfaces.csv --unit mm --environment 293.15";
 
+/// Ray-casting backends (`bench --rays SCENE --backend`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// Every backend this binary has.
+    All,
+    /// The engine's own BVH.
+    Bvh,
+    /// Intel Embree 3 (builds with `--features embree`).
+    Embree,
+}
+
 /// How a view-factor matrix is written (`form-factors --format`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MatrixFormatArg {
@@ -718,6 +729,10 @@ pub struct BenchArgs {
     /// `--pictures`: paths per pixel of the reference when it is made.
     #[arg(long, value_name = "N", default_value_t = 16384, help_heading = SCENE)]
     pub reference_spp: u32,
+    /// `--rays SCENE`: which ray casters to time (`embree` needs a build with `--features
+    /// embree`).
+    #[arg(long, value_enum, default_value = "all", help_heading = RUN)]
+    pub backend: BackendArg,
     /// `--pictures`: image size (square).
     #[arg(long, value_name = "PX", default_value_t = 256, help_heading = SCENE)]
     pub size: u32,

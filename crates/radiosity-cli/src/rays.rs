@@ -85,7 +85,11 @@ fn measure(caster: &dyn Caster, rays: &[(Ray, u32)], runs: usize) -> (f64, Vec<(
 
 /// Run the ray benchmark on `scene`.
 pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
+    use crate::args::BackendArg;
     crate::settings::threads(a.threads)?;
+    if a.backend == BackendArg::Embree && !cfg!(feature = "embree") {
+        bail!("--backend embree: this binary was built without Embree (cargo build --release --features embree, with Debian's libembree-dev)");
+    }
     let scene = crate::load_scene(scene, a.one_sided)?;
     scene.validate_geometry()?;
     let mesh = Mesh::build(&scene, MeshParams::Patches(a.patches))?;
@@ -109,12 +113,13 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
     #[allow(unused_mut)]
     let mut backends: Vec<(Box<dyn Caster>, f64)> = Vec::new();
     #[cfg(feature = "embree")]
-    {
+    if a.backend != BackendArg::Bvh {
         let t = Instant::now();
         let e = crate::embree::Embree::new(&mesh)?;
         backends.push((Box::new(e), t.elapsed().as_secs_f64()));
     }
     let mut results: Vec<(f64, Vec<(u32, f32)>)> = Vec::new();
+    // The BVH's hits are the reference every backend is compared with.
     let ours = measure(&bvh, &rays, a.runs);
     let show = |name: &str, rate: f64, hits: &[(u32, f32)], build: f64| {
         let hit = hits.iter().filter(|h| h.0 != u32::MAX).count() as f64 / hits.len() as f64;
@@ -127,15 +132,26 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
             build
         );
     };
-    show(bvh.name(), ours.0, &ours.1, build);
-    for (b, build) in &backends {
-        let r = measure(b.as_ref(), &rays, a.runs);
-        show(b.name(), r.0, &r.1, *build);
-        results.push(r);
+    if a.backend != BackendArg::Embree {
+        show(bvh.name(), ours.0, &ours.1, build);
+    }
+    if a.backend == BackendArg::All {
+        for (b, build) in &backends {
+            let r = measure(b.as_ref(), &rays, a.runs);
+            show(b.name(), r.0, &r.1, *build);
+            results.push(r);
+        }
     }
     // Two surfaces at the same distance (coincident, overlapping polygons) are a tie either
     // backend may break its own way: counted apart from real disagreements.
     let tie = 1e-5 * mesh_diagonal(&mesh);
+    if a.backend == BackendArg::Embree {
+        for (b, build) in &backends {
+            let r = measure(b.as_ref(), &rays, a.runs);
+            show(b.name(), r.0, &r.1, *build);
+        }
+        return Ok(());
+    }
     // Any-hit (occlusion) queries on the same rays, unbounded: what shadow rays cost.
     let mut occ_rates = Vec::new();
     let mut blocked = 0usize;

@@ -2709,3 +2709,12 @@ fn embree_agrees_with_the_bvh_hit_for_hit() {
         .unwrap();
     assert!(differ / 200_000.0 < 1e-4, "{line}");
 }
+
+/// Without the `embree` feature, asking for Embree is a one-line error that says how to get it.
+#[cfg(not(feature = "embree"))]
+#[test]
+fn embree_backend_needs_the_feature() {
+    let dir = scratch("bench-no-embree");
+    let out = run(&["bench", "--rays", "cornell", "--backend", "embree"], &dir);
+    assert_fails(&out, &["--backend embree", "--features embree"], &dir, &[]);
+}
