@@ -10,6 +10,37 @@ use radiosity::scene::Camera;
 use radiosity::solve::{Parameter as SolverParameter, SolveError, SolverParams};
 use std::path::Path;
 
+/// `--patches N` or `--max-edge L` (checked), else `default`.
+pub fn mesh_params(
+    patches: Option<usize>,
+    max_edge: Option<f32>,
+    default: MeshParams,
+) -> Result<MeshParams> {
+    Ok(match (patches, max_edge) {
+        (_, Some(l)) if !(l.is_finite() && l > 0.0) => {
+            bail!("--max-edge {l}: must be a positive length")
+        }
+        (_, Some(l)) => MeshParams::MaxEdge(l),
+        (Some(0), _) => bail!("--patches 0: at least one patch is needed"),
+        (Some(n), _) => MeshParams::Patches(n),
+        (None, None) => default,
+    })
+}
+
+/// `--resolution`, `--samples` and `--rays` (when given) in range.
+pub fn form_factor_numbers(resolution: u32, samples: u32, rays: Option<u32>) -> Result<()> {
+    if resolution < 2 {
+        bail!("--resolution {resolution}: at least 2 pixels along a face are needed");
+    }
+    if samples == 0 {
+        bail!("--samples 0: at least one point per patch is needed");
+    }
+    if rays == Some(0) {
+        bail!("--rays 0: at least one ray per row is needed");
+    }
+    Ok(())
+}
+
 /// The solve's default tolerance (unshot fraction of the emitted energy).
 pub const DEFAULT_TOLERANCE: f64 = 0.01;
 
@@ -20,30 +51,14 @@ pub const PICTURE_TOLERANCE: f64 = 3e-4;
 
 /// Library settings from the shared solve options.
 pub fn settings(a: &SolveArgs) -> Result<Settings> {
-    let mesh = match (a.patches, a.max_edge) {
-        (_, Some(l)) if !(l.is_finite() && l > 0.0) => {
-            bail!("--max-edge {l}: must be a positive length")
-        }
-        (_, Some(l)) => MeshParams::MaxEdge(l),
-        (Some(0), _) => bail!("--patches 0: at least one patch is needed"),
-        (Some(n), _) => MeshParams::Patches(n),
-        (None, None) => MeshParams::default(),
-    };
+    let mesh = mesh_params(a.patches, a.max_edge, MeshParams::default())?;
     if a.rays == 0 {
         bail!("--rays 0: at least one ray per form-factor row is needed");
     }
     if a.threads == Some(0) {
         bail!("--threads 0: at least one thread is needed");
     }
-    if a.resolution < 2 {
-        bail!(
-            "--resolution {}: at least 2 pixels along a face are needed",
-            a.resolution
-        );
-    }
-    if a.samples == 0 {
-        bail!("--samples 0: at least one point per patch is needed");
-    }
+    form_factor_numbers(a.resolution, a.samples, None)?;
     let form_factors = FormFactorParams {
         method: a.form_factors.0,
         resolution: a.resolution,

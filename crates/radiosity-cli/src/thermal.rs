@@ -40,27 +40,9 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             a.environment
         );
     }
-    if a.resolution < 2 {
-        bail!(
-            "--resolution {}: at least 2 pixels along a face are needed",
-            a.resolution
-        );
-    }
-    if a.samples == 0 {
-        bail!("--samples 0: at least one point per patch is needed");
-    }
-    if a.rays == Some(0) {
-        bail!("--rays 0: at least one ray per row is needed");
-    }
-    let mesh_params = match (a.patches, a.max_edge) {
-        (_, Some(l)) if !(l.is_finite() && l > 0.0) => {
-            bail!("--max-edge {l}: must be a positive length")
-        }
-        (_, Some(l)) => MeshParams::MaxEdge(l),
-        (Some(0), _) => bail!("--patches 0: at least one patch is needed"),
-        (Some(n), _) => MeshParams::Patches(n),
-        (None, None) => MeshParams::Faces,
-    };
+    crate::settings::form_factor_numbers(a.resolution, a.samples, a.rays)?;
+    // Engineers' default: one patch per face.
+    let mesh_params = crate::settings::mesh_params(a.patches, a.max_edge, MeshParams::Faces)?;
     crate::settings::threads(a.threads)?;
 
     // The scene, and what View3D's file says of its surfaces.

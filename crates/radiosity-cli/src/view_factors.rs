@@ -20,18 +20,7 @@ fn ext_is(path: &std::path::Path, format: FileFormat) -> bool {
 /// Run the command.
 pub fn run(a: FormFactorsArgs) -> Result<()> {
     let method = a.method.0;
-    if a.resolution < 2 {
-        bail!(
-            "--resolution {}: at least 2 pixels along a face are needed",
-            a.resolution
-        );
-    }
-    if a.samples == 0 {
-        bail!("--samples 0: at least one point per patch is needed");
-    }
-    if a.rays == 0 {
-        bail!("--rays 0: at least one ray per row is needed");
-    }
+    crate::settings::form_factor_numbers(a.resolution, a.samples, Some(a.rays))?;
     let storage: Storage = a.storage.into();
     let view3d = match a.format {
         Some(MatrixFormatArg::View3d) => true,
@@ -57,18 +46,13 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     }
     let is_vs3 = FileFormat::from_path(Path::new(&a.scene)) == Some(FileFormat::Vs3)
         && Path::new(&a.scene).exists();
-    let mesh_params = match (a.faces, a.patches, a.max_edge) {
-        (true, _, _) => MeshParams::Faces,
-        (_, _, Some(l)) if !(l.is_finite() && l > 0.0) => {
-            bail!("--max-edge {l}: must be a positive length")
-        }
-        (_, _, Some(l)) => MeshParams::MaxEdge(l),
-        (_, Some(0), _) => bail!("--patches 0: at least one patch is needed"),
-        (_, Some(n), _) => MeshParams::Patches(n),
-        // View3D's users and output think in surfaces.
-        (false, None, None) if is_vs3 || view3d => MeshParams::Faces,
-        (false, None, None) => MeshParams::default(),
-    };
+    // View3D's users and output think in surfaces.
+    let mesh_params =
+        if a.faces || ((is_vs3 || view3d) && a.patches.is_none() && a.max_edge.is_none()) {
+            MeshParams::Faces
+        } else {
+            crate::settings::mesh_params(a.patches, a.max_edge, MeshParams::default())?
+        };
     let faces = mesh_params == MeshParams::Faces;
     crate::settings::threads(a.threads)?;
     let vs3 = if is_vs3 {

@@ -90,6 +90,95 @@ pub struct Hit {
     pub front: bool,
 }
 
+/// A ray broadcast to four SIMD lanes, with its safe inverse direction: what both queries
+/// test boxes and triangle blocks with.
+struct Ray4 {
+    o: [Vec4; 3],
+    d: [Vec4; 3],
+    inv: [Vec4; 3],
+}
+
+impl Ray4 {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let (o, d) = (ray.origin, ray.direction);
+        // 1/d with zero components replaced by a huge finite value: (box − o)·inv then never
+        // evaluates 0·∞ = NaN for a ray that lies in a box's face plane.
+        let safe_inv = |c: f32| {
+            if c.abs() > 1e-30 {
+                1.0 / c
+            } else {
+                1e30f32.copysign(c)
+            }
+        };
+        let s = |v: Vec3| [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)];
+        Self {
+            o: s(o),
+            d: s(d),
+            inv: s(Vec3::new(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z))),
+        }
+    }
+
+    /// Möller–Trumbore on a block's four triangles: `(t, u, v, det)` per lane (NaN lanes for
+    /// det = 0, which fail every comparison).
+    #[inline(always)]
+    fn intersect(&self, b: &TriBlock) -> (Vec4, Vec4, Vec4, Vec4) {
+        let [dx, dy, dz] = self.d;
+        let px = dy * b.e2[2] - dz * b.e2[1];
+        let py = dz * b.e2[0] - dx * b.e2[2];
+        let pz = dx * b.e2[1] - dy * b.e2[0];
+        let det = b.e1[0] * px + b.e1[1] * py + b.e1[2] * pz;
+        let inv_det = Vec4::ONE / det;
+        let sx = self.o[0] - b.v0[0];
+        let sy = self.o[1] - b.v0[1];
+        let sz = self.o[2] - b.v0[2];
+        let u = (sx * px + sy * py + sz * pz) * inv_det;
+        let qx = sy * b.e1[2] - sz * b.e1[1];
+        let qy = sz * b.e1[0] - sx * b.e1[2];
+        let qz = sx * b.e1[1] - sy * b.e1[0];
+        let v = (dx * qx + dy * qy + dz * qz) * inv_det;
+        let t = (b.e2[0] * qx + b.e2[1] * qy + b.e2[2] * qz) * inv_det;
+        (t, u, v, det)
+    }
+
+    /// Entry distances into a node's four child boxes, and the mask of the children the ray
+    /// meets with `0 ≤ t ≤ t_max`.
+    #[inline(always)]
+    fn enter(&self, n: &Node4, t_max: f32) -> (Vec4, u32) {
+        let [ox, oy, oz] = self.o;
+        let [ix, iy, iz] = self.inv;
+        let tx0 = (n.min_x - ox) * ix;
+        let tx1 = (n.max_x - ox) * ix;
+        let ty0 = (n.min_y - oy) * iy;
+        let ty1 = (n.max_y - oy) * iy;
+        let tz0 = (n.min_z - oz) * iz;
+        let tz1 = (n.max_z - oz) * iz;
+        let tmin = tx0
+            .min(tx1)
+            .max(ty0.min(ty1))
+            .max(tz0.min(tz1))
+            .max(Vec4::ZERO);
+        let tmax = tx0
+            .max(tx1)
+            .min(ty0.max(ty1))
+            .min(tz0.max(tz1))
+            .min(Vec4::splat(t_max));
+        (tmin, tmin.cmple(tmax).bitmask())
+    }
+}
+
+/// The lanes whose triangle the ray crosses (inside the edges, up to [`EDGE_EPS`]) with
+/// `0 < t < t_below`.
+#[inline(always)]
+fn lanes_hit(t: Vec4, u: Vec4, v: Vec4, t_below: f32) -> u32 {
+    (u.cmpge(Vec4::splat(-EDGE_EPS))
+        & v.cmpge(Vec4::splat(-EDGE_EPS))
+        & (u + v).cmple(Vec4::splat(1.0 + EDGE_EPS))
+        & t.cmpgt(Vec4::ZERO)
+        & t.cmplt(Vec4::splat(t_below)))
+    .bitmask()
+}
+
 /// The hierarchy over all patches of a mesh.
 #[derive(Clone, Debug)]
 pub struct Bvh {
@@ -266,20 +355,7 @@ impl Bvh {
         if self.tris.is_empty() {
             return None;
         }
-        let o = ray.origin;
-        let d = ray.direction;
-        // 1/d with zero components replaced by a huge finite value: (box − o)·inv then never
-        // evaluates 0·∞ = NaN for a ray that lies in a box's face plane.
-        let safe_inv = |c: f32| {
-            if c.abs() > 1e-30 {
-                1.0 / c
-            } else {
-                1e30f32.copysign(c)
-            }
-        };
-        let inv = Vec3::new(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z));
-        let (ox, oy, oz) = (Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z));
-        let (ix, iy, iz) = (Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z));
+        let r = Ray4::new(ray);
         let mut best_t = t_max;
         let tie_abs = self.tie;
         let mut best = u32::MAX; // triangle id of the closest hit
@@ -290,30 +366,9 @@ impl Bvh {
         'outer: loop {
             if cur & LEAF != 0 {
                 let b = &self.blocks[(cur & !LEAF) as usize];
-                // Möller–Trumbore on four triangles at once.
-                let (dx, dy, dz) = (Vec4::splat(d.x), Vec4::splat(d.y), Vec4::splat(d.z));
-                let px = dy * b.e2[2] - dz * b.e2[1];
-                let py = dz * b.e2[0] - dx * b.e2[2];
-                let pz = dx * b.e2[1] - dy * b.e2[0];
-                let det = b.e1[0] * px + b.e1[1] * py + b.e1[2] * pz;
-                let inv_det = Vec4::ONE / det;
-                let sx = ox - b.v0[0];
-                let sy = oy - b.v0[1];
-                let sz = oz - b.v0[2];
-                let u = (sx * px + sy * py + sz * pz) * inv_det;
-                let qx = sy * b.e1[2] - sz * b.e1[1];
-                let qy = sz * b.e1[0] - sx * b.e1[2];
-                let qz = sx * b.e1[1] - sy * b.e1[0];
-                let v = (dx * qx + dy * qy + dz * qz) * inv_det;
-                let t = (b.e2[0] * qx + b.e2[1] * qy + b.e2[2] * qz) * inv_det;
-                // NaN lanes (det = 0) fail every comparison. Hits up to TIE beyond the best are
-                // kept for the tie rule below.
-                let ok = u.cmpge(Vec4::splat(-EDGE_EPS))
-                    & v.cmpge(Vec4::splat(-EDGE_EPS))
-                    & (u + v).cmple(Vec4::splat(1.0 + EDGE_EPS))
-                    & t.cmpgt(Vec4::ZERO)
-                    & t.cmplt(Vec4::splat(best_t * (1.0 + TIE) + tie_abs));
-                let mut mask = ok.bitmask();
+                let (t, u, v, det) = r.intersect(b);
+                // Hits up to TIE beyond the best are kept for the tie rule below.
+                let mut mask = lanes_hit(t, u, v, best_t * (1.0 + TIE) + tie_abs);
                 if mask != 0 {
                     let (ta, ua, va, da) =
                         (t.to_array(), u.to_array(), v.to_array(), det.to_array());
@@ -338,23 +393,7 @@ impl Bvh {
                 }
             } else {
                 let n = &self.nodes[cur as usize];
-                let tx0 = (n.min_x - ox) * ix;
-                let tx1 = (n.max_x - ox) * ix;
-                let ty0 = (n.min_y - oy) * iy;
-                let ty1 = (n.max_y - oy) * iy;
-                let tz0 = (n.min_z - oz) * iz;
-                let tz1 = (n.max_z - oz) * iz;
-                let tmin = tx0
-                    .min(tx1)
-                    .max(ty0.min(ty1))
-                    .max(tz0.min(tz1))
-                    .max(Vec4::ZERO);
-                let tmax = tx0
-                    .max(tx1)
-                    .min(ty0.max(ty1))
-                    .min(tz0.max(tz1))
-                    .min(Vec4::splat(best_t));
-                let mut mask = tmin.cmple(tmax).bitmask();
+                let (tmin, mut mask) = r.enter(n, best_t);
                 if mask != 0 {
                     let dist = tmin.to_array();
                     // The hit children, sorted by entry distance (at most four: insertion sort).
@@ -416,64 +455,20 @@ impl Bvh {
         if self.tris.is_empty() {
             return false;
         }
-        let o = ray.origin;
-        let d = ray.direction;
-        let safe_inv = |c: f32| {
-            if c.abs() > 1e-30 {
-                1.0 / c
-            } else {
-                1e30f32.copysign(c)
-            }
-        };
-        let inv = Vec3::new(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z));
-        let (ox, oy, oz) = (Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z));
-        let (ix, iy, iz) = (Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z));
-        let (dx, dy, dz) = (Vec4::splat(d.x), Vec4::splat(d.y), Vec4::splat(d.z));
-        let t_max4 = Vec4::splat(t_max);
+        let r = Ray4::new(ray);
         let mut stack: [u32; 128] = [0; 128];
         let mut sp = 0usize;
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
-                let b = &self.blocks[(cur & !LEAF) as usize];
-                let px = dy * b.e2[2] - dz * b.e2[1];
-                let py = dz * b.e2[0] - dx * b.e2[2];
-                let pz = dx * b.e2[1] - dy * b.e2[0];
-                let det = b.e1[0] * px + b.e1[1] * py + b.e1[2] * pz;
-                let inv_det = Vec4::ONE / det;
-                let sx = ox - b.v0[0];
-                let sy = oy - b.v0[1];
-                let sz = oz - b.v0[2];
-                let u = (sx * px + sy * py + sz * pz) * inv_det;
-                let qx = sy * b.e1[2] - sz * b.e1[1];
-                let qy = sz * b.e1[0] - sx * b.e1[2];
-                let qz = sx * b.e1[1] - sy * b.e1[0];
-                let v = (dx * qx + dy * qy + dz * qz) * inv_det;
-                let t = (b.e2[0] * qx + b.e2[1] * qy + b.e2[2] * qz) * inv_det;
-                let ok = u.cmpge(Vec4::splat(-EDGE_EPS))
-                    & v.cmpge(Vec4::splat(-EDGE_EPS))
-                    & (u + v).cmple(Vec4::splat(1.0 + EDGE_EPS))
-                    & t.cmpgt(Vec4::ZERO)
-                    & t.cmplt(t_max4);
-                // Padding lanes are zero triangles: det = 0 makes their lanes NaN, never a hit.
-                if ok.bitmask() != 0 {
+                let (t, u, v, _) = r.intersect(&self.blocks[(cur & !LEAF) as usize]);
+                // Padding lanes are zero triangles: det = 0 makes them NaN, never a hit.
+                if lanes_hit(t, u, v, t_max) != 0 {
                     return true;
                 }
             } else {
                 let n = &self.nodes[cur as usize];
-                let tx0 = (n.min_x - ox) * ix;
-                let tx1 = (n.max_x - ox) * ix;
-                let ty0 = (n.min_y - oy) * iy;
-                let ty1 = (n.max_y - oy) * iy;
-                let tz0 = (n.min_z - oz) * iz;
-                let tz1 = (n.max_z - oz) * iz;
-                let tmin = tx0
-                    .min(tx1)
-                    .max(ty0.min(ty1))
-                    .max(tz0.min(tz1))
-                    .max(Vec4::ZERO);
-                let tmax = tx0.max(tx1).min(ty0.max(ty1)).min(tz0.max(tz1)).min(t_max4);
-                let mut mask = tmin.cmple(tmax).bitmask();
+                let (_, mut mask) = r.enter(n, t_max);
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
                     mask &= mask - 1;

@@ -174,37 +174,68 @@ pub(crate) mod tests {
         (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
     }
 
+    /// A scene meshed, with its hierarchy and per-patch materials: what the integrators' tests
+    /// shade.
+    pub(crate) struct Fixture {
+        pub(crate) mesh: Mesh,
+        pub(crate) bvh: Bvh,
+        pub(crate) system: crate::system::System,
+    }
+
+    impl Fixture {
+        pub(crate) fn new(scene: &Scene, patches: usize) -> Self {
+            let mesh = Mesh::build(scene, MeshParams::Patches(patches)).unwrap();
+            let bvh = Bvh::build(&mesh);
+            let system = crate::pipeline::patch_system(scene, &mesh);
+            Self { mesh, bvh, system }
+        }
+
+        pub(crate) fn surfaces(&self) -> Surfaces<'_> {
+            Surfaces {
+                mesh: &self.mesh,
+                bvh: &self.bvh,
+                reflectance: &self.system.reflectance,
+                emission: &self.system.emission,
+            }
+        }
+
+        pub(crate) fn lights(&self) -> Lights {
+            Lights::new(&self.mesh, &self.system.emission)
+        }
+
+        /// A patch of the floor (the upward-facing surface of [`lamp_over_floor`]).
+        pub(crate) fn floor(&self) -> u32 {
+            (0..self.mesh.len())
+                .find(|&i| self.mesh.patches[i].normal.y > 0.5)
+                .unwrap() as u32
+        }
+    }
+
+    /// Mean of `n` draws of `f` and its standard error.
+    pub(crate) fn mean_and_se(n: usize, mut f: impl FnMut() -> f64) -> (f64, f64) {
+        let (mut s1, mut s2) = (0.0, 0.0);
+        for _ in 0..n {
+            let v = f();
+            s1 += v;
+            s2 += v * v;
+        }
+        let m = s1 / n as f64;
+        (m, ((s2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
+    }
+
     /// Next-event estimation is unbiased for the irradiance under a square lamp: E · F with
     /// F from the closed form, within 4 standard errors of the sample mean.
     #[test]
     fn irradiance_under_a_lamp_matches_the_closed_form() {
-        let scene = lamp_over_floor(1.0, 0.8, 10.0, 0.5);
-        let mesh = Mesh::build(&scene, MeshParams::Patches(400)).unwrap();
-        let bvh = Bvh::build(&mesh);
-        let sys = crate::pipeline::patch_system(&scene, &mesh);
-        let s = Surfaces {
-            mesh: &mesh,
-            bvh: &bvh,
-            reflectance: &sys.reflectance,
-            emission: &sys.emission,
-        };
-        let lights = Lights::new(&mesh, &sys.emission);
-        let floor = (0..mesh.len())
-            .find(|&i| mesh.patches[i].normal.y > 0.5)
-            .unwrap() as u32;
+        let f = Fixture::new(&lamp_over_floor(1.0, 0.8, 10.0, 0.5), 400);
+        let (s, lights, floor) = (f.surfaces(), f.lights(), f.floor());
         let exact = 10.0 * 4.0 * corner_factor(0.5, 0.5, 0.8);
         let mut rng = crate::sampling::stream(1, 2, 3, 4);
-        let n = 200_000;
-        let (mut s1, mut s2) = (0.0, 0.0);
-        for _ in 0..n {
-            let v = lights
+        let (mean, se) = mean_and_se(200_000, || {
+            lights
                 .irradiance(&s, Vec3::ZERO, Vec3::Y, floor, &mut rng)
-                .g;
-            s1 += v;
-            s2 += v * v;
-        }
-        let mean = s1 / n as f64;
-        let se = ((s2 / n as f64 - mean * mean) / n as f64).sqrt();
+                .g
+        });
         assert!((mean - exact).abs() < 4.0 * se, "{mean} vs {exact} ± {se}");
         assert!(se < 0.01 * exact);
     }

@@ -171,6 +171,20 @@ pub fn render(
     )
 }
 
+/// A ray arriving at point `x` of `patch` against its normal `n`, and its hit: what an
+/// integrator needs to shade `x` as if a camera ray had reached it (tests and probes).
+pub(crate) fn arriving(x: Vec3, n: Vec3, patch: u32) -> (Ray, Hit) {
+    let hit = Hit {
+        t: 1.0,
+        patch,
+        sub: 0,
+        u: 0.0,
+        v: 0.0,
+        front: true,
+    };
+    (Ray::new(x + n, -n), hit)
+}
+
 /// The value at a hit point interpolated from the patch's vertex values.
 #[inline]
 pub(crate) fn gouraud(mesh: &Mesh, vertex_values: &[Rgb], hit: &Hit) -> Rgb {

@@ -92,16 +92,7 @@ pub fn radiosity_at(
     paths: u32,
     rng: &mut Rng64,
 ) -> (Rgb, Rgb) {
-    // A ray arriving along −n at x is all `radiance` needs.
-    let ray = Ray::new(x + n, -n);
-    let hit = Hit {
-        t: 1.0,
-        patch,
-        sub: 0,
-        u: 0.0,
-        v: 0.0,
-        front: true,
-    };
+    let (ray, hit) = super::arriving(x, n, patch);
     let (mut sum, mut sq) = (Rgb::BLACK, Rgb::BLACK);
     for _ in 0..paths {
         let v = radiance(s, lights, &ray, &hit, rng) * std::f64::consts::PI;
@@ -122,38 +113,22 @@ pub fn radiosity_at(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::Bvh;
-    use crate::mesh::{Mesh, MeshParams};
-    use crate::render::light::tests::{corner_factor, lamp_over_floor};
+    use crate::render::light::tests::{corner_factor, lamp_over_floor, Fixture};
     use crate::sampling::stream;
-
-    fn setup(scene: &crate::scene::Scene, patches: usize) -> (Mesh, Bvh, crate::system::System) {
-        let mesh = Mesh::build(scene, MeshParams::Patches(patches)).unwrap();
-        let bvh = Bvh::build(&mesh);
-        let sys = crate::pipeline::patch_system(scene, &mesh);
-        (mesh, bvh, sys)
-    }
 
     /// The furnace (every surface emits E and reflects ρ, closed): B = E/(1 − ρ) everywhere.
     /// The path tracer's estimate at points of the box and the block is within 4 standard
     /// errors of it (each from 4,000 paths).
     #[test]
     fn path_tracer_matches_the_furnace() {
-        let scene = crate::scene::builtin::furnace();
-        let (mesh, bvh, sys) = setup(&scene, 600);
-        let s = Surfaces {
-            mesh: &mesh,
-            bvh: &bvh,
-            reflectance: &sys.reflectance,
-            emission: &sys.emission,
-        };
-        let lights = Lights::new(&mesh, &sys.emission);
+        let f = Fixture::new(&crate::scene::builtin::furnace(), 600);
+        let (s, lights) = (f.surfaces(), f.lights());
         let rho = crate::scene::builtin::FURNACE_REFLECTANCE;
         let e = crate::scene::builtin::FURNACE_EMISSION;
         let exact = e.g / (1.0 - rho.g);
         let mut rng = stream(5, 0, 0, 0);
-        for i in (0..mesh.len()).step_by(97) {
-            let p = &mesh.patches[i];
+        for i in (0..f.mesh.len()).step_by(97) {
+            let p = &f.mesh.patches[i];
             let (b, se) = radiosity_at(&s, &lights, p.centre, p.normal, i as u32, 4000, &mut rng);
             assert!(
                 (b.g - exact).abs() < 4.0 * se.g + 1e-9,
@@ -168,18 +143,8 @@ mod tests {
     /// (its light escapes or meets the black lamp).
     #[test]
     fn path_tracer_matches_the_lamp_closed_form() {
-        let scene = lamp_over_floor(1.0, 0.8, 10.0, 0.5);
-        let (mesh, bvh, sys) = setup(&scene, 400);
-        let s = Surfaces {
-            mesh: &mesh,
-            bvh: &bvh,
-            reflectance: &sys.reflectance,
-            emission: &sys.emission,
-        };
-        let lights = Lights::new(&mesh, &sys.emission);
-        let floor = (0..mesh.len())
-            .find(|&i| mesh.patches[i].normal.y > 0.5)
-            .unwrap();
+        let f = Fixture::new(&lamp_over_floor(1.0, 0.8, 10.0, 0.5), 400);
+        let (s, lights) = (f.surfaces(), f.lights());
         let exact = 0.5 * 10.0 * 4.0 * corner_factor(0.5, 0.5, 0.8);
         let mut rng = stream(6, 0, 0, 0);
         let (b, se) = radiosity_at(
@@ -187,7 +152,7 @@ mod tests {
             &lights,
             Vec3::ZERO,
             Vec3::Y,
-            floor as u32,
+            f.floor(),
             100_000,
             &mut rng,
         );
