@@ -35,6 +35,42 @@ impl ValueEnum for SolverArg {
     }
 }
 
+/// A method that solves a scene (`solve`, `render`, `--solver`): every linear-system solver,
+/// or `hierarchical` (None), which needs the scene's geometry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SceneSolverArg(pub Option<Solver>);
+
+const fn wrap_scene_solvers<const N: usize, const M: usize>(all: [Solver; N]) -> [SceneSolverArg; M] {
+    let mut out = [SceneSolverArg(None); M];
+    let mut i = 0;
+    while i < N {
+        out[i] = SceneSolverArg(Some(all[i]));
+        i += 1;
+    }
+    out
+}
+
+static SCENE_SOLVERS: [SceneSolverArg; Solver::ALL.len() + 1] = wrap_scene_solvers(Solver::ALL);
+
+/// The name and summary of the hierarchical method.
+pub const HIERARCHICAL: (&str, &str) = (
+    "hierarchical",
+    "hierarchical radiosity with clustering: adaptive elements and links (Hanrahan et al. 1991; Smits et al. 1994)",
+);
+
+impl ValueEnum for SceneSolverArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        &SCENE_SOLVERS
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(match self.0 {
+            Some(s) => PossibleValue::new(s.name()).help(s.summary()),
+            None => PossibleValue::new(HIERARCHICAL.0).help(HIERARCHICAL.1),
+        })
+    }
+}
+
 /// A form-factor method named on the command line (`--form-factor-method`, `--method`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FormFactorArg(pub FormFactorMethod);
@@ -532,7 +568,7 @@ pub struct SolveArgs {
     pub rows: RowsArg,
     /// The solution method.
     #[arg(long, value_name = "M", value_enum, default_value = "progressive", help_heading = SOLVER)]
-    pub solver: SolverArg,
+    pub solver: SceneSolverArg,
     /// Stop when the unshot energy is at most this fraction of the emitted energy (default
     /// 0.01; `render` 0.0003, where the display's ambient term changes no part of the Cornell
     /// box's picture by more than 1 %).
@@ -555,6 +591,20 @@ pub struct SolveArgs {
     /// iteration.
     #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
     pub iteration_rays: u32,
+    /// `hierarchical`: refine a link when the power it may misplace exceeds this fraction of
+    /// the emitted power.
+    #[arg(long, value_name = "E", default_value_t = radiosity::hierarchical::Params::default().link_error, help_heading = SOLVER)]
+    pub link_error: f64,
+    /// `hierarchical`: do not split elements below this area, in square scene units (default:
+    /// the scene's total area × 1e-6).
+    #[arg(long, value_name = "A", help_heading = SOLVER)]
+    pub min_area: Option<f64>,
+    /// `hierarchical`: visibility rays from each of a link's four receiver points.
+    #[arg(long, value_name = "N", default_value_t = radiosity::hierarchical::Params::default().visibility_rays, help_heading = SOLVER)]
+    pub visibility_rays: u32,
+    /// `hierarchical`: refinement passes at most (each followed by a solve).
+    #[arg(long, value_name = "N", default_value_t = radiosity::hierarchical::Params::default().max_passes, help_heading = SOLVER)]
+    pub passes: u32,
     /// Seed of every random stream.
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]
     pub seed: u64,
@@ -666,6 +716,14 @@ pub struct SolveCmdArgs {
         help_heading = OUTPUT
     )]
     pub exposure: f32,
+    /// `hierarchical`: write every link as CSV (receiver, source, kind, form factor,
+    /// uncertainty, transported power).
+    #[arg(long, value_name = "links.csv", help_heading = OUTPUT)]
+    pub links_out: Option<PathBuf>,
+    /// `hierarchical`: write every element as CSV (id, parent, level, surface, leaf, area,
+    /// centre, radiosity).
+    #[arg(long, value_name = "elements.csv", help_heading = OUTPUT)]
+    pub elements_out: Option<PathBuf>,
 }
 
 /// `radiosity bench`.
@@ -739,6 +797,20 @@ pub struct BenchArgs {
     /// `--pictures`: folder for the results.
     #[arg(long, value_name = "DIR", default_value = "pictures", help_heading = OUTPUT)]
     pub out: PathBuf,
+    /// Per-surface accuracy of hierarchical radiosity (at each --link-errors) and of uniform
+    /// meshes (at each --sizes, progressive) on SCENE, against path-traced surface means
+    /// (--reference surfaces.csv, made with --reference-paths paths when absent).
+    #[arg(long, value_name = "SCENE", help_heading = SCENE)]
+    pub hierarchical: Option<String>,
+    /// `--hierarchical`: the link errors to try.
+    #[arg(long, value_name = "E,E,…", value_delimiter = ',', num_args = 1.., help_heading = SOLVER)]
+    pub link_errors: Option<Vec<f64>>,
+    /// `--hierarchical`: paths of the reference in all (shared by area).
+    #[arg(long, value_name = "N", default_value_t = 20_000_000, help_heading = SCENE)]
+    pub reference_paths: u64,
+    /// `--hierarchical`: Monte Carlo rays a form-factor row of the uniform solves.
+    #[arg(long = "uniform-rays", value_name = "N", default_value_t = 1024, help_heading = FORM_FACTORS)]
+    pub uniform_rays: u32,
 }
 
 /// `radiosity view`.

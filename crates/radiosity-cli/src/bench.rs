@@ -106,6 +106,9 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if let Some(scene) = &a.pictures {
         return crate::pictures::run(&a, scene);
     }
+    if let Some(scene) = &a.hierarchical {
+        return crate::accuracy::run(&a, scene);
+    }
     crate::settings::threads(a.threads)?;
     if a.form_factors {
         return form_factor_table(a.runs);

@@ -1,5 +1,6 @@
 //! `radiosity`: the command-line front end. Parses arguments, runs the library, reports.
 
+mod accuracy;
 mod alloc;
 mod args;
 mod bench;

@@ -104,16 +104,47 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
         scene.name,
         scene.polygons.len()
     );
-    println!(
-        "patches     {} (max edge {:.4} scene units)",
-        s.mesh.len(),
-        s.mesh.max_edge
-    );
-    println!("rays        {} in {} form-factor rows", ff.rays, ff.rows);
+    match &s.hierarchy {
+        Some(h) => {
+            let hi = &h.hierarchy.info;
+            println!(
+                "patches     {} leaf elements of {} ({} levels at most; minimum area {:.4e} square scene units)",
+                s.mesh.len(),
+                hi.elements,
+                h.hierarchy
+                    .elements
+                    .items
+                    .iter()
+                    .map(|e| e.level)
+                    .max()
+                    .unwrap_or(0)
+                    + 1,
+                hi.min_area
+            );
+            println!(
+                "links       {} ({:.1} a leaf) over {} clusters; {} refinements in {} passes; {} visibility rays; {:.1} MiB",
+                hi.links,
+                hi.links as f64 / s.mesh.len().max(1) as f64,
+                hi.clusters,
+                hi.refinements,
+                hi.passes,
+                hi.rays,
+                hi.bytes as f64 / (1024.0 * 1024.0)
+            );
+        }
+        None => {
+            println!(
+                "patches     {} (max edge {:.4} scene units)",
+                s.mesh.len(),
+                s.mesh.max_edge
+            );
+            println!("rays        {} in {} form-factor rows", ff.rays, ff.rows);
+        }
+    }
     println!(
         "iterations  {} by {} ({}; unshot energy left {:.3}% of emitted)",
         i.iterations,
-        s.method,
+        s.method_name(),
         if i.converged {
             "converged".to_string()
         } else {
@@ -139,8 +170,16 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
     );
     let t = &s.timings;
     let mut line = format!(
-        "time        mesh {:.3} s, hierarchy {:.3} s, form factors {:.3} s, solve {:.3} s",
-        t.mesh, t.bvh, t.form_factors, t.solve
+        "time        mesh {:.3} s, hierarchy {:.3} s, {} {:.3} s, solve {:.3} s",
+        t.mesh,
+        t.bvh,
+        if s.hierarchy.is_some() {
+            "link refinement"
+        } else {
+            "form factors"
+        },
+        t.form_factors,
+        t.solve
     );
     if let Some((r, w)) = render {
         line += &format!(", render {r:.3} s, write {w:.3} s");

@@ -4,6 +4,10 @@ use crate::args::{CameraArgs, ImageArgs, SolveArgs};
 use anyhow::{bail, Context, Result};
 use radiosity::formfactor::{FormFactorError, Parameter, Params as FormFactorParams};
 use radiosity::geom::Vec3;
+use radiosity::hierarchical::{
+    HierarchicalError, Parameter as HierarchicalParameter, Params as HierarchicalParams,
+};
+use radiosity::solve::Solver;
 use radiosity::mesh::MeshParams;
 use radiosity::pipeline::Settings;
 use radiosity::scene::Camera;
@@ -68,17 +72,48 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
         ..FormFactorParams::shooting()
     };
     form_factors.validate().map_err(flag_error)?;
+    let tolerance = a.tolerance.unwrap_or(if a.picture {
+        PICTURE_TOLERANCE
+    } else {
+        DEFAULT_TOLERANCE
+    });
+    let hierarchical = match a.solver.0 {
+        Some(_) => None,
+        None => {
+            if a.trace.is_some() {
+                bail!("--trace: the hierarchical solver has no stored matrix to trace against; use a linear-system solver");
+            }
+            let defaults = HierarchicalParams::default();
+            let p = HierarchicalParams {
+                link_error: a.link_error,
+                min_area: a.min_area.unwrap_or(0.0),
+                visibility_rays: a.visibility_rays,
+                max_passes: a.passes,
+                tolerance,
+                max_iterations: a.max_iterations.unwrap_or(defaults.max_iterations),
+                seed: a.seed,
+                ..defaults
+            };
+            if a.min_area == Some(0.0) {
+                bail!("--min-area 0: must be a positive area");
+            }
+            if a.passes == 0 {
+                bail!("--passes 0: at least one refinement pass is needed");
+            }
+            p.validate().map_err(|e| match flag_of(&e) {
+                Some(flag) => anyhow::anyhow!("{flag}: {e}"),
+                None => e.into(),
+            })?;
+            Some(p)
+        }
+    };
     Ok(Settings {
         mesh,
         form_factors,
         rows: a.rows.into(),
-        solver: a.solver.0,
+        solver: a.solver.0.unwrap_or(Solver::Progressive),
         params: solver_params(
-            a.tolerance.unwrap_or(if a.picture {
-                PICTURE_TOLERANCE
-            } else {
-                DEFAULT_TOLERANCE
-            }),
+            tolerance,
             a.max_iterations,
             a.omega,
             a.photons,
@@ -87,6 +122,7 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
         )?,
         memory_limit: 0,
         trace: a.trace.is_some(),
+        hierarchical,
     })
 }
 
@@ -97,6 +133,14 @@ pub fn flag_of(e: &(dyn std::error::Error + 'static)) -> Option<&'static str> {
             Parameter::Resolution => "--resolution",
             Parameter::Samples => "--samples",
             Parameter::Rays => "--rays",
+        });
+    }
+    if let Some(HierarchicalError::Parameter { parameter, .. }) = e.downcast_ref() {
+        return Some(match parameter {
+            HierarchicalParameter::LinkError => "--link-error",
+            HierarchicalParameter::MinArea => "--min-area",
+            HierarchicalParameter::VisibilityRays => "--visibility-rays",
+            HierarchicalParameter::Tolerance => "--tolerance",
         });
     }
     if let Some(SolveError::Parameter { parameter, .. }) = e.downcast_ref() {

@@ -26,6 +26,7 @@ pub mod export;
 pub mod formfactor;
 pub mod fuzz;
 pub mod geom;
+pub mod hierarchical;
 pub mod io;
 pub mod loc;
 pub mod mesh;
@@ -58,6 +59,9 @@ pub enum Error {
     /// An input file is malformed.
     #[error(transparent)]
     Input(#[from] io::InputError),
+    /// Hierarchical radiosity could not run.
+    #[error(transparent)]
+    Hierarchical(#[from] hierarchical::HierarchicalError),
     /// A heat-transfer problem could not be solved.
     #[error(transparent)]
     Thermal(#[from] thermal::ThermalError),

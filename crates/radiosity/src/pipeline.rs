@@ -50,6 +50,10 @@ pub struct Settings {
     /// Record a convergence trace ([`Solution::trace`]); every row of F is then stored first,
     /// so that the error can be measured against the LU solution of the very matrix solved.
     pub trace: bool,
+    /// Solve by hierarchical radiosity with these parameters instead of meshing uniformly and
+    /// running `solver` ([`crate::hierarchical`]): `mesh`, `form_factors`, `rows` and `solver`
+    /// are then unused.
+    pub hierarchical: Option<crate::hierarchical::Params>,
 }
 
 impl Default for Settings {
@@ -62,6 +66,7 @@ impl Default for Settings {
             params: SolverParams::default(),
             memory_limit: 0,
             trace: false,
+            hierarchical: None,
         }
     }
 }
@@ -115,6 +120,29 @@ pub struct Solution {
     pub timings: Timings,
     /// The convergence trace, when [`Settings::trace`] asked for one.
     pub trace: Option<Trace>,
+    /// The element hierarchy and its links, when solved by hierarchical radiosity (the
+    /// patches are then its leaves: patch `k` is element `leaves[k]`).
+    pub hierarchy: Option<HierarchicalSolution>,
+}
+
+/// What hierarchical radiosity leaves beside the leaf patches.
+#[derive(Debug)]
+pub struct HierarchicalSolution {
+    /// Every element, cluster and link, with radiosities.
+    pub hierarchy: crate::hierarchical::Hierarchy,
+    /// The element of each patch.
+    pub leaves: Vec<u32>,
+}
+
+impl Solution {
+    /// The method's name: the solver's, or `hierarchical`.
+    pub fn method_name(&self) -> &'static str {
+        if self.hierarchy.is_some() {
+            "hierarchical"
+        } else {
+            self.method.name()
+        }
+    }
 }
 
 impl Solution {
@@ -301,6 +329,9 @@ pub fn solve(
         0 => available_memory().unwrap_or(u64::MAX),
         l => l,
     };
+    if let Some(params) = &settings.hierarchical {
+        return solve_hierarchical(scene, params, limit, observer);
+    }
     let store = settings.stores_rows();
     let memory = MemoryCheck {
         limit,
@@ -403,7 +434,158 @@ pub fn solve(
         info,
         form_factors,
         trace,
+        hierarchy: None,
     })
+}
+
+/// Hierarchical radiosity over the scene's pieces ([`crate::hierarchical`]); the solution's
+/// patches are the leaf elements, and its hierarchy is built over them for pictures.
+fn solve_hierarchical(
+    scene: &Scene,
+    params: &crate::hierarchical::Params,
+    limit: u64,
+    observer: &dyn Observer,
+) -> Result<Solution, Error> {
+    params.validate()?;
+    observer.event(Event::Stage(Stage::Mesh));
+    let t = Instant::now();
+    let roots = Mesh::build(scene, MeshParams::Faces)?;
+    let root_system = patch_system(scene, &roots);
+    root_system
+        .validate()
+        .map_err(|e| located(e, scene, &roots))?;
+    let mesh_s = t.elapsed().as_secs_f64();
+    observer.event(Event::Stage(Stage::Bvh));
+    let t = Instant::now();
+    let root_bvh = Bvh::build(&roots);
+    let mut bvh_s = t.elapsed().as_secs_f64();
+    let params = crate::hierarchical::Params {
+        memory_limit: params.memory_limit.min(limit / 2),
+        ..*params
+    };
+    let h = crate::hierarchical::solve(&roots, &root_system, &root_bvh, &params, observer)?;
+    let t = Instant::now();
+    let leaves = h.leaves();
+    let mesh = crate::hierarchical::output::leaf_mesh(&h, &roots, &leaves);
+    let root_of = |k: usize| h.elements.items[leaves[k] as usize].root as usize;
+    let system = System {
+        area: mesh.patches.iter().map(|p| p.area as f64).collect(),
+        reflectance: (0..leaves.len())
+            .map(|k| root_system.reflectance[root_of(k)])
+            .collect(),
+        emission: (0..leaves.len())
+            .map(|k| root_system.emission[root_of(k)])
+            .collect(),
+    };
+    let radiosity: Vec<Rgb> = leaves.iter().map(|&e| h.radiosity[e as usize]).collect();
+    let unshot: Vec<Rgb> = leaves.iter().map(|&e| h.unshot[e as usize]).collect();
+    let bvh = Bvh::build(&mesh);
+    bvh_s += t.elapsed().as_secs_f64();
+    let hi = h.info;
+    // Energy: emitted, and what arrived (Σ A H over leaves, H gathered through every ancestor)
+    // against what left (Σ A B).
+    let emitted: Rgb = system
+        .emission
+        .iter()
+        .zip(&system.area)
+        .map(|(e, a)| *e * *a)
+        .sum();
+    // What arrived at each leaf, H A: gathered through its own links and every ancestor's.
+    let incident: Vec<Rgb> = leaves
+        .iter()
+        .map(|&e| {
+            let mut x = e;
+            let mut g = Rgb::BLACK;
+            loop {
+                let el = &h.elements.items[x as usize];
+                g += h.gathered[x as usize] / (el.area as f64).max(f64::MIN_POSITIVE);
+                if el.parent == crate::hierarchical::element::NONE {
+                    break;
+                }
+                x = el.parent;
+            }
+            g * h.elements.items[e as usize].area as f64
+        })
+        .collect();
+    let arrived: Rgb = incident.iter().copied().sum();
+    let left: Rgb = radiosity.iter().zip(&system.area).map(|(b, a)| *b * *a).sum();
+    let absorbed: Rgb = incident
+        .iter()
+        .zip(&system.reflectance)
+        .map(|(h, r)| *h * (Rgb::splat(1.0) - *r))
+        .sum();
+    let unshot_power: Rgb = unshot.iter().zip(&system.area).map(|(u, a)| *u * *a).sum();
+    let info = Info {
+        iterations: hi.iterations,
+        converged: hi.converged,
+        unshot_fraction: hi.unshot_fraction,
+        seconds: hi.refine_seconds + hi.solve_seconds,
+        emitted,
+        absorbed,
+        escaped: left - arrived,
+        unshot: unshot_power,
+        estimated_error: 0.0,
+    };
+    Ok(Solution {
+        timings: Timings {
+            mesh: mesh_s,
+            bvh: bvh_s,
+            form_factors: hi.refine_seconds,
+            solve: hi.solve_seconds,
+        },
+        mesh,
+        bvh,
+        system,
+        radiosity,
+        unshot,
+        method: Solver::Jacobi,
+        info,
+        form_factors: FormFactorStats {
+            rows: hi.links as u64,
+            rays: hi.rays,
+            seconds: hi.refine_seconds,
+            ..Default::default()
+        },
+        trace: None,
+        hierarchy: Some(HierarchicalSolution {
+            hierarchy: h,
+            leaves,
+        }),
+    })
+}
+
+/// Path-traced mean radiosity of every surface (input polygon) of `scene`, with its standard
+/// error ([`crate::render::path::surface_means`]): `samples` paths in all, shared among the
+/// surfaces in proportion to their area (at least 64 each). The independent reference that
+/// solutions' surface means are measured against.
+pub fn path_surface_means(
+    scene: &Scene,
+    samples: u64,
+    seed: u64,
+) -> Result<Vec<(Rgb, Rgb)>, Error> {
+    scene.validate()?;
+    let mesh = Mesh::build(scene, MeshParams::Faces)?;
+    let bvh = Bvh::build(&mesh);
+    let system = patch_system(scene, &mesh);
+    let mut area = vec![0.0f64; scene.polygons.len()];
+    for p in &mesh.patches {
+        area[p.surface as usize] += p.area as f64;
+    }
+    let total: f64 = area.iter().sum();
+    let counts: Vec<u64> = area
+        .iter()
+        .map(|a| ((samples as f64 * a / total).round() as u64).max(64))
+        .collect();
+    let surfaces = crate::render::light::Surfaces {
+        mesh: &mesh,
+        bvh: &bvh,
+        reflectance: &system.reflectance,
+        emission: &system.emission,
+    };
+    let lights = crate::render::light::Lights::new(&mesh, &system.emission);
+    Ok(crate::render::path::surface_means(
+        &surfaces, &lights, &counts, seed,
+    ))
 }
 
 /// A system error about a patch, as an error at the place of the polygon it was cut from.

@@ -36,3 +36,11 @@ pub fn coaxial_discs(r1: f64, r2: f64, h: f64) -> f64 {
     let x = 1.0 + (1.0 + b * b) / (a * a);
     0.5 * (x - (x * x - 4.0 * (b / a).powi(2)).sqrt())
 }
+
+/// From a differential area to a parallel `a × b` rectangle at distance `c`, the area's normal
+/// through one corner of the rectangle (Howell's catalogue, B-3).
+pub fn point_parallel_rectangle(a: f64, b: f64, c: f64) -> f64 {
+    let (x, y) = (a / c, b / c);
+    let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+    (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
+}

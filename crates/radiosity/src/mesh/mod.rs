@@ -84,6 +84,12 @@ pub struct Mesh {
     pub max_edge: f32,
     /// Smoothing group of each surface (input polygon), from [`crate::scene::Polygon::group`].
     pub groups: Vec<u32>,
+    /// T-vertices `[v, a, b]`: vertex `v` lies on the edge `(a, b)` of a larger patch that
+    /// does not have it as a corner, so its interpolated value must be the mean of `a`'s and
+    /// `b`'s for colours to stay continuous. Ordered so that a constraint's `a` and `b` are
+    /// final before it (longest edges first). Empty for uniform meshes; filled by adaptive
+    /// meshes (hierarchical radiosity's leaves).
+    pub hanging: Vec<[u32; 3]>,
 }
 
 /// A piece of an input polygon: a triangle or a convex quad.

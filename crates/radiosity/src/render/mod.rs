@@ -70,7 +70,10 @@ impl Image {
 /// same surface: the patches that share the vertex, plus those of other pieces of the same input
 /// polygon, or of other polygons of the same smoothing group ([`crate::scene::Polygon::group`])
 /// whose normal is within [`crate::scene::CREASE_ANGLE_DEG`] of its own. So patches of one
-/// surface show no seams, and edges between surfaces (or across a crease) stay hard.
+/// surface show no seams, and edges between surfaces (or across a crease) stay hard. A
+/// T-vertex of an adaptive mesh ([`Mesh::hanging`]) then takes the mean of the ends of the edge
+/// it lies on, so the larger patch's interpolation along that edge and the smaller patches'
+/// agree: no colour cracks.
 pub fn vertex_radiosity(mesh: &Mesh, patch_values: &[Rgb]) -> Vec<Rgb> {
     let nv = mesh.vertices.len();
     let mut sum = vec![Rgb::BLACK; nv];
@@ -139,6 +142,9 @@ pub fn vertex_radiosity(mesh: &Mesh, patch_values: &[Rgb]) -> Vec<Rgb> {
                 out[i as usize] = s / w;
             }
         }
+    }
+    for &[v, a, b] in &mesh.hanging {
+        out[v as usize] = (out[a as usize] + out[b as usize]) * 0.5;
     }
     out
 }

@@ -110,6 +110,81 @@ pub fn radiosity_at(
     (mean, se)
 }
 
+/// The area-weighted mean radiosity of each surface (input polygon) and its standard error,
+/// by one path from each of `samples[k]` points drawn uniformly over surface `k`. Independent
+/// of any radiosity solution: the reference that solutions' surface means are measured
+/// against. Points come in chunks of 4,096 with streams keyed by `(seed, surface, chunk)`,
+/// so the result does not depend on the thread count.
+pub fn surface_means(
+    s: &Surfaces<'_>,
+    lights: &Lights,
+    samples: &[u64],
+    seed: u64,
+) -> Vec<(Rgb, Rgb)> {
+    use rayon::prelude::*;
+    let surfaces = samples.len();
+    // The patches of each surface with their cumulative areas.
+    let mut patches: Vec<Vec<usize>> = vec![Vec::new(); surfaces];
+    for (i, p) in s.mesh.patches.iter().enumerate() {
+        if let Some(v) = patches.get_mut(p.surface as usize) {
+            v.push(i);
+        }
+    }
+    const CHUNK: u64 = 4096;
+    let jobs: Vec<(usize, u64)> = (0..surfaces)
+        .flat_map(|k| (0..samples[k].div_ceil(CHUNK)).map(move |c| (k, c)))
+        .collect();
+    let sums: Vec<(usize, Rgb, Rgb, u64)> = jobs
+        .par_iter()
+        .map(|&(k, c)| {
+            let list = &patches[k];
+            let mut rng = crate::sampling::stream(seed, k as u64, c, 0x5355_5246);
+            let (mut s1, mut s2) = (Rgb::BLACK, Rgb::BLACK);
+            let n = CHUNK.min(samples[k] - c * CHUNK);
+            if list.is_empty() {
+                return (k, s1, s2, 0);
+            }
+            let total: f64 = list.iter().map(|&i| s.mesh.patches[i].area as f64).sum();
+            for _ in 0..n {
+                let mut u = uniform(&mut rng) as f64 * total;
+                let mut i = list[list.len() - 1];
+                for &j in list {
+                    let a = s.mesh.patches[j].area as f64;
+                    if u < a {
+                        i = j;
+                        break;
+                    }
+                    u -= a;
+                }
+                let (u1, u2, u3) = (uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
+                let x = s.mesh.sample_point(i, u1, u2, u3);
+                let nrm = s.mesh.patches[i].normal;
+                let (b, _) = radiosity_at(s, lights, x, nrm, i as u32, 1, &mut rng);
+                s1 += b;
+                s2 += b * b;
+            }
+            (k, s1, s2, n)
+        })
+        .collect();
+    let mut acc = vec![(Rgb::BLACK, Rgb::BLACK, 0u64); surfaces];
+    for (k, s1, s2, n) in sums {
+        acc[k].0 += s1;
+        acc[k].1 += s2;
+        acc[k].2 += n;
+    }
+    acc.into_iter()
+        .map(|(s1, s2, n)| {
+            if n == 0 {
+                return (Rgb::BLACK, Rgb::BLACK);
+            }
+            let m = n as f64;
+            let mean = s1 / m;
+            let var = (s2 / m - mean * mean) / (m - 1.0).max(1.0);
+            (mean, var.map(|v| v.max(0.0).sqrt()))
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

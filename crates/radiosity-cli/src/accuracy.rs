@@ -1,0 +1,172 @@
+//! `radiosity bench --hierarchical SCENE`: the per-surface accuracy of hierarchical radiosity
+//! (at each `--link-errors`) and of uniform meshes solved by progressive refinement (at each
+//! `--sizes`), against path-traced surface means that know nothing of either
+//! ([`radiosity::pipeline::path_surface_means`]). Emitters are left out of the errors (their
+//! radiosity is mostly their own emission).
+
+use crate::args::BenchArgs;
+use anyhow::{bail, Context, Result};
+use radiosity::hierarchical::Params as HierarchicalParams;
+use radiosity::mesh::MeshParams;
+use radiosity::pipeline::{self, Settings, Solution};
+use radiosity::Rgb;
+use std::path::Path;
+use std::time::Instant;
+
+/// Surface means and their standard errors, from `path` or made and written there.
+fn reference(
+    a: &BenchArgs,
+    scene: &radiosity::scene::Scene,
+    path: &Path,
+) -> Result<Vec<(Rgb, Rgb)>> {
+    if path.exists() {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let mut out = Vec::new();
+        for (k, line) in text.lines().enumerate().skip(1) {
+            let v: Vec<f64> = line
+                .split(',')
+                .skip(1)
+                .map(|t| t.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .with_context(|| format!("{}:{}: not a number", path.display(), k + 1))?;
+            if v.len() != 6 {
+                bail!(
+                    "{}:{}: expected 7 columns (surface,b_r,b_g,b_b,se_r,se_g,se_b)",
+                    path.display(),
+                    k + 1
+                );
+            }
+            out.push((Rgb::new(v[0], v[1], v[2]), Rgb::new(v[3], v[4], v[5])));
+        }
+        if out.len() != scene.polygons.len() {
+            bail!(
+                "{}: {} surfaces, but the scene has {}",
+                path.display(),
+                out.len(),
+                scene.polygons.len()
+            );
+        }
+        println!("reference   {} (read)", path.display());
+        return Ok(out);
+    }
+    let t = Instant::now();
+    let means = pipeline::path_surface_means(scene, a.reference_paths, 7)?;
+    let mut csv = String::from("surface,b_r,b_g,b_b,se_r,se_g,se_b\n");
+    for (k, (b, se)) in means.iter().enumerate() {
+        csv += &format!(
+            "{k},{},{},{},{},{},{}\n",
+            b.r, b.g, b.b, se.r, se.g, se.b
+        );
+    }
+    radiosity::export::write_text(path, &csv)?;
+    println!(
+        "reference   {} ({} paths, {:.1} s)",
+        path.display(),
+        a.reference_paths,
+        t.elapsed().as_secs_f64()
+    );
+    Ok(means)
+}
+
+/// Relative errors of a solution's surface means (channel sums), emitters and surfaces the
+/// reference cannot resolve (standard error above 1 %) left out: (mean, worst, area-weighted
+/// L1, the reference's own noise floor of that L1).
+fn errors(
+    scene: &radiosity::scene::Scene,
+    s: &Solution,
+    reference: &[(Rgb, Rgb)],
+) -> (f64, f64, f64, f64) {
+    let n = scene.polygons.len();
+    let mut sum = vec![0.0f64; n];
+    let mut area = vec![0.0f64; n];
+    for (p, b) in s.mesh.patches.iter().zip(&s.radiosity) {
+        sum[p.surface as usize] += b.sum() * p.area as f64;
+        area[p.surface as usize] += p.area as f64;
+    }
+    let (mut total, mut worst, mut count) = (0.0, 0.0f64, 0usize);
+    let (mut l1, mut floor, mut weight) = (0.0, 0.0, 0.0);
+    for k in 0..n {
+        let emits = scene.materials[scene.polygons[k].material]
+            .emission
+            .max_channel()
+            > 0.0;
+        let (b, se) = reference[k];
+        if emits || area[k] <= 0.0 || b.sum() <= 0.0 {
+            continue;
+        }
+        let se = (se.r * se.r + se.g * se.g + se.b * se.b).sqrt();
+        let rel = (sum[k] / area[k] - b.sum()) / b.sum();
+        l1 += (sum[k] / area[k] - b.sum()).abs() * area[k];
+        floor += se * (2.0 / std::f64::consts::PI).sqrt() * area[k];
+        weight += b.sum() * area[k];
+        if se / b.sum() > 0.01 {
+            continue;
+        }
+        total += rel.abs();
+        worst = worst.max(rel.abs());
+        count += 1;
+    }
+    (
+        total / count.max(1) as f64,
+        worst,
+        l1 / weight.max(f64::MIN_POSITIVE),
+        floor / weight.max(f64::MIN_POSITIVE),
+    )
+}
+
+/// Run the accuracy benchmark.
+pub fn run(a: &BenchArgs, name: &str) -> Result<()> {
+    crate::settings::threads(a.threads)?;
+    let scene = crate::load_scene(name, a.one_sided)?;
+    let path = a.reference.clone().unwrap_or_else(|| {
+        std::path::PathBuf::from(format!("{}-surfaces.csv", scene.name))
+    });
+    let reference = reference(a, &scene, &path)?;
+    println!(
+        "{:<28} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "method", "elements", "links", "wall s", "mean %", "worst %", "L1 %", "floor %"
+    );
+    let row = |label: String, s: &Solution, links: usize, wall: f64| {
+        let (mean, worst, l1, floor) = errors(&scene, s, &reference);
+        println!(
+            "{label:<28} {:>9} {:>9} {:>8.2} {:>8.3} {:>8.3} {:>8.3} {:>8.3}",
+            s.mesh.len(),
+            links,
+            wall,
+            100.0 * mean,
+            100.0 * worst,
+            100.0 * l1,
+            100.0 * floor
+        );
+    };
+    let tolerance = a.tolerance.min(1e-4);
+    for &e in a.link_errors.as_deref().unwrap_or(&[1e-4, 3e-5, 1e-5]) {
+        let settings = Settings {
+            hierarchical: Some(HierarchicalParams {
+                link_error: e,
+                tolerance,
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        let t = Instant::now();
+        let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent)?;
+        let wall = t.elapsed().as_secs_f64();
+        let links = s.hierarchy.as_ref().map_or(0, |h| h.hierarchy.links.len());
+        row(format!("hierarchical {e:e}"), &s, links, wall);
+    }
+    for &n in a.sizes.as_deref().unwrap_or(&[]) {
+        let mut settings = Settings {
+            mesh: MeshParams::Patches(n),
+            ..Default::default()
+        };
+        settings.form_factors.rays = a.uniform_rays;
+        settings.params.tolerance = tolerance;
+        let t = Instant::now();
+        let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent)?;
+        let wall = t.elapsed().as_secs_f64();
+        row(format!("uniform progressive {n}"), &s, 0, wall);
+    }
+    Ok(())
+}

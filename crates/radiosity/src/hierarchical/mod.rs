@@ -1,0 +1,796 @@
+//! Hierarchical radiosity with clustering (Hanrahan, Salzman & Aupperle 1991; clusters after
+//! Smits, Arvo & Greenberg 1994 and Sillion 1995).
+//!
+//! Each input piece (convex quad or triangle) is the root of an element quadtree
+//! ([`element`]); the roots are grouped into a binary cluster tree ([`cluster`]). Light moves
+//! along *links*: a link from receiver element `r` to source `s` (an element or a cluster) says
+//! that `r` gathers `k · B_s`, where `k` is the form factor from `r` to `s` ([`kernel`]) and
+//! `B_s` the area-weighted mean radiosity of `s`.
+//!
+//! **Refinement.** Every root element starts with one candidate link to the top cluster. A
+//! candidate is culled when the two cannot see each other (one lies behind the other's plane,
+//! or both belong to the same input piece), and otherwise estimated and judged by the oracle
+//!
+//! ```text
+//! err = ρ_r A_r (B̄_s · K + k · ΔB_s)
+//! ```
+//!
+//! the power that could be misplaced by gathering through this link: `ΔB_s` is the spread of
+//! radiosity among the source's leaves (what gathering from their mean hides), and `K` the
+//! kernel's uncertainty over the receiver — in the far field (centres more than twice the sum of
+//! the bounding radii apart) the spread `max − min` of the point values over the receiver's four
+//! points, so that partial visibility (a shadow boundary) and steep 1/r² fall-off refine; in the
+//! near field, where four points cannot bound the kernel, its bound `max(k_max, min(1,
+//! A_s/(π d²)))` with `d` the gap between the bounding spheres. A link with `err` above
+//! `link_error × Φ` (Φ the emitted power) is replaced by links from the children of the larger
+//! side (by bounding radius); elements are not split below `min_area`, and a cluster that holds
+//! the receiver or is closer than twice its radius plus the receiver's is always opened.
+//!
+//! **Clusters** are sources only: a receiver is always an element, so a root gathers from
+//! the clusters of everything far from it (O(log N) links a root, as in Barnes–Hut), and no
+//! isotropic assumption is made about how a cluster receives. A cluster sends with the mean
+//! radiosity of its surfaces, and its link coefficient is a Monte Carlo estimate of the
+//! point-to-area factor over its actual surfaces with both cosines and visibility
+//! ([`kernel`]): the orientation of every surface counts, not an isotropic volume.
+//!
+//! **Solution.** Jacobi iterations of gather (every link, in parallel), push (what an element
+//! gathered is added to its descendants) and pull (an element's radiosity is the area mean of its
+//! children's; a cluster's the area mean of its members'), from B = E, until the power the
+//! last iteration changed is at most `tolerance × Φ`. Then every link is judged again with
+//! the new radiosities and refined where needed, and the solve repeated, until a pass refines
+//! nothing (or `max_passes`).
+//!
+//! The result is the leaf elements with their radiosity ([`output`] turns them into a mesh
+//! whose vertex colours are continuous across T-vertices).
+
+pub mod cluster;
+pub mod element;
+pub mod kernel;
+pub mod output;
+
+use crate::accel::Bvh;
+use crate::color::Rgb;
+use crate::mesh::Mesh;
+use crate::observe::{Event, Observer, Stage};
+use crate::system::System;
+use cluster::{Clusters, CLUSTER};
+use element::{Element, Elements};
+use kernel::{Context, Estimate};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// What the hierarchical solver is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Params {
+    /// A link is refined when the power it may misplace exceeds this fraction of the emitted
+    /// power.
+    pub link_error: f64,
+    /// Elements are not split below this area (square scene units); 0: the scene's area × 1e-6.
+    pub min_area: f64,
+    /// Visibility rays from each of a link's four receiver points.
+    pub visibility_rays: u32,
+    /// Refinement passes at most (each followed by a solve).
+    pub max_passes: u32,
+    /// Stop iterating when the last iteration changed at most this fraction of the emitted
+    /// power.
+    pub tolerance: f64,
+    /// Iterations per solve at most.
+    pub max_iterations: u64,
+    /// Seed of the visibility streams.
+    pub seed: u64,
+    /// Refuse to grow beyond this many bytes of elements and links.
+    pub memory_limit: u64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            link_error: 2e-5,
+            min_area: 0.0,
+            visibility_rays: 4,
+            max_passes: 6,
+            tolerance: 1e-4,
+            max_iterations: 1000,
+            seed: 1,
+            memory_limit: 4 << 30,
+        }
+    }
+}
+
+/// A parameter, for errors (the program maps it to its option).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Parameter {
+    /// [`Params::link_error`].
+    LinkError,
+    /// [`Params::min_area`].
+    MinArea,
+    /// [`Params::visibility_rays`].
+    VisibilityRays,
+    /// [`Params::tolerance`].
+    Tolerance,
+}
+
+impl std::fmt::Display for Parameter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Parameter::LinkError => "link error",
+            Parameter::MinArea => "minimum element area",
+            Parameter::VisibilityRays => "visibility rays per receiver point",
+            Parameter::Tolerance => "tolerance",
+        })
+    }
+}
+
+/// Why the hierarchical solver could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum HierarchicalError {
+    /// A parameter is out of range.
+    #[error("{parameter} = {value} is outside {range}")]
+    Parameter {
+        /// Which.
+        parameter: Parameter,
+        /// Its value.
+        value: f64,
+        /// The range it must lie in.
+        range: &'static str,
+    },
+    /// Refinement would outgrow the memory allowed.
+    #[error("hierarchical refinement reached {elements} elements and {links} links, about {} MiB, more than the {} MiB allowed; raise the link error or the minimum element area", needed >> 20, limit >> 20)]
+    TooLarge {
+        /// Elements so far.
+        elements: usize,
+        /// Links so far.
+        links: usize,
+        /// Bytes they need.
+        needed: u64,
+        /// Bytes allowed.
+        limit: u64,
+    },
+}
+
+impl Params {
+    /// Check every parameter's range.
+    pub fn validate(&self) -> Result<(), HierarchicalError> {
+        let bad = |parameter, value: f64, range| {
+            Err(HierarchicalError::Parameter {
+                parameter,
+                value,
+                range,
+            })
+        };
+        if !(self.link_error.is_finite() && self.link_error > 0.0) {
+            return bad(Parameter::LinkError, self.link_error, "(0, ∞)");
+        }
+        if !(self.min_area.is_finite() && self.min_area >= 0.0) {
+            return bad(Parameter::MinArea, self.min_area, "[0, ∞)");
+        }
+        if !(1..=1024).contains(&self.visibility_rays) {
+            return bad(
+                Parameter::VisibilityRays,
+                self.visibility_rays as f64,
+                "[1, 1024]",
+            );
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return bad(Parameter::Tolerance, self.tolerance, "(0, ∞)");
+        }
+        Ok(())
+    }
+}
+
+/// A link: `receiver` gathers `k · B(source)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Link {
+    /// The receiving element.
+    pub receiver: u32,
+    /// The source: an element id, or a cluster index tagged with [`CLUSTER`].
+    pub source: u32,
+    /// The form factor from receiver to source.
+    pub k: f32,
+    /// The oracle's own estimate of it, independent of `k` (so that which links are kept
+    /// does not depend on the values they carry).
+    pub k_oracle: f32,
+    /// The oracle's kernel uncertainty `K` (see the module docs).
+    pub uncertainty: f32,
+}
+
+/// What the hierarchical solver did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Info {
+    /// Elements in all the quadtrees (roots included).
+    pub elements: usize,
+    /// Leaf elements (the output).
+    pub leaves: usize,
+    /// Links.
+    pub links: usize,
+    /// Clusters.
+    pub clusters: usize,
+    /// Links replaced by finer ones.
+    pub refinements: u64,
+    /// Refinement passes.
+    pub passes: u32,
+    /// Gather–push–pull iterations, all passes.
+    pub iterations: u64,
+    /// Visibility rays.
+    pub rays: u64,
+    /// Bytes held by elements, clusters and links.
+    pub bytes: u64,
+    /// Seconds refining links (estimation included).
+    pub refine_seconds: f64,
+    /// Seconds iterating.
+    pub solve_seconds: f64,
+    /// Power the last iteration changed, over the emitted power.
+    pub unshot_fraction: f64,
+    /// True when the last solve reached the tolerance.
+    pub converged: bool,
+    /// The minimum element area used.
+    pub min_area: f64,
+}
+
+/// A solved hierarchy.
+#[derive(Clone, Debug)]
+pub struct Hierarchy {
+    /// Every element (roots first: root `i` is piece `i` of the input mesh).
+    pub elements: Elements,
+    /// The clusters.
+    pub clusters: Clusters,
+    /// The links, grouped by receiver.
+    pub links: Vec<Link>,
+    /// Radiosity of each element (the area mean of its leaves).
+    pub radiosity: Vec<Rgb>,
+    /// What the last iteration changed at each element (leaves: not yet gathered light).
+    pub unshot: Vec<Rgb>,
+    /// Power each element gathered (through its own links, area × Σ k B).
+    pub gathered: Vec<Rgb>,
+    /// Radiosity of each cluster.
+    pub cluster_radiosity: Vec<Rgb>,
+    /// The report.
+    pub info: Info,
+}
+
+impl Hierarchy {
+    /// The leaf elements, tree by tree, depth first.
+    pub fn leaves(&self) -> Vec<u32> {
+        let mut out = Vec::new();
+        for r in 0..self.elements.roots as u32 {
+            self.elements.leaves_below(r, &mut out);
+        }
+        out
+    }
+
+    /// The radiosity of a link's source.
+    pub fn source_radiosity(&self, source: u32) -> Rgb {
+        if source & CLUSTER != 0 {
+            self.cluster_radiosity[(source & !CLUSTER) as usize]
+        } else {
+            self.radiosity[source as usize]
+        }
+    }
+}
+
+enum Decision {
+    Cull,
+    Accept(Estimate, f32, f32),
+    SplitReceiver,
+    SplitSource,
+}
+
+/// Bytes a link and an element hold (with their per-element solution vectors).
+const LINK_BYTES: u64 = std::mem::size_of::<Link>() as u64;
+const ELEMENT_BYTES: u64 = std::mem::size_of::<Element>() as u64 + 4 * 24 + 8;
+
+struct State<'a> {
+    h: Hierarchy,
+    /// Spread (max − min, channel mean) of leaf radiosity under each element / cluster.
+    spread: Vec<f32>,
+    cluster_spread: Vec<f32>,
+    reflectance: &'a [Rgb],
+    emission: &'a [Rgb],
+    bvh: &'a Bvh,
+    params: &'a Params,
+    eps: f64,
+    emitted: f64,
+    min_area: f32,
+}
+
+fn mean(c: Rgb) -> f64 {
+    c.sum() / 3.0
+}
+
+impl State<'_> {
+    fn source(&self, s: u32) -> (Rgb, f32, f32, Vec3, f64) {
+        if s & CLUSTER != 0 {
+            let c = (s & !CLUSTER) as usize;
+            let n = &self.h.clusters.nodes[c];
+            (
+                self.h.cluster_radiosity[c],
+                self.cluster_spread[c],
+                n.radius,
+                n.centre,
+                n.area,
+            )
+        } else {
+            let e = &self.h.elements.items[s as usize];
+            (
+                self.h.radiosity[s as usize],
+                self.spread[s as usize],
+                e.radius,
+                e.centre,
+                e.area as f64,
+            )
+        }
+    }
+
+    fn error(&self, r: u32, s: u32, k: f32, uncertainty: f32) -> f64 {
+        let re = &self.h.elements.items[r as usize];
+        let (b, spread, ..) = self.source(s);
+        mean(self.reflectance[re.root as usize])
+            * re.area as f64
+            * (mean(b) * uncertainty as f64 + k as f64 * spread as f64)
+    }
+
+    fn can_split(&self, e: u32) -> bool {
+        e & CLUSTER != 0 || self.h.elements.items[e as usize].area * 0.25 >= self.min_area
+    }
+
+    /// Which side to open when a link is not good enough, if either can be.
+    fn split(&self, r: u32, s: u32) -> Option<Decision> {
+        let rr = self.h.elements.items[r as usize].radius;
+        let (_, _, rs, ..) = self.source(s);
+        match (self.can_split(r), self.can_split(s)) {
+            (true, true) if rr >= rs => Some(Decision::SplitReceiver),
+            (true, false) => Some(Decision::SplitReceiver),
+            (_, true) => Some(Decision::SplitSource),
+            (false, false) => None,
+        }
+    }
+
+    fn decide(&self, ctx: &Context, r: u32, s: u32) -> Decision {
+        let re = &self.h.elements.items[r as usize];
+        fn behind(mut points: impl Iterator<Item = Vec3>, o: Vec3, n: Vec3, size: f32) -> bool {
+            points.all(|p| (p - o).dot(n) <= 1e-5 * size)
+        }
+        let (_, _, rs, cs, area_s) = self.source(s);
+        let size = re.radius + rs;
+        if s & CLUSTER != 0 {
+            let c = s & !CLUSTER;
+            let node = &self.h.clusters.nodes[c as usize];
+            if std::env::var("HR_NOCLUSTER").is_ok() || self.h.clusters.contains(c, re.root) {
+                return Decision::SplitSource;
+            }
+            let (lo, hi) = (node.bounds.min, node.bounds.max);
+            let corners = (0..8).map(|i| {
+                Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+            });
+            if behind(corners, re.centre, re.normal, size) {
+                return Decision::Cull;
+            }
+            if (cs - re.centre).length() <= 2.0 * rs + re.radius {
+                return if re.radius > rs && self.can_split(r) {
+                    Decision::SplitReceiver
+                } else {
+                    Decision::SplitSource
+                };
+            }
+        } else {
+            let se = &self.h.elements.items[s as usize];
+            if se.root == re.root
+                || behind(se.polygon().iter().copied(), re.centre, re.normal, size)
+                || behind(re.polygon().iter().copied(), se.centre, se.normal, size)
+            {
+                return Decision::Cull;
+            }
+        }
+        let est = ctx.estimate(r, s, 0);
+        let d = (cs - re.centre).length();
+        let uncertainty = if d > 2.0 * (re.radius + rs) {
+            if est.partial {
+                est.hi
+            } else {
+                est.hi - est.lo
+            }
+        } else {
+            let gap = d - re.radius - rs;
+            let bound = if gap > 0.0 {
+                (area_s / (std::f64::consts::PI * gap as f64 * gap as f64)).min(1.0) as f32
+            } else {
+                1.0
+            };
+            est.hi.max(bound)
+        };
+        if self.error(r, s, est.k, uncertainty) > self.eps {
+            if let Some(d) = self.split(r, s) {
+                return d;
+            }
+        }
+        // Kept: its coefficient from an estimate independent of the one that decided.
+        let mut kept = ctx.estimate(r, s, 1);
+        kept.rays += est.rays;
+        Decision::Accept(kept, est.k, uncertainty)
+    }
+
+    fn check_memory(&self) -> Result<(), HierarchicalError> {
+        let (elements, links) = (self.h.elements.items.len(), self.h.links.len());
+        let needed = elements as u64 * ELEMENT_BYTES
+            + links as u64 * LINK_BYTES
+            + self.h.clusters.nodes.len() as u64 * 64;
+        if needed > self.params.memory_limit {
+            return Err(HierarchicalError::TooLarge {
+                elements,
+                links,
+                needed,
+                limit: self.params.memory_limit,
+            });
+        }
+        Ok(())
+    }
+
+    fn new_elements(&mut self, parent: u32) -> u32 {
+        let before = self.h.elements.items.len();
+        let first = self.h.elements.subdivide(parent);
+        let grown = self.h.elements.items.len() - before;
+        let b = self.h.radiosity[parent as usize];
+        for _ in 0..grown {
+            self.h.radiosity.push(b);
+            self.h.unshot.push(Rgb::BLACK);
+            self.h.gathered.push(Rgb::BLACK);
+            self.spread.push(0.0);
+        }
+        first
+    }
+
+    /// Estimate and judge every candidate, splitting until every one is a link or culled.
+    fn refine(&mut self, mut todo: Vec<(u32, u32)>) -> Result<(), HierarchicalError> {
+        while !todo.is_empty() {
+            let decisions: Vec<Decision> = {
+                let ctx = Context {
+                    elements: &self.h.elements.items,
+                    clusters: &self.h.clusters,
+                    bvh: self.bvh,
+                    rays: self.params.visibility_rays,
+                    seed: self.params.seed,
+                };
+                todo.par_iter()
+                    .map(|&(r, s)| self.decide(&ctx, r, s))
+                    .collect()
+            };
+            let mut next = Vec::new();
+            for (&(r, s), d) in todo.iter().zip(decisions) {
+                match d {
+                    Decision::Cull => {}
+                    Decision::Accept(est, k_oracle, uncertainty) => {
+                        self.h.info.rays += est.rays as u64;
+                        self.h.links.push(Link {
+                            receiver: r,
+                            source: s,
+                            k: est.k,
+                            k_oracle,
+                            uncertainty,
+                        });
+                    }
+                    Decision::SplitReceiver => {
+                        self.h.info.refinements += 1;
+                        let first = self.new_elements(r);
+                        next.extend((first..first + 4).map(|c| (c, s)));
+                    }
+                    Decision::SplitSource if s & CLUSTER != 0 => {
+                        self.h.info.refinements += 1;
+                        let node = &self.h.clusters.nodes[(s & !CLUSTER) as usize];
+                        next.extend(node.children.map(|c| (r, c)));
+                    }
+                    Decision::SplitSource => {
+                        self.h.info.refinements += 1;
+                        let first = self.new_elements(s);
+                        next.extend((first..first + 4).map(|c| (r, c)));
+                    }
+                }
+            }
+            self.check_memory()?;
+            todo = next;
+        }
+        Ok(())
+    }
+
+    /// Judge every link with the current radiosities; replace those that fail by candidates.
+    fn rerefine(&mut self) -> Result<u64, HierarchicalError> {
+        let links = std::mem::take(&mut self.h.links);
+        let verdicts: Vec<Option<Decision>> = links
+            .par_iter()
+            .map(|l| {
+                if self.error(l.receiver, l.source, l.k_oracle, l.uncertainty) > self.eps {
+                    self.split(l.receiver, l.source)
+                } else {
+                    None
+                }
+            })
+            .collect();
+        let mut todo = Vec::new();
+        let mut kept = Vec::with_capacity(links.len());
+        let mut split = 0;
+        for (l, v) in links.into_iter().zip(verdicts) {
+            let (r, s) = (l.receiver, l.source);
+            if matches!(v, Some(Decision::SplitReceiver | Decision::SplitSource)) {
+                split += 1;
+            }
+            match v {
+                None | Some(Decision::Cull) | Some(Decision::Accept(..)) => kept.push(l),
+                Some(Decision::SplitReceiver) => {
+                    let first = self.new_elements(r);
+                    todo.extend((first..first + 4).map(|c| (c, s)));
+                }
+                Some(Decision::SplitSource) if s & CLUSTER != 0 => {
+                    let node = &self.h.clusters.nodes[(s & !CLUSTER) as usize];
+                    todo.extend(node.children.map(|c| (r, c)));
+                }
+                Some(Decision::SplitSource) => {
+                    let first = self.new_elements(s);
+                    todo.extend((first..first + 4).map(|c| (r, c)));
+                }
+            }
+        }
+        self.h.info.refinements += split;
+        self.h.links = kept;
+        self.refine(todo)?;
+        Ok(split)
+    }
+
+    /// Gather–push–pull until the tolerance; returns iterations.
+    fn iterate(&mut self, observer: &dyn Observer) -> u64 {
+        // Links grouped by receiver, in a fixed order.
+        self.h
+            .links
+            .sort_by_key(|l| (l.receiver, l.source));
+        let n = self.h.elements.items.len();
+        let mut start = vec![0u32; n + 1];
+        for l in &self.h.links {
+            start[l.receiver as usize + 1] += 1;
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut iterations = 0;
+        let mut down = vec![Rgb::BLACK; n];
+        loop {
+            // Gather: every element's links, in parallel, each receiver's sum in link order.
+            let h = &self.h;
+            let gathered: Vec<Rgb> = (0..n)
+                .into_par_iter()
+                .map(|e| {
+                    h.links[start[e] as usize..start[e + 1] as usize]
+                        .iter()
+                        .map(|l| h.source_radiosity(l.source) * l.k as f64)
+                        .fold(Rgb::BLACK, |a, b| a + b)
+                })
+                .collect();
+            // Push: parents come before children.
+            let items = &self.h.elements.items;
+            for e in 0..n {
+                let p = items[e].parent;
+                down[e] = gathered[e]
+                    + if p == element::NONE {
+                        Rgb::BLACK
+                    } else {
+                        down[p as usize]
+                    };
+            }
+            // Leaves: B = E + ρ H; pull: children come after parents, so a reverse pass sees
+            // every child before its parent.
+            let mut change = 0.0;
+            let mut lo = vec![f32::INFINITY; n];
+            let mut hi = vec![f32::NEG_INFINITY; n];
+            for e in (0..n).rev() {
+                let el = &items[e];
+                let b = if el.is_leaf() {
+                    let root = el.root as usize;
+                    let b = self.emission[root] + self.reflectance[root] * down[e];
+                    let d = (b - self.h.radiosity[e]).map(f64::abs);
+                    change += d.sum() / 3.0 * el.area as f64;
+                    self.h.unshot[e] = d;
+                    let m = mean(b) as f32;
+                    lo[e] = m;
+                    hi[e] = m;
+                    b
+                } else {
+                    let mut s = Rgb::BLACK;
+                    let mut a = 0.0;
+                    let mut u = Rgb::BLACK;
+                    for c in el.children..el.children + 4 {
+                        let ca = items[c as usize].area as f64;
+                        s += self.h.radiosity[c as usize] * ca;
+                        u += self.h.unshot[c as usize] * ca;
+                        a += ca;
+                        lo[e] = lo[e].min(lo[c as usize]);
+                        hi[e] = hi[e].max(hi[c as usize]);
+                    }
+                    self.h.unshot[e] = if a > 0.0 { u / a } else { Rgb::BLACK };
+                    if a > 0.0 {
+                        s / a
+                    } else {
+                        Rgb::BLACK
+                    }
+                };
+                self.h.radiosity[e] = b;
+                self.h.gathered[e] = gathered[e] * el.area as f64;
+            }
+            for e in 0..n {
+                self.spread[e] = hi[e] - lo[e];
+            }
+            self.pull_clusters(&lo, &hi);
+            iterations += 1;
+            let fraction = change / self.emitted;
+            self.h.info.unshot_fraction = fraction;
+            self.h.info.converged = fraction <= self.params.tolerance;
+            if self.h.info.converged
+                || iterations >= self.params.max_iterations
+                || observer.cancelled()
+            {
+                return iterations;
+            }
+        }
+    }
+
+    fn pull_clusters(&mut self, lo: &[f32], hi: &[f32]) {
+        let nc = self.h.clusters.nodes.len();
+        let mut clo = vec![f32::INFINITY; nc];
+        let mut chi = vec![f32::NEG_INFINITY; nc];
+        for c in 0..nc {
+            let node = self.h.clusters.nodes[c];
+            let mut s = Rgb::BLACK;
+            for child in node.children {
+                let (b, l, h, a) = if child & CLUSTER != 0 {
+                    let k = (child & !CLUSTER) as usize;
+                    (
+                        self.h.cluster_radiosity[k],
+                        clo[k],
+                        chi[k],
+                        self.h.clusters.nodes[k].area,
+                    )
+                } else {
+                    let k = child as usize;
+                    (
+                        self.h.radiosity[k],
+                        lo[k],
+                        hi[k],
+                        self.h.elements.items[k].area as f64,
+                    )
+                };
+                s += b * a;
+                clo[c] = clo[c].min(l);
+                chi[c] = chi[c].max(h);
+            }
+            self.h.cluster_radiosity[c] = if node.area > 0.0 {
+                s / node.area
+            } else {
+                Rgb::BLACK
+            };
+            self.cluster_spread[c] = chi[c] - clo[c];
+        }
+    }
+}
+
+use crate::geom::Vec3;
+
+/// Solve by hierarchical radiosity over `roots`, the input pieces as one patch each (with
+/// their reflectances and emissions in `system`), `bvh` built over them.
+pub fn solve(
+    roots: &Mesh,
+    system: &System,
+    bvh: &Bvh,
+    params: &Params,
+    observer: &dyn Observer,
+) -> Result<Hierarchy, HierarchicalError> {
+    params.validate()?;
+    let items: Vec<Element> = roots
+        .patches
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let v = |k: usize| {
+                if p.vertices[k] == crate::mesh::Patch::NONE {
+                    roots.vertices[p.vertices[2] as usize]
+                } else {
+                    roots.vertices[p.vertices[k] as usize]
+                }
+            };
+            Element::new(
+                [v(0), v(1), v(2), v(3)],
+                p.is_triangle(),
+                i as u32,
+                element::NONE,
+                0,
+            )
+        })
+        .collect();
+    let clusters = Clusters::build(&items);
+    let total_area: f64 = items.iter().map(|e| e.area as f64).sum();
+    let min_area = if params.min_area > 0.0 {
+        params.min_area
+    } else {
+        total_area * 1e-6
+    };
+    let n = items.len();
+    let emitted: f64 = system
+        .emission
+        .iter()
+        .zip(&system.area)
+        .map(|(e, a)| mean(*e) * a)
+        .sum::<f64>()
+        .max(f64::MIN_POSITIVE);
+    let nc = clusters.nodes.len();
+    let top = clusters.top;
+    let mut state = State {
+        h: Hierarchy {
+            radiosity: system.emission.clone(),
+            unshot: vec![Rgb::BLACK; n],
+            gathered: vec![Rgb::BLACK; n],
+            cluster_radiosity: vec![Rgb::BLACK; nc],
+            elements: Elements { items, roots: n },
+            clusters,
+            links: Vec::new(),
+            info: Info {
+                clusters: nc,
+                min_area,
+                ..Default::default()
+            },
+        },
+        spread: vec![0.0; n],
+        cluster_spread: vec![0.0; nc],
+        reflectance: &system.reflectance,
+        emission: &system.emission,
+        bvh,
+        params,
+        eps: params.link_error * emitted,
+        emitted,
+        min_area: min_area as f32,
+    };
+    // Cluster radiosities (and spreads) of B = E before the first refinement.
+    let lo: Vec<f32> = state.h.radiosity.iter().map(|b| mean(*b) as f32).collect();
+    state.pull_clusters(&lo, &lo);
+    for (c, s) in state.cluster_spread.iter_mut().enumerate() {
+        // Spread of emission under each cluster: max − min of its members' means.
+        let node = &state.h.clusters.nodes[c];
+        let members = &state.h.clusters.order[node.first as usize..(node.first + node.count) as usize];
+        let (l, h) = members.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &m| {
+            (l.min(lo[m as usize]), h.max(lo[m as usize]))
+        });
+        *s = h - l;
+    }
+    observer.event(Event::Stage(Stage::FormFactors));
+    let t = Instant::now();
+    state.refine((0..n as u32).map(|r| (r, top)).collect())?;
+    state.h.info.refine_seconds += t.elapsed().as_secs_f64();
+    state.h.info.passes = 1;
+    observer.event(Event::Stage(Stage::Solve));
+    loop {
+        let t = Instant::now();
+        state.h.info.iterations += state.iterate(observer);
+        state.h.info.solve_seconds += t.elapsed().as_secs_f64();
+        observer.event(Event::Progress {
+            stage: Stage::Solve,
+            done: state.h.info.passes as u64,
+            total: params.max_passes as u64,
+        });
+        if state.h.info.passes >= params.max_passes || observer.cancelled() {
+            break;
+        }
+        let t = Instant::now();
+        let refined = state.rerefine()?;
+        state.h.info.refine_seconds += t.elapsed().as_secs_f64();
+        if refined == 0 {
+            break;
+        }
+        state.h.info.passes += 1;
+    }
+    let mut h = state.h;
+    h.info.elements = h.elements.items.len();
+    h.info.leaves = h.elements.items.iter().filter(|e| e.is_leaf()).count();
+    h.info.links = h.links.len();
+    h.info.bytes = h.info.elements as u64 * ELEMENT_BYTES
+        + h.info.links as u64 * LINK_BYTES
+        + nc as u64 * 64;
+    Ok(h)
+}
