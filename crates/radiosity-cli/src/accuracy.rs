@@ -54,10 +54,7 @@ fn reference(
     let means = pipeline::path_surface_means(scene, a.reference_paths, 7)?;
     let mut csv = String::from("surface,b_r,b_g,b_b,se_r,se_g,se_b\n");
     for (k, (b, se)) in means.iter().enumerate() {
-        csv += &format!(
-            "{k},{},{},{},{},{},{}\n",
-            b.r, b.g, b.b, se.r, se.g, se.b
-        );
+        csv += &format!("{k},{},{},{},{},{},{}\n", b.r, b.g, b.b, se.r, se.g, se.b);
     }
     radiosity::export::write_text(path, &csv)?;
     println!(
@@ -119,9 +116,10 @@ fn errors(
 pub fn run(a: &BenchArgs, name: &str) -> Result<()> {
     crate::settings::threads(a.threads)?;
     let scene = crate::load_scene(name, a.one_sided)?;
-    let path = a.reference.clone().unwrap_or_else(|| {
-        std::path::PathBuf::from(format!("{}-surfaces.csv", scene.name))
-    });
+    let path = a
+        .reference
+        .clone()
+        .unwrap_or_else(|| std::path::PathBuf::from(format!("{}-surfaces.csv", scene.name)));
     let reference = reference(a, &scene, &path)?;
     println!(
         "{:<28} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",

@@ -40,7 +40,9 @@ impl ValueEnum for SolverArg {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SceneSolverArg(pub Option<Solver>);
 
-const fn wrap_scene_solvers<const N: usize, const M: usize>(all: [Solver; N]) -> [SceneSolverArg; M] {
+const fn wrap_scene_solvers<const N: usize, const M: usize>(
+    all: [Solver; N],
+) -> [SceneSolverArg; M] {
     let mut out = [SceneSolverArg(None); M];
     let mut i = 0;
     while i < N {
@@ -599,7 +601,7 @@ pub struct SolveArgs {
     /// the scene's total area × 1e-6).
     #[arg(long, value_name = "A", help_heading = SOLVER)]
     pub min_area: Option<f64>,
-    /// `hierarchical`: visibility rays from each of a link's four receiver points.
+    /// `hierarchical`: visibility rays from each of a link's sixteen receiver points.
     #[arg(long, value_name = "N", default_value_t = radiosity::hierarchical::Params::default().visibility_rays, help_heading = SOLVER)]
     pub visibility_rays: u32,
     /// `hierarchical`: refinement passes at most (each followed by a solve).

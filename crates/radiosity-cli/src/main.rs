@@ -392,9 +392,38 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     if let Some(t) = &a.solve.trace {
         settings::check_output(t)?;
     }
+    for (flag, path) in [
+        ("--links-out", &a.links_out),
+        ("--elements-out", &a.elements_out),
+    ] {
+        if let Some(p) = path {
+            if a.solve.solver.0.is_some() {
+                anyhow::bail!("{flag}: only the hierarchical solver has links and elements (add --solver hierarchical)");
+            }
+            settings::check_output(p)?;
+        }
+    }
     settings::settings(&a.solve)?;
     settings::threads(a.solve.threads)?;
     let (scene, solution) = solve_scene(&a.solve)?;
+    if let Some(h) = &solution.hierarchy {
+        if let Some(p) = &a.links_out {
+            radiosity::export::write_links_csv(p, &h.hierarchy)?;
+            println!(
+                "links       {} ({} rows)",
+                p.display(),
+                h.hierarchy.links.len()
+            );
+        }
+        if let Some(p) = &a.elements_out {
+            radiosity::export::write_elements_csv(p, &h.hierarchy, &h.root_surfaces)?;
+            println!(
+                "elements    {} ({} rows)",
+                p.display(),
+                h.hierarchy.elements.items.len()
+            );
+        }
+    }
     let t = Instant::now();
     if baked {
         let vertex = solution.vertex_display_radiosity();

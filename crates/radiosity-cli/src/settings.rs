@@ -7,10 +7,10 @@ use radiosity::geom::Vec3;
 use radiosity::hierarchical::{
     HierarchicalError, Parameter as HierarchicalParameter, Params as HierarchicalParams,
 };
-use radiosity::solve::Solver;
 use radiosity::mesh::MeshParams;
 use radiosity::pipeline::Settings;
 use radiosity::scene::Camera;
+use radiosity::solve::Solver;
 use radiosity::solve::{Parameter as SolverParameter, SolveError, SolverParams};
 use std::path::Path;
 

@@ -2710,3 +2710,169 @@ fn embree_backend_needs_the_feature() {
     let out = run(&["bench", "--rays", "cornell", "--backend", "embree"], &dir);
     assert_fails(&out, &["--backend embree", "--features embree"], &dir, &[]);
 }
+
+/// `solve --solver hierarchical`: the leaves as CSV rows (one per leaf in the elements file),
+/// the links and elements written, the furnace uniform per surface, a baked glTF and a picture
+/// from the same solution.
+#[test]
+fn hierarchical_solve_writes_leaves_links_and_elements() {
+    let dir = scratch("hierarchical");
+    let out = run(
+        &[
+            "solve",
+            "furnace",
+            "--solver",
+            "hierarchical",
+            "--tolerance",
+            "1e-7",
+            "-o",
+            "f.csv",
+            "--links-out",
+            "links.csv",
+            "--elements-out",
+            "elements.csv",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("leaf elements") && text.contains("by hierarchical"),
+        "{text}"
+    );
+    let rows = std::fs::read_to_string(dir.join("f.csv")).unwrap();
+    let elements = std::fs::read_to_string(dir.join("elements.csv")).unwrap();
+    let links = std::fs::read_to_string(dir.join("links.csv")).unwrap();
+    assert!(links.starts_with(
+        "receiver,source,source_kind,form_factor,uncertainty,power_r,power_g,power_b\n"
+    ));
+    assert!(links.lines().count() > 1000);
+    let leaves = elements
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(4) == Some("1"))
+        .count();
+    assert_eq!(leaves, rows.lines().count() - 1);
+    // Furnace: B = E/(1 − ρ) = 2 (green); each surface's area mean within 0.5 %.
+    let mut per = std::collections::HashMap::<String, (f64, f64)>::new();
+    let header: Vec<&str> = rows.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let (s, a, g) = (col("surface"), col("area"), col("radiosity_g"));
+    for line in rows.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let area: f64 = f[a].parse().unwrap();
+        let e = per.entry(f[s].to_string()).or_default();
+        e.0 += area * f[g].parse::<f64>().unwrap();
+        e.1 += area;
+    }
+    for (k, (b, area)) in per {
+        assert!(
+            (b / area / 2.0 - 1.0).abs() < 0.005,
+            "surface {k}: {}",
+            b / area
+        );
+    }
+    // Baked and rendered from the hierarchical leaves.
+    for args in [
+        &[
+            "solve",
+            "cornell",
+            "--solver",
+            "hierarchical",
+            "-o",
+            "c.glb",
+        ][..],
+        &[
+            "render",
+            "cornell",
+            "--solver",
+            "hierarchical",
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "-o",
+            "c.png",
+        ][..],
+    ] {
+        let out = run(args, &dir);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert!(std::fs::metadata(dir.join("c.glb")).unwrap().len() > 10_000);
+    assert!(std::fs::metadata(dir.join("c.png")).unwrap().len() > 1_000);
+}
+
+/// Impossible hierarchical options fail on one line, naming the option, writing nothing.
+#[test]
+fn hierarchical_rejects_bad_options() {
+    let dir = scratch("hierarchical-bad");
+    for (args, needle) in [
+        (
+            &[
+                "solve",
+                "cornell",
+                "--solver",
+                "hierarchical",
+                "--link-error",
+                "0",
+                "-o",
+                "x.csv",
+            ][..],
+            "--link-error",
+        ),
+        (
+            &[
+                "solve",
+                "cornell",
+                "--solver",
+                "hierarchical",
+                "--min-area",
+                "0",
+                "-o",
+                "x.csv",
+            ][..],
+            "--min-area",
+        ),
+        (
+            &[
+                "solve",
+                "cornell",
+                "--solver",
+                "hierarchical",
+                "--visibility-rays",
+                "0",
+                "-o",
+                "x.csv",
+            ][..],
+            "--visibility-rays",
+        ),
+        (
+            &["solve", "cornell", "--links-out", "l.csv", "-o", "x.csv"][..],
+            "--links-out",
+        ),
+        (
+            &[
+                "solve",
+                "cornell",
+                "--solver",
+                "hierarchical",
+                "--trace",
+                "t.csv",
+                "-o",
+                "x.csv",
+            ][..],
+            "--trace",
+        ),
+    ] {
+        let out = run(args, &dir);
+        assert_fails(&out, &[needle], &dir, &[]);
+    }
+}

@@ -132,6 +132,8 @@ pub struct HierarchicalSolution {
     pub hierarchy: crate::hierarchical::Hierarchy,
     /// The element of each patch.
     pub leaves: Vec<u32>,
+    /// The input polygon (surface) of each root element.
+    pub root_surfaces: Vec<u32>,
 }
 
 impl Solution {
@@ -482,33 +484,24 @@ fn solve_hierarchical(
     let bvh = Bvh::build(&mesh);
     bvh_s += t.elapsed().as_secs_f64();
     let hi = h.info;
-    // Energy: emitted, and what arrived (Σ A H over leaves, H gathered through every ancestor)
-    // against what left (Σ A B).
+    // Energy: emitted, and what arrived (Σ A H over leaves) against what left (Σ A B).
     let emitted: Rgb = system
         .emission
         .iter()
         .zip(&system.area)
         .map(|(e, a)| *e * *a)
         .sum();
-    // What arrived at each leaf, H A: gathered through its own links and every ancestor's.
+    // What arrived at each leaf, H A: through its own links and every ancestor's.
     let incident: Vec<Rgb> = leaves
         .iter()
-        .map(|&e| {
-            let mut x = e;
-            let mut g = Rgb::BLACK;
-            loop {
-                let el = &h.elements.items[x as usize];
-                g += h.gathered[x as usize] / (el.area as f64).max(f64::MIN_POSITIVE);
-                if el.parent == crate::hierarchical::element::NONE {
-                    break;
-                }
-                x = el.parent;
-            }
-            g * h.elements.items[e as usize].area as f64
-        })
+        .map(|&e| h.incident[e as usize] * h.elements.items[e as usize].area as f64)
         .collect();
     let arrived: Rgb = incident.iter().copied().sum();
-    let left: Rgb = radiosity.iter().zip(&system.area).map(|(b, a)| *b * *a).sum();
+    let left: Rgb = radiosity
+        .iter()
+        .zip(&system.area)
+        .map(|(b, a)| *b * *a)
+        .sum();
     let absorbed: Rgb = incident
         .iter()
         .zip(&system.reflectance)
@@ -550,6 +543,7 @@ fn solve_hierarchical(
         hierarchy: Some(HierarchicalSolution {
             hierarchy: h,
             leaves,
+            root_surfaces: roots.patches.iter().map(|p| p.surface).collect(),
         }),
     })
 }

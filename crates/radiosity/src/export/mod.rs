@@ -187,6 +187,73 @@ pub fn write_text(path: &Path, text: &str) -> Result<(), ExportError> {
     write_atomic(path, |out| out.write_all(text.as_bytes()))
 }
 
+/// A hierarchical solution's links as CSV, one row each:
+/// `receiver,source,source_kind,form_factor,uncertainty,power_r,power_g,power_b` (source kind
+/// `element` or `cluster`; power: what the link carries, A_r · k · B_s).
+pub fn write_links_csv(path: &Path, h: &crate::hierarchical::Hierarchy) -> Result<(), ExportError> {
+    use crate::hierarchical::cluster::CLUSTER;
+    write_atomic(path, |out| {
+        writeln!(
+            out,
+            "receiver,source,source_kind,form_factor,uncertainty,power_r,power_g,power_b"
+        )?;
+        for l in &h.links {
+            let (id, kind) = if l.source & CLUSTER != 0 {
+                (l.source & !CLUSTER, "cluster")
+            } else {
+                (l.source, "element")
+            };
+            let a = h.elements.items[l.receiver as usize].area as f64;
+            let p = h.link_radiosity(l) * (a * l.k as f64);
+            writeln!(
+                out,
+                "{},{id},{kind},{},{},{},{},{}",
+                l.receiver, l.k, l.uncertainty, p.r, p.g, p.b
+            )?;
+        }
+        Ok(())
+    })
+}
+
+/// A hierarchical solution's elements as CSV, one row each (roots first):
+/// `element,parent,level,surface,leaf,area,cx,cy,cz,radiosity_r,radiosity_g,radiosity_b`
+/// (parent empty for a root; surface: the input polygon; leaf 1 or 0).
+pub fn write_elements_csv(
+    path: &Path,
+    h: &crate::hierarchical::Hierarchy,
+    roots: &[u32],
+) -> Result<(), ExportError> {
+    write_atomic(path, |out| {
+        writeln!(
+            out,
+            "element,parent,level,surface,leaf,area,cx,cy,cz,radiosity_r,radiosity_g,radiosity_b"
+        )?;
+        for (i, e) in h.elements.items.iter().enumerate() {
+            let parent = if e.parent == crate::hierarchical::element::NONE {
+                String::new()
+            } else {
+                e.parent.to_string()
+            };
+            let b = h.radiosity[i];
+            writeln!(
+                out,
+                "{i},{parent},{},{},{},{},{},{},{},{},{},{}",
+                e.level,
+                roots[e.root as usize],
+                e.is_leaf() as u8,
+                e.area,
+                e.centre.x,
+                e.centre.y,
+                e.centre.z,
+                b.r,
+                b.g,
+                b.b
+            )?;
+        }
+        Ok(())
+    })
+}
+
 /// One radiosity row per patch: header `radiosity` (one channel, the red one) or
 /// `radiosity_r,radiosity_g,radiosity_b`.
 pub fn write_radiosity_csv(

@@ -146,7 +146,9 @@ mod tests {
 
     #[test]
     fn clusters_hold_contiguous_ranges_and_pick_by_area() {
-        let roots: Vec<Element> = (0..7).map(|i| square(i as f32 * 3.0, 1.0 + i as f32)).collect();
+        let roots: Vec<Element> = (0..7)
+            .map(|i| square(i as f32 * 3.0, 1.0 + i as f32))
+            .collect();
         let c = Clusters::build(&roots);
         assert_eq!(c.nodes.len(), 6);
         let top = &c.nodes[(c.top & !CLUSTER) as usize];

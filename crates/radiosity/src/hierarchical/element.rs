@@ -11,6 +11,9 @@ use crate::geom::{triangle_cross, Vec3};
 /// Marker for "none" in element links (no parent, no children).
 pub const NONE: u32 = u32::MAX;
 
+/// Points a receiver is sampled at ([`Element::receiver_points`]).
+pub const POINTS: usize = 16;
+
 /// A node of an element quadtree: a planar convex quad or a triangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Element {
@@ -105,7 +108,12 @@ impl Element {
         } else {
             let (ab, bc, cd, da) = (mid(a, b), mid(b, c), mid(c, d), mid(d, a));
             let o = (a + b + c + d) * 0.25;
-            [[a, ab, o, da], [ab, b, bc, o], [o, bc, c, cd], [da, o, cd, d]]
+            [
+                [a, ab, o, da],
+                [ab, b, bc, o],
+                [o, bc, c, cd],
+                [da, o, cd, d],
+            ]
         }
     }
 
@@ -138,23 +146,25 @@ impl Element {
         a + (b - a) * s + (c - a) * t
     }
 
-    /// Four points spread over the element, one uniform in each child's quarter (stratified
-    /// jitter from the eight uniforms `u`): where a link's kernel is evaluated on its receiver.
-    /// Jittered, not fixed, so that the mean over the points is an unbiased estimate of the
-    /// element's mean (a fixed pattern would see a shadow between its points as absent on
-    /// every element alike).
-    pub fn receiver_points(&self, u: [f32; 8]) -> [Vec3; 4] {
+    /// Sixteen points spread over the element, one uniform in each of its grandchildren
+    /// (stratified jitter from the uniforms `u`): where a link's kernel is evaluated on its
+    /// receiver. Jittered, not fixed, so that the mean over the points is an unbiased
+    /// estimate of the element's mean (a fixed pattern would see a shadow between its points
+    /// as absent on every element alike); sixteen, so that a shadow crossing the element is
+    /// seen by some points and missed by others, which is what the oracle looks for.
+    pub fn receiver_points(&self, u: &[f32; 2 * POINTS]) -> [Vec3; POINTS] {
         if self.tri {
             let kids = self.child_corners();
             std::array::from_fn(|k| {
+                let child = Element::new(kids[k / 4], true, 0, NONE, 0);
+                let [a, b, c, _] = child.child_corners()[k % 4];
                 let (s, t) = crate::sampling::uniform_triangle(u[2 * k], u[2 * k + 1]);
-                let [a, b, c, _] = kids[k];
                 a + (b - a) * s + (c - a) * t
             })
         } else {
             std::array::from_fn(|k| {
-                let (i, j) = ((k & 1) as f32, (k >> 1) as f32);
-                self.point(0.5 * (i + u[2 * k]), 0.5 * (j + u[2 * k + 1]))
+                let (i, j) = ((k % 4) as f32, (k / 4) as f32);
+                self.point(0.25 * (i + u[2 * k]), 0.25 * (j + u[2 * k + 1]))
             })
         }
     }
@@ -238,9 +248,15 @@ mod tests {
             0,
         );
         for parent in [quad, tri] {
-            let kids = parent.child_corners().map(|c| Element::new(c, parent.tri, 0, 0, 1));
+            let kids = parent
+                .child_corners()
+                .map(|c| Element::new(c, parent.tri, 0, 0, 1));
             let sum: f32 = kids.iter().map(|k| k.area).sum();
-            assert!((sum - parent.area).abs() < 1e-5 * parent.area, "{sum} {}", parent.area);
+            assert!(
+                (sum - parent.area).abs() < 1e-5 * parent.area,
+                "{sum} {}",
+                parent.area
+            );
             for k in &kids {
                 assert!(k.normal.dot(parent.normal) > 0.9999);
             }

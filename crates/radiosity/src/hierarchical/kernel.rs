@@ -1,17 +1,20 @@
-//! The transfer coefficient of one link, evaluated at four points of its receiver.
+//! The transfer coefficient of one link, evaluated at sixteen jittered points of its receiver.
 //!
 //! - From an element: the exact unoccluded factor from a point to a polygon (Lambert's contour
 //!   formula, e.g. Baum, Rushmeier & Winget 1989, eq. 3) times the fraction of rays from the
-//!   point to points on the source that arrive unoccluded.
+//!   point to points on the source that arrive unoccluded, each ray weighted by the kernel at
+//!   its end (so the fraction is the kernel's, not the area's), drawn on the part of the
+//!   source in front of the point.
 //! - From a cluster: a Monte Carlo estimate of the same point-to-area factor over the cluster's
 //!   surfaces, points drawn by area, each weighted by both cosines (a surface facing away sends
 //!   nothing) and its visibility.
 //!
 //! The coefficient `k` of the link is the mean over the receiver's points, and what the
-//! refinement oracle needs is kept beside it (the largest and smallest point value).
+//! refinement oracle needs is kept beside it (the largest and smallest point value, whether
+//! any ray was blocked, and the largest value visibility aside).
 
 use super::cluster::{Clusters, CLUSTER};
-use super::element::Element;
+use super::element::{Element, POINTS};
 use crate::accel::Bvh;
 use crate::geom::{Ray, Vec3};
 use crate::sampling::{stream, uniform, Rng64};
@@ -66,15 +69,21 @@ pub struct Estimate {
     /// The mean over the receiver's points: the fraction of the receiver's energy that would
     /// reach the source, `F_rs`.
     pub k: f32,
+    /// The mean over the points in each of the receiver's four children (in child order):
+    /// what each child's part of the receiver gathers.
+    pub quarters: [f32; 4],
     /// The largest point value.
     pub hi: f32,
     /// The smallest point value.
     pub lo: f32,
     /// Rays cast.
     pub rays: u32,
-    /// Some rays arrived and some were blocked: the source is partly hidden, so the part
-    /// seen may be brighter or darker than the source's mean radiosity.
-    pub partial: bool,
+    /// Some ray was blocked: the source is hidden from some points, wholly or in part, and
+    /// the points cannot tell how much of the receiver is in shadow.
+    pub blocked: bool,
+    /// The largest point value with every ray counted as arriving: the kernel's bound when
+    /// visibility is uncertain.
+    pub unoccluded: f32,
 }
 
 /// What link estimation reads.
@@ -89,22 +98,123 @@ pub struct Context<'a> {
     pub rays: u32,
     /// Seed of the visibility streams.
     pub seed: u64,
+    /// Which input pieces emit.
+    pub emits: &'a [bool],
+}
+
+/// The fraction of element `e` (id `id`) that is exposed: at four jittered points (one in
+/// each quarter), two rays
+/// (along the normal and one cosine-distributed) are cast, and a point is *covered* when both
+/// first meet the back of a surface (it lies inside a closed solid, such as the floor under a
+/// box standing on it). A covered point can neither receive nor send light, so the mean
+/// radiosity a source shows is taken over its exposed part.
+pub fn exposure(e: &Element, id: u32, bvh: &Bvh, seed: u64) -> f32 {
+    let mut rng = stream(seed, id as u64, 0, 0x4558_504f);
+    let jitter: [f32; 2 * POINTS] = std::array::from_fn(|_| uniform(&mut rng));
+    let off = bvh.ray_offset();
+    let (t, b) = crate::geom::orthonormal_basis(e.normal);
+    let mut exposed = 0;
+    for x in e.receiver_points(&jitter).into_iter().step_by(4) {
+        let d = crate::sampling::cosine_direction_in(
+            e.normal,
+            t,
+            b,
+            uniform(&mut rng),
+            uniform(&mut rng),
+        );
+        let covered = [e.normal, d].iter().all(|&dir| {
+            matches!(
+                bvh.closest_hit(&Ray::new(x + e.normal * off, dir), f32::INFINITY),
+                Some(h) if !h.front
+            )
+        });
+        if !covered {
+            exposed += 1;
+        }
+    }
+    exposed as f32 / 4.0
+}
+
+/// Where the ray from `x` along `d` meets the front of element `s`, if it does.
+fn hit_polygon(x: Vec3, d: Vec3, s: &Element) -> Option<Vec3> {
+    let denom = d.dot(s.normal);
+    if denom >= 0.0 {
+        return None;
+    }
+    let t = (s.corners[0] - x).dot(s.normal) / denom;
+    if t.is_nan() || t <= 0.0 {
+        return None;
+    }
+    let y = x + d * t;
+    let poly = s.polygon();
+    let k = poly.len();
+    (0..k)
+        .all(|i| {
+            (poly[(i + 1) % k] - poly[i])
+                .cross(y - poly[i])
+                .dot(s.normal)
+                >= 0.0
+        })
+        .then_some(y)
+}
+
+/// The child of an element that holds its receiver point `p` ([`Element::receiver_points`]).
+fn quarter(tri: bool, p: usize) -> usize {
+    if tri {
+        p / 4
+    } else {
+        // Points on a 4 × 4 grid, p = i + 4 j; children (0,0), (1,0), (1,1), (0,1).
+        let (i, j) = ((p % 4) / 2, (p / 4) / 2);
+        [[0, 3], [1, 2]][i][j]
+    }
+}
+
+/// The fraction of root element `e` (input piece `piece`) that is not hidden by a coincident
+/// twin: a ray from just behind each of four points through the surface must meet `piece`
+/// itself first, not another polygon lying in the same place (which the hierarchy reports
+/// first, and which therefore receives the light in its stead).
+pub fn untwinned(e: &Element, piece: u32, bvh: &Bvh) -> f32 {
+    let off = bvh.ray_offset();
+    let points = e.receiver_points(&[0.5; 2 * POINTS]);
+    let mut seen = 0;
+    for x in points.into_iter().step_by(4) {
+        let hit = bvh.closest_hit(&Ray::new(x - e.normal * (2.0 * off), e.normal), 4.0 * off);
+        if !matches!(hit, Some(h) if h.patch != piece && h.front) {
+            seen += 1;
+        }
+    }
+    seen as f32 / 4.0
 }
 
 impl Context<'_> {
-    /// Whether the segment from `x` (on a surface of normal `nx`) to `y` (on a surface of
-    /// normal `ny`) is free, both ends lifted off their surfaces.
-    fn visible(&self, x: Vec3, nx: Vec3, y: Vec3, ny: Vec3) -> bool {
+    /// Whether `y`, a point on input piece `piece`, is what `x` (on a surface of normal `nx`)
+    /// sees first in its direction: the closest hit of the ray from `x` towards `y` must be
+    /// the front of `piece`. Asking only whether the segment is free would see both of two
+    /// coincident polygons and count their light twice; so of coincident reflectors only the
+    /// one the hierarchy reports first is seen. Coincident *emitters* are all seen (a hit at
+    /// the target's distance counts), as the shooting methods and the path tracer's next-event
+    /// estimation count every emitter's power.
+    fn visible(&self, x: Vec3, nx: Vec3, y: Vec3, piece: u32) -> bool {
         let off = self.bvh.ray_offset();
-        let (from, to) = (x + nx * off, y + ny * off);
-        let d = to - from;
+        let from = x + nx * off;
+        let d = y - from;
         let dist = d.length();
         if dist <= 4.0 * off {
             return true;
         }
-        !self
+        match self
             .bvh
-            .occluded(&Ray::new(from, d / dist), dist - 2.0 * off)
+            .closest_hit(&Ray::new(from, d / dist), dist * 1.001 + 4.0 * off)
+        {
+            Some(h) => {
+                h.front
+                    && (h.patch == piece
+                        || (self.emits[piece as usize]
+                            && (h.t - dist).abs() <= 1e-4 * dist + 4.0 * off))
+            }
+            // Rounding let the ray slip past the edge of its target: nothing was in the way.
+            None => true,
+        }
     }
 
     /// The coefficient of the link from receiver element `r` to `source` (an element id, or a
@@ -121,28 +231,34 @@ impl Context<'_> {
         };
         let m = self.rays.max(1);
         let mut sum = 0.0f64;
-        let (mut blocked, mut free) = (false, false);
-        let jitter: [f32; 8] = std::array::from_fn(|_| uniform(&mut rng));
-        for x in re.receiver_points(jitter) {
+        let jitter: [f32; 2 * POINTS] = std::array::from_fn(|_| uniform(&mut rng));
+        for (p, x) in re.receiver_points(&jitter).into_iter().enumerate() {
             let mut vis = [0u32; 2];
-            let f = if source & CLUSTER == 0 {
-                self.from_element(x, re.normal, &self.elements[source as usize], m, &mut rng, &mut vis)
+            let (f, bound) = if source & CLUSTER == 0 {
+                self.element_factor(
+                    x,
+                    re.normal,
+                    &self.elements[source as usize],
+                    m,
+                    &mut rng,
+                    &mut vis,
+                )
             } else {
-                self.from_cluster(x, re.normal, source & !CLUSTER, m, &mut rng, &mut vis)
+                self.cluster_factor(x, re.normal, source & !CLUSTER, m, &mut rng, &mut vis)
             };
             out.rays += vis[0] + vis[1];
-            blocked |= vis[1] > 0;
-            free |= vis[0] > 0;
+            out.quarters[quarter(re.tri, p)] += f as f32 / (POINTS / 4) as f32;
+            out.blocked |= vis[1] > 0;
+            out.unoccluded = out.unoccluded.max(bound as f32);
             sum += f;
             out.hi = out.hi.max(f as f32);
             out.lo = out.lo.min(f as f32);
         }
-        out.k = (sum / 4.0) as f32;
-        out.partial = blocked && free;
+        out.k = (sum / POINTS as f64) as f32;
         out
     }
 
-    fn from_element(
+    fn element_factor(
         &self,
         x: Vec3,
         n: Vec3,
@@ -150,45 +266,68 @@ impl Context<'_> {
         m: u32,
         rng: &mut Rng64,
         vis: &mut [u32; 2],
-    ) -> f64 {
+    ) -> (f64, f64) {
         let f = point_polygon(x, n, s.polygon(), s.normal);
         if f <= 0.0 {
-            return 0.0;
+            return (0.0, 0.0);
         }
         // Visibility over the part of the source in front of x (the part the analytic factor
-        // counts), each ray weighted by the kernel cos θ cos θ' / r² at its end point, so that
-        // the fraction seen is the kernel's, not the area's (the two differ where the near
-        // part of a source is hidden and the far part is not). Points behind x's plane are
-        // drawn again, up to 8 m draws.
+        // counts), weighted by the kernel cos θ cos θ' / r², so that the fraction is the
+        // kernel's, not the area's (they differ where the near part of a source is hidden and
+        // the far part is not). A source that fills much of x's view (F ≥ 0.1) is sampled by
+        // cosine-distributed directions that meet it, whose density is the kernel itself;
+        // a smaller one by points uniform over its area, each ray weighted by the kernel.
         let (mut seen, mut total, mut valid) = (0.0f64, 0.0f64, 0u32);
-        for _ in 0..8 * m {
-            if valid == m {
-                break;
+        if f >= 0.1 {
+            let (t, b) = crate::geom::orthonormal_basis(n);
+            let tries = (m as f64 / f * 2.0).ceil() as u32 + 8;
+            for _ in 0..tries {
+                if valid == m {
+                    break;
+                }
+                let d = crate::sampling::cosine_direction_in(n, t, b, uniform(rng), uniform(rng));
+                let Some(y) = hit_polygon(x, d, s) else {
+                    continue;
+                };
+                valid += 1;
+                total += 1.0;
+                if self.visible(x, n, y, s.root) {
+                    seen += 1.0;
+                    vis[0] += 1;
+                } else {
+                    vis[1] += 1;
+                }
             }
-            let y = s.sample(uniform(rng), uniform(rng), uniform(rng));
-            let d = y - x;
-            let d2 = d.length_squared() as f64;
-            let w = n.dot(d) as f64 * -(s.normal.dot(d) as f64) / (d2 * d2);
-            if !(w > 0.0) {
-                continue;
-            }
-            valid += 1;
-            total += w;
-            if self.visible(x, n, y, s.normal) {
-                seen += w;
-                vis[0] += 1;
-            } else {
-                vis[1] += 1;
+        } else {
+            for _ in 0..8 * m {
+                if valid == m {
+                    break;
+                }
+                let y = s.sample(uniform(rng), uniform(rng), uniform(rng));
+                let d = y - x;
+                let d2 = d.length_squared() as f64;
+                let w = n.dot(d) as f64 * -(s.normal.dot(d) as f64) / (d2 * d2);
+                if w.is_nan() || w <= 0.0 {
+                    continue;
+                }
+                valid += 1;
+                total += w;
+                if self.visible(x, n, y, s.root) {
+                    seen += w;
+                    vis[0] += 1;
+                } else {
+                    vis[1] += 1;
+                }
             }
         }
         if valid == 0 {
             // A sliver in front: too thin to hit; its factor is tiny, take it as seen.
-            return f;
+            return (f, f);
         }
-        f * seen / total
+        (f * seen / total, f)
     }
 
-    fn from_cluster(
+    fn cluster_factor(
         &self,
         x: Vec3,
         n: Vec3,
@@ -196,11 +335,13 @@ impl Context<'_> {
         m: u32,
         rng: &mut Rng64,
         vis: &mut [u32; 2],
-    ) -> f64 {
+    ) -> (f64, f64) {
         let area = self.clusters.nodes[c as usize].area;
         let mut sum = 0.0;
+        let mut bound = 0.0;
         for _ in 0..m {
-            let root = &self.elements[self.clusters.pick(c, uniform(rng) as f64) as usize];
+            let piece = self.clusters.pick(c, uniform(rng) as f64);
+            let root = &self.elements[piece as usize];
             let y = root.sample(uniform(rng), uniform(rng), uniform(rng));
             let d = y - x;
             let d2 = d.length_squared();
@@ -211,14 +352,16 @@ impl Context<'_> {
             if cr <= 0.0 || cs <= 0.0 {
                 continue;
             }
-            if self.visible(x, n, y, root.normal) {
-                sum += (cr as f64 * cs as f64) / (PI * d2 as f64 * d2 as f64);
+            let w = (cr as f64 * cs as f64) / (PI * d2 as f64 * d2 as f64);
+            bound += w;
+            if self.visible(x, n, y, piece) {
+                sum += w;
                 vis[0] += 1;
             } else {
                 vis[1] += 1;
             }
         }
-        area * sum / m as f64
+        (area * sum / m as f64, area * bound / m as f64)
     }
 }
 
@@ -241,7 +384,10 @@ mod tests {
         let quarter = closed_form::point_parallel_rectangle(1.0, 1.0, h as f64);
         assert!((f - 4.0 * quarter).abs() < 1e-6, "{f} vs {}", 4.0 * quarter);
         // Behind the source: nothing; a source half behind the receiver's plane: clipped.
-        assert_eq!(point_polygon(Vec3::Y * 2.0, Vec3::Y, &square, -Vec3::Y), 0.0);
+        assert_eq!(
+            point_polygon(Vec3::Y * 2.0, Vec3::Y, &square, -Vec3::Y),
+            0.0
+        );
         let tilted = [
             Vec3::new(1.0, -1.0, -1.0),
             Vec3::new(1.0, -1.0, 1.0),
@@ -262,7 +408,10 @@ mod tests {
         let mut quad = 0.0;
         for i in 0..n {
             for j in 0..n {
-                let (y, z) = ((i as f64 + 0.5) / n as f64, -1.0 + 2.0 * (j as f64 + 0.5) / n as f64);
+                let (y, z) = (
+                    (i as f64 + 0.5) / n as f64,
+                    -1.0 + 2.0 * (j as f64 + 0.5) / n as f64,
+                );
                 let r2 = 1.0 + y * y + z * z;
                 quad += y * 1.0 / (PI * r2 * r2) * (2.0 / (n * n) as f64);
             }
@@ -271,11 +420,51 @@ mod tests {
         // A closed cube around the point: the factors to the five faces in front sum to 1.
         let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
         let faces: [([Vec3; 4], Vec3); 5] = [
-            ([c(-1., 1., -1.), c(-1., 1., 1.), c(1., 1., 1.), c(1., 1., -1.)], -Vec3::Y),
-            ([c(1., -1., -1.), c(1., -1., 1.), c(1., 1., 1.), c(1., 1., -1.)], -Vec3::X),
-            ([c(-1., -1., -1.), c(-1., 1., -1.), c(-1., 1., 1.), c(-1., -1., 1.)], Vec3::X),
-            ([c(-1., -1., 1.), c(-1., 1., 1.), c(1., 1., 1.), c(1., -1., 1.)], -Vec3::Z),
-            ([c(-1., -1., -1.), c(1., -1., -1.), c(1., 1., -1.), c(-1., 1., -1.)], Vec3::Z),
+            (
+                [
+                    c(-1., 1., -1.),
+                    c(-1., 1., 1.),
+                    c(1., 1., 1.),
+                    c(1., 1., -1.),
+                ],
+                -Vec3::Y,
+            ),
+            (
+                [
+                    c(1., -1., -1.),
+                    c(1., -1., 1.),
+                    c(1., 1., 1.),
+                    c(1., 1., -1.),
+                ],
+                -Vec3::X,
+            ),
+            (
+                [
+                    c(-1., -1., -1.),
+                    c(-1., 1., -1.),
+                    c(-1., 1., 1.),
+                    c(-1., -1., 1.),
+                ],
+                Vec3::X,
+            ),
+            (
+                [
+                    c(-1., -1., 1.),
+                    c(-1., 1., 1.),
+                    c(1., 1., 1.),
+                    c(1., -1., 1.),
+                ],
+                -Vec3::Z,
+            ),
+            (
+                [
+                    c(-1., -1., -1.),
+                    c(1., -1., -1.),
+                    c(1., 1., -1.),
+                    c(-1., 1., -1.),
+                ],
+                Vec3::Z,
+            ),
         ];
         let x = Vec3::new(0.2, -0.3, 0.1);
         let total: f64 = faces

@@ -9,7 +9,8 @@
 //!
 //! **Refinement.** Every root element starts with one candidate link to the top cluster. A
 //! candidate is culled when the two cannot see each other (one lies behind the other's plane,
-//! or both belong to the same input piece), and otherwise estimated and judged by the oracle
+//! or both belong to the same input piece), and otherwise estimated at sixteen jittered points
+//! of the receiver ([`kernel`]) and judged by the oracle
 //!
 //! ```text
 //! err = ρ_r A_r (B̄_s · K + k · ΔB_s)
@@ -17,14 +18,24 @@
 //!
 //! the power that could be misplaced by gathering through this link: `ΔB_s` is the spread of
 //! radiosity among the source's leaves (what gathering from their mean hides), and `K` the
-//! kernel's uncertainty over the receiver — in the far field (centres more than twice the sum of
-//! the bounding radii apart) the spread `max − min` of the point values over the receiver's four
-//! points, so that partial visibility (a shadow boundary) and steep 1/r² fall-off refine; in the
-//! near field, where four points cannot bound the kernel, its bound `max(k_max, min(1,
-//! A_s/(π d²)))` with `d` the gap between the bounding spheres. A link with `err` above
-//! `link_error × Φ` (Φ the emitted power) is replaced by links from the children of the larger
-//! side (by bounding radius); elements are not split below `min_area`, and a cluster that holds
-//! the receiver or is closer than twice its radius plus the receiver's is always opened.
+//! kernel's uncertainty over the receiver:
+//!
+//! - far field (centres more than twice the sum of the bounding radii apart), every ray
+//!   arrived: the spread `max − min` of the point values, so that steep fall-off refines;
+//! - far field, some ray blocked: at least the largest *unoccluded* point value times
+//!   `1 − 0.05^(1/n)` (n rays), the lit fraction that n blocked rays leave possible at 95 %
+//!   confidence, since sixteen points cannot tell how much of the receiver a shadow covers
+//!   (a receiver whose points all fell in shadow would otherwise keep k = 0 however much of
+//!   it is lit);
+//! - near field, where points cannot bound the kernel: `max(k_max, min(1, A_s/(π d²)))` with
+//!   `d` the gap between the bounding spheres.
+//!
+//! A link with `err` above `link_error × Φ` (Φ the emitted power) is replaced by links from
+//! the children of the larger side (by bounding radius); elements are not split below
+//! `min_area`, and a cluster that holds the receiver or is closer than twice its radius plus
+//! the receiver's is always opened. A link that is kept takes its coefficient from a second,
+//! independent estimate: keeping a link because its points happened to agree must not bias
+//! the light it carries.
 //!
 //! **Clusters** are sources only: a receiver is always an element, so a root gathers from
 //! the clusters of everything far from it (O(log N) links a root, as in Barnes–Hut), and no
@@ -32,6 +43,12 @@
 //! radiosity of its surfaces, and its link coefficient is a Monte Carlo estimate of the
 //! point-to-area factor over its actual surfaces with both cosines and visibility
 //! ([`kernel`]): the orientation of every surface counts, not an isotropic volume.
+//!
+//! **Covered surface.** Part of an element may lie inside a closed solid (the floor under a
+//! box standing on it): it neither receives nor sends light. Each element's exposed fraction
+//! is estimated by rays ([`kernel::exposure`]), and what a source element sends is the mean
+//! radiosity of its children weighted by their exposed area, not by their whole area, which
+//! would dilute the light of the floor next to the box with the darkness under it.
 //!
 //! **Solution.** Jacobi iterations of gather (every link, in parallel), push (what an element
 //! gathered is added to its descendants) and pull (an element's radiosity is the area mean of its
@@ -67,7 +84,7 @@ pub struct Params {
     pub link_error: f64,
     /// Elements are not split below this area (square scene units); 0: the scene's area × 1e-6.
     pub min_area: f64,
-    /// Visibility rays from each of a link's four receiver points.
+    /// Visibility rays from each of a link's sixteen receiver points.
     pub visibility_rays: u32,
     /// Refinement passes at most (each followed by a solve).
     pub max_passes: u32,
@@ -87,7 +104,7 @@ impl Default for Params {
         Self {
             link_error: 2e-5,
             min_area: 0.0,
-            visibility_rays: 4,
+            visibility_rays: 1,
             max_passes: 6,
             tolerance: 1e-4,
             max_iterations: 1000,
@@ -192,6 +209,33 @@ pub struct Link {
     pub k_oracle: f32,
     /// The oracle's kernel uncertainty `K` (see the module docs).
     pub uncertainty: f32,
+    /// `k` over each of the receiver's four children (their mean is `k`): what is pushed to
+    /// each, so that a link at a coarse receiver still lights its parts unevenly where the
+    /// kernel varies.
+    pub quarters: [f32; 4],
+    /// From a cluster: the direction from its centre to the receiver's, × 127. A cluster
+    /// sends what its surfaces facing that way send ([`Hierarchy::link_radiosity`]).
+    pub direction: [i8; 3],
+}
+
+/// The six axis directions of a cluster's directional radiosity.
+const AXES: [Vec3; 6] = [
+    Vec3::X,
+    Vec3::NEG_X,
+    Vec3::Y,
+    Vec3::NEG_Y,
+    Vec3::Z,
+    Vec3::NEG_Z,
+];
+
+/// What a cluster sends towards each axis direction: Σ A_j B_j max(0, n_j·a) and
+/// Σ A_j max(0, n_j·a) over its surfaces.
+pub type Directional = [(Rgb, f64); 6];
+
+/// What a direction `w` (unit) weighs each axis with: max(0, w·a)², which sums to 1.
+fn axis_weights(w: Vec3) -> [f32; 6] {
+    let c = |v: f32| v.max(0.0) * v.max(0.0);
+    [c(w.x), c(-w.x), c(w.y), c(-w.y), c(w.z), c(-w.z)]
 }
 
 /// What the hierarchical solver did.
@@ -240,10 +284,16 @@ pub struct Hierarchy {
     pub radiosity: Vec<Rgb>,
     /// What the last iteration changed at each element (leaves: not yet gathered light).
     pub unshot: Vec<Rgb>,
-    /// Power each element gathered (through its own links, area × Σ k B).
-    pub gathered: Vec<Rgb>,
-    /// Radiosity of each cluster.
+    /// What arrived at each element per unit area (`H`, with B = E + ρ H at a leaf): through
+    /// its own links and its ancestors'.
+    pub incident: Vec<Rgb>,
+    /// Radiosity of each cluster (the area mean of its surfaces).
     pub cluster_radiosity: Vec<Rgb>,
+    /// What each cluster sends by direction.
+    pub cluster_directional: Vec<Directional>,
+    /// What each element sends: the mean radiosity of its children weighted by their exposed
+    /// area (its own radiosity at a leaf).
+    pub sent: Vec<Rgb>,
     /// The report.
     pub info: Info,
 }
@@ -258,12 +308,40 @@ impl Hierarchy {
         out
     }
 
-    /// The radiosity of a link's source.
+    /// The radiosity of a link's source (a cluster's area mean).
     pub fn source_radiosity(&self, source: u32) -> Rgb {
         if source & CLUSTER != 0 {
             self.cluster_radiosity[(source & !CLUSTER) as usize]
         } else {
             self.radiosity[source as usize]
+        }
+    }
+
+    /// The radiosity a link gathers: what its source element sends, or what its source
+    /// cluster's surfaces send towards the receiver (projected-area weighted, from the six
+    /// axis bins; the area mean where no surface faces that way).
+    pub fn link_radiosity(&self, l: &Link) -> Rgb {
+        if l.source & CLUSTER == 0 {
+            return self.sent[l.source as usize];
+        }
+        let c = (l.source & !CLUSTER) as usize;
+        let w = axis_weights(
+            Vec3::new(
+                l.direction[0] as f32,
+                l.direction[1] as f32,
+                l.direction[2] as f32,
+            )
+            .normalize_or_zero(),
+        );
+        let (mut p, mut a) = (Rgb::BLACK, 0.0);
+        for (wk, (pk, ak)) in w.iter().zip(&self.cluster_directional[c]) {
+            p += *pk * *wk as f64;
+            a += ak * *wk as f64;
+        }
+        if a > 0.0 {
+            p / a
+        } else {
+            self.cluster_radiosity[c]
         }
     }
 }
@@ -281,6 +359,13 @@ const ELEMENT_BYTES: u64 = std::mem::size_of::<Element>() as u64 + 4 * 24 + 8;
 
 struct State<'a> {
     h: Hierarchy,
+    /// Fraction of each root not hidden by a coincident twin ([`kernel::untwinned`]).
+    untwinned: Vec<f32>,
+    /// Which root elements emit.
+    emits: Vec<bool>,
+    /// Exposed fraction of each element ([`kernel::exposure`]).
+    exposure: Vec<f32>,
+
     /// Spread (max − min, channel mean) of leaf radiosity under each element / cluster.
     spread: Vec<f32>,
     cluster_spread: Vec<f32>,
@@ -312,7 +397,7 @@ impl State<'_> {
         } else {
             let e = &self.h.elements.items[s as usize];
             (
-                self.h.radiosity[s as usize],
+                self.h.sent[s as usize],
                 self.spread[s as usize],
                 e.radius,
                 e.centre,
@@ -355,7 +440,7 @@ impl State<'_> {
         if s & CLUSTER != 0 {
             let c = s & !CLUSTER;
             let node = &self.h.clusters.nodes[c as usize];
-            if std::env::var("HR_NOCLUSTER").is_ok() || self.h.clusters.contains(c, re.root) {
+            if self.h.clusters.contains(c, re.root) {
                 return Decision::SplitSource;
             }
             let (lo, hi) = (node.bounds.min, node.bounds.max);
@@ -388,8 +473,11 @@ impl State<'_> {
         let est = ctx.estimate(r, s, 0);
         let d = (cs - re.centre).length();
         let uncertainty = if d > 2.0 * (re.radius + rs) {
-            if est.partial {
-                est.hi
+            if est.blocked {
+                // However many rays were blocked, a lit part the rays missed may remain: at
+                // 95 % confidence it is below 1 − 0.05^(1/n) of the receiver for n rays.
+                let missed = 1.0 - 0.05f32.powf(1.0 / est.rays.max(1) as f32);
+                (est.hi - est.lo).max(est.unoccluded * missed)
             } else {
                 est.hi - est.lo
             }
@@ -434,10 +522,19 @@ impl State<'_> {
         let first = self.h.elements.subdivide(parent);
         let grown = self.h.elements.items.len() - before;
         let b = self.h.radiosity[parent as usize];
-        for _ in 0..grown {
+        let sent = self.h.sent[parent as usize];
+        for k in 0..grown {
+            let id = (before + k) as u32;
+            self.exposure.push(kernel::exposure(
+                &self.h.elements.items[id as usize],
+                id,
+                self.bvh,
+                self.params.seed,
+            ));
+            self.h.sent.push(sent);
             self.h.radiosity.push(b);
             self.h.unshot.push(Rgb::BLACK);
-            self.h.gathered.push(Rgb::BLACK);
+            self.h.incident.push(Rgb::BLACK);
             self.spread.push(0.0);
         }
         first
@@ -453,6 +550,7 @@ impl State<'_> {
                     bvh: self.bvh,
                     rays: self.params.visibility_rays,
                     seed: self.params.seed,
+                    emits: &self.emits,
                 };
                 todo.par_iter()
                     .map(|&(r, s)| self.decide(&ctx, r, s))
@@ -470,6 +568,16 @@ impl State<'_> {
                             k: est.k,
                             k_oracle,
                             uncertainty,
+                            quarters: est.quarters,
+                            direction: if s & CLUSTER != 0 {
+                                let c = &self.h.clusters.nodes[(s & !CLUSTER) as usize];
+                                let w = (self.h.elements.items[r as usize].centre - c.centre)
+                                    .normalize_or_zero()
+                                    * 127.0;
+                                [w.x as i8, w.y as i8, w.z as i8]
+                            } else {
+                                [0; 3]
+                            },
                         });
                     }
                     Decision::SplitReceiver => {
@@ -541,9 +649,7 @@ impl State<'_> {
     /// Gather–push–pull until the tolerance; returns iterations.
     fn iterate(&mut self, observer: &dyn Observer) -> u64 {
         // Links grouped by receiver, in a fixed order.
-        self.h
-            .links
-            .sort_by_key(|l| (l.receiver, l.source));
+        self.h.links.sort_by_key(|l| (l.receiver, l.source));
         let n = self.h.elements.items.len();
         let mut start = vec![0u32; n + 1];
         for l in &self.h.links {
@@ -557,25 +663,29 @@ impl State<'_> {
         loop {
             // Gather: every element's links, in parallel, each receiver's sum in link order.
             let h = &self.h;
-            let gathered: Vec<Rgb> = (0..n)
+            let gathered: Vec<[Rgb; 4]> = (0..n)
                 .into_par_iter()
                 .map(|e| {
-                    h.links[start[e] as usize..start[e + 1] as usize]
-                        .iter()
-                        .map(|l| h.source_radiosity(l.source) * l.k as f64)
-                        .fold(Rgb::BLACK, |a, b| a + b)
+                    let mut g = [Rgb::BLACK; 4];
+                    for l in &h.links[start[e] as usize..start[e + 1] as usize] {
+                        let b = h.link_radiosity(l);
+                        for (gq, kq) in g.iter_mut().zip(l.quarters) {
+                            *gq += b * kq as f64;
+                        }
+                    }
+                    g
                 })
                 .collect();
-            // Push: parents come before children.
+            // Push: parents come before children; child c takes its parent's quarter c.
             let items = &self.h.elements.items;
             for e in 0..n {
                 let p = items[e].parent;
-                down[e] = gathered[e]
-                    + if p == element::NONE {
-                        Rgb::BLACK
-                    } else {
-                        down[p as usize]
-                    };
+                down[e] = if p == element::NONE {
+                    Rgb::BLACK
+                } else {
+                    let p = p as usize;
+                    down[p] + gathered[p][e - items[p].children as usize]
+                };
             }
             // Leaves: B = E + ρ H; pull: children come after parents, so a reverse pass sees
             // every child before its parent.
@@ -584,40 +694,49 @@ impl State<'_> {
             let mut hi = vec![f32::NEG_INFINITY; n];
             for e in (0..n).rev() {
                 let el = &items[e];
+                let g = &gathered[e];
+                let here = (down[e] + (g[0] + g[1] + g[2] + g[3]) * 0.25)
+                    * self.untwinned[el.root as usize] as f64;
+                self.h.incident[e] = here;
                 let b = if el.is_leaf() {
                     let root = el.root as usize;
-                    let b = self.emission[root] + self.reflectance[root] * down[e];
+                    let b = self.emission[root] + self.reflectance[root] * here;
                     let d = (b - self.h.radiosity[e]).map(f64::abs);
                     change += d.sum() / 3.0 * el.area as f64;
                     self.h.unshot[e] = d;
                     let m = mean(b) as f32;
                     lo[e] = m;
                     hi[e] = m;
+                    self.h.sent[e] = b;
                     b
                 } else {
                     let mut s = Rgb::BLACK;
                     let mut a = 0.0;
                     let mut u = Rgb::BLACK;
+                    let (mut se, mut ae) = (Rgb::BLACK, 0.0);
                     for c in el.children..el.children + 4 {
-                        let ca = items[c as usize].area as f64;
-                        s += self.h.radiosity[c as usize] * ca;
-                        u += self.h.unshot[c as usize] * ca;
+                        let c = c as usize;
+                        let ca = items[c].area as f64;
+                        s += self.h.radiosity[c] * ca;
+                        u += self.h.unshot[c] * ca;
                         a += ca;
-                        lo[e] = lo[e].min(lo[c as usize]);
-                        hi[e] = hi[e].max(hi[c as usize]);
+                        let w = ca * self.exposure[c] as f64;
+                        se += self.h.sent[c] * w;
+                        ae += w;
+                        if self.exposure[c] > 0.0 {
+                            lo[e] = lo[e].min(lo[c]);
+                            hi[e] = hi[e].max(hi[c]);
+                        }
                     }
                     self.h.unshot[e] = if a > 0.0 { u / a } else { Rgb::BLACK };
-                    if a > 0.0 {
-                        s / a
-                    } else {
-                        Rgb::BLACK
-                    }
+                    let b = if a > 0.0 { s / a } else { Rgb::BLACK };
+                    self.h.sent[e] = if ae > 0.0 { se / ae } else { b };
+                    b
                 };
                 self.h.radiosity[e] = b;
-                self.h.gathered[e] = gathered[e] * el.area as f64;
             }
             for e in 0..n {
-                self.spread[e] = hi[e] - lo[e];
+                self.spread[e] = (hi[e] - lo[e]).max(0.0);
             }
             self.pull_clusters(&lo, &hi);
             iterations += 1;
@@ -640,7 +759,23 @@ impl State<'_> {
         for c in 0..nc {
             let node = self.h.clusters.nodes[c];
             let mut s = Rgb::BLACK;
+            let mut dir: Directional = [(Rgb::BLACK, 0.0); 6];
             for child in node.children {
+                if child & CLUSTER != 0 {
+                    let k = (child & !CLUSTER) as usize;
+                    for (d, x) in dir.iter_mut().zip(self.h.cluster_directional[k]) {
+                        d.0 += x.0;
+                        d.1 += x.1;
+                    }
+                } else {
+                    let e = &self.h.elements.items[child as usize];
+                    let b = self.h.sent[child as usize];
+                    for (d, axis) in dir.iter_mut().zip(AXES) {
+                        let w = e.area as f64 * e.normal.dot(axis).max(0.0) as f64;
+                        d.0 += b * w;
+                        d.1 += w;
+                    }
+                }
                 let (b, l, h, a) = if child & CLUSTER != 0 {
                     let k = (child & !CLUSTER) as usize;
                     (
@@ -652,7 +787,7 @@ impl State<'_> {
                 } else {
                     let k = child as usize;
                     (
-                        self.h.radiosity[k],
+                        self.h.sent[k],
                         lo[k],
                         hi[k],
                         self.h.elements.items[k].area as f64,
@@ -668,6 +803,7 @@ impl State<'_> {
                 Rgb::BLACK
             };
             self.cluster_spread[c] = chi[c] - clo[c];
+            self.h.cluster_directional[c] = dir;
         }
     }
 }
@@ -706,6 +842,7 @@ pub fn solve(
         })
         .collect();
     let clusters = Clusters::build(&items);
+    let items_for_exposure = items.clone();
     let total_area: f64 = items.iter().map(|e| e.area as f64).sum();
     let min_area = if params.min_area > 0.0 {
         params.min_area
@@ -726,8 +863,10 @@ pub fn solve(
         h: Hierarchy {
             radiosity: system.emission.clone(),
             unshot: vec![Rgb::BLACK; n],
-            gathered: vec![Rgb::BLACK; n],
+            incident: vec![Rgb::BLACK; n],
             cluster_radiosity: vec![Rgb::BLACK; nc],
+            cluster_directional: vec![[(Rgb::BLACK, 0.0); 6]; nc],
+            sent: system.emission.clone(),
             elements: Elements { items, roots: n },
             clusters,
             links: Vec::new(),
@@ -739,6 +878,21 @@ pub fn solve(
         },
         spread: vec![0.0; n],
         cluster_spread: vec![0.0; nc],
+        emits: system
+            .emission
+            .iter()
+            .map(|e| e.max_channel() > 0.0)
+            .collect(),
+        untwinned: items_for_exposure
+            .par_iter()
+            .enumerate()
+            .map(|(i, e)| kernel::untwinned(e, i as u32, bvh))
+            .collect(),
+        exposure: (0..n)
+            .into_par_iter()
+            .map(|i| kernel::exposure(&items_for_exposure[i], i as u32, bvh, params.seed))
+            .collect(),
+
         reflectance: &system.reflectance,
         emission: &system.emission,
         bvh,
@@ -753,10 +907,13 @@ pub fn solve(
     for (c, s) in state.cluster_spread.iter_mut().enumerate() {
         // Spread of emission under each cluster: max − min of its members' means.
         let node = &state.h.clusters.nodes[c];
-        let members = &state.h.clusters.order[node.first as usize..(node.first + node.count) as usize];
-        let (l, h) = members.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &m| {
-            (l.min(lo[m as usize]), h.max(lo[m as usize]))
-        });
+        let members =
+            &state.h.clusters.order[node.first as usize..(node.first + node.count) as usize];
+        let (l, h) = members
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &m| {
+                (l.min(lo[m as usize]), h.max(lo[m as usize]))
+            });
         *s = h - l;
     }
     observer.event(Event::Stage(Stage::FormFactors));
@@ -789,8 +946,357 @@ pub fn solve(
     h.info.elements = h.elements.items.len();
     h.info.leaves = h.elements.items.iter().filter(|e| e.is_leaf()).count();
     h.info.links = h.links.len();
-    h.info.bytes = h.info.elements as u64 * ELEMENT_BYTES
-        + h.info.links as u64 * LINK_BYTES
-        + nc as u64 * 64;
+    h.info.bytes =
+        h.info.elements as u64 * ELEMENT_BYTES + h.info.links as u64 * LINK_BYTES + nc as u64 * 64;
     Ok(h)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::{self, Settings};
+    use crate::scene::{Material, Polygon, Scene};
+
+    fn quad(v: [[f32; 3]; 4], material: usize) -> Polygon {
+        Polygon {
+            vertices: v.iter().map(|p| Vec3::from_array(*p)).collect(),
+            material,
+            line: 0,
+            group: 0,
+        }
+    }
+
+    /// A closed unit cube seen from inside: floor, ceiling and four walls, with the given
+    /// material per face.
+    fn cube(materials: Vec<Material>, of_face: [usize; 6]) -> Scene {
+        let faces = [
+            [[0., 0., 0.], [0., 0., 1.], [1., 0., 1.], [1., 0., 0.]],
+            [[0., 1., 0.], [1., 1., 0.], [1., 1., 1.], [0., 1., 1.]],
+            [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]],
+            [[0., 0., 1.], [0., 1., 1.], [1., 1., 1.], [1., 0., 1.]],
+            [[0., 0., 0.], [0., 1., 0.], [0., 1., 1.], [0., 0., 1.]],
+            [[1., 0., 0.], [1., 0., 1.], [1., 1., 1.], [1., 1., 0.]],
+        ];
+        Scene {
+            name: "cube".into(),
+            materials,
+            polygons: (0..6).map(|k| quad(faces[k], of_face[k])).collect(),
+            ..Scene::default()
+        }
+    }
+
+    fn solve(scene: &Scene, params: Params) -> pipeline::Solution {
+        let settings = Settings {
+            hierarchical: Some(params),
+            ..Default::default()
+        };
+        pipeline::solve(scene, &settings, &crate::observe::Silent).unwrap()
+    }
+
+    /// The furnace (every surface emits E and reflects ρ, closed, with a floating block that
+    /// occludes): B = E/(1 − ρ) exactly. Per input surface the area mean is within 0.2 %
+    /// (measured: at most 0.04 %); per leaf, a coarse link's value pushed to the receiver's
+    /// quarters still misses the kernel's variation within them, most at the box's corners
+    /// (measured 1.93 … 2.14 for 2, area-weighted RMS 1.2 %), so every leaf is held to 10 % and
+    /// the RMS to 2.5 %.
+    #[test]
+    fn furnace_is_uniform() {
+        let scene = crate::scene::builtin::furnace();
+        let s = solve(
+            &scene,
+            Params {
+                tolerance: 1e-8,
+                ..Default::default()
+            },
+        );
+        let exact = crate::scene::builtin::FURNACE_EMISSION.g
+            / (1.0 - crate::scene::builtin::FURNACE_REFLECTANCE.g);
+        let mut per = vec![(0.0, 0.0); scene.polygons.len()];
+        let (mut sq, mut area) = (0.0, 0.0);
+        for (p, b) in s.mesh.patches.iter().zip(&s.radiosity) {
+            let rel = b.g / exact - 1.0;
+            assert!(rel.abs() < 0.1, "leaf at {:?}: {}", p.centre, b.g);
+            sq += rel * rel * p.area as f64;
+            area += p.area as f64;
+            per[p.surface as usize].0 += b.g * p.area as f64;
+            per[p.surface as usize].1 += p.area as f64;
+        }
+        assert!((sq / area).sqrt() < 0.025, "RMS {}", (sq / area).sqrt());
+        for (k, (b, a)) in per.iter().enumerate() {
+            let mean = b / a;
+            assert!((mean / exact - 1.0).abs() < 0.002, "surface {k}: {mean}");
+        }
+    }
+
+    /// A closed cube whose ceiling emits: nothing escapes, so the power absorbed equals the
+    /// power emitted, up to the links' estimation error (measured: 0.03 % more absorbed than
+    /// emitted), held to 0.5 %.
+    #[test]
+    fn energy_balances_in_a_closed_cube() {
+        let grey = Material::diffuse("grey", Rgb::splat(0.6));
+        let lamp = Material::emitter("lamp", Rgb::splat(0.6), Rgb::splat(1.0));
+        let s = solve(
+            &cube(vec![grey, lamp], [0, 1, 0, 0, 0, 0]),
+            Params::default(),
+        );
+        let i = &s.info;
+        let e = i.emitted.g;
+        assert!((i.absorbed.g - e).abs() < 0.005 * e, "{:?}", i);
+        assert!(i.escaped.g.abs() < 0.005 * e, "{:?}", i);
+    }
+
+    /// Reciprocity of the link coefficients: A_i k_ij = A_j k_ji for two parallel squares and
+    /// for two perpendicular ones sharing an edge (nothing between them: the kernel is exact
+    /// at each point, the error is the 16-point quadrature's), and both match Howell.
+    #[test]
+    fn link_form_factors_are_reciprocal_and_exact() {
+        let grey = Material::diffuse("grey", Rgb::splat(0.5));
+        let lamp = Material::emitter("lamp", Rgb::BLACK, Rgb::splat(1.0));
+        let scene = cube(vec![grey, lamp], [1, 0, 0, 0, 0, 0]);
+        let roots = crate::mesh::Mesh::build(&scene, crate::mesh::MeshParams::Faces).unwrap();
+        let bvh = Bvh::build(&roots);
+        let items: Vec<Element> = roots
+            .patches
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let v = |k: usize| roots.vertices[p.vertices[k] as usize];
+                Element::new([v(0), v(1), v(2), v(3)], false, i as u32, element::NONE, 0)
+            })
+            .collect();
+        let clusters = Clusters::build(&items);
+        // Means over 200 independent estimates: the standard error of each mean is below
+        // 0.2 % (parallel) and 0.5 % (perpendicular) of the value.
+        let runs = 200;
+        let mean = |i: u32, j: u32| {
+            (1..=runs)
+                .map(|seed| {
+                    let ctx = Context {
+                        elements: &items,
+                        clusters: &clusters,
+                        bvh: &bvh,
+                        rays: 1,
+                        seed,
+                        emits: &[false; 6],
+                    };
+                    ctx.estimate(i, j, 0).k as f64
+                })
+                .sum::<f64>()
+                / runs as f64
+        };
+        // Floor (0) and ceiling (1): Howell C-11, 0.19982.
+        let parallel = crate::formfactor::closed_form::parallel_rectangles(1.0, 1.0, 1.0);
+        // Floor and a wall sharing an edge: Howell C-14, 0.20004.
+        let perpendicular = crate::formfactor::closed_form::perpendicular_rectangles(1.0, 1.0, 1.0);
+        for (i, j, exact, tol) in [
+            (0, 1, parallel, 0.006),
+            (1, 0, parallel, 0.006),
+            (0, 2, perpendicular, 0.02),
+            (2, 0, perpendicular, 0.02),
+            (0, 4, perpendicular, 0.02),
+            (4, 0, perpendicular, 0.02),
+        ] {
+            let k = mean(i, j);
+            assert!((k - exact).abs() < tol * exact, "{i}→{j}: {k} vs {exact}");
+        }
+    }
+
+    /// At the leaf level of a small hierarchy, the exact system (analytic factors between the
+    /// leaves of a convex cube, where nothing occludes, solved by LU) agrees with the
+    /// hierarchical solution: the area-weighted mean difference is the links' approximation
+    /// error (measured 1.1 % over 1,680 leaves, the worst leaf 8 %), held to 2 % and every
+    /// leaf to 15 %.
+    #[test]
+    fn leaves_agree_with_the_exact_leaf_system() {
+        let grey = Material::diffuse("grey", Rgb::splat(0.6));
+        let lamp = Material::emitter("lamp", Rgb::splat(0.3), Rgb::splat(1.0));
+        let scene = cube(vec![grey, lamp], [0, 1, 0, 0, 0, 0]);
+        let s = solve(
+            &scene,
+            Params {
+                link_error: 1e-3,
+                tolerance: 1e-8,
+                ..Default::default()
+            },
+        );
+        let n = s.mesh.len();
+        assert!((50..3000).contains(&n), "{n} leaves");
+        let ff = crate::formfactor::Params::geometric(
+            crate::formfactor::FormFactorMethod::Analytic,
+            2,
+            1,
+        );
+        let est = crate::formfactor::Estimator::new(&s.mesh, &s.bvh, ff).unwrap();
+        let mut f = est
+            .matrix(crate::formfactor::Storage::Sparse, &crate::observe::Silent)
+            .into_sparse();
+        let exact = pipeline::solve_system(
+            &s.system,
+            &mut f,
+            crate::solve::Solver::Gauss,
+            &Default::default(),
+            false,
+            &crate::observe::Silent,
+        )
+        .unwrap();
+        let (mut diff, mut total, mut worst) = (0.0, 0.0, 0.0f64);
+        for k in 0..n {
+            let (h, x) = (s.radiosity[k].g, exact.radiosity[k].g);
+            worst = worst.max((h - x).abs() / x);
+            diff += (h - x).abs() * s.system.area[k];
+            total += x * s.system.area[k];
+        }
+        assert!(worst < 0.15, "{worst}");
+        assert!(diff / total < 0.02, "{}", diff / total);
+    }
+
+    /// A square lamp over a floor with a square occluder between them: the leaves crowd along
+    /// the shadow's edge. Leaves within 0.1 of the penumbra's middle line are more than twice
+    /// as dense (per unit area) as those elsewhere within 1.5 of the centre (measured 2.7×),
+    /// though the lit floor nearer the lamp has the steeper fall-off.
+    #[test]
+    fn refinement_concentrates_at_a_shadow_boundary() {
+        let lamp = Material::emitter("lamp", Rgb::BLACK, Rgb::splat(10.0));
+        let floor = Material::diffuse("floor", Rgb::splat(0.5));
+        let black = Material::diffuse("occluder", Rgb::BLACK);
+        let scene = Scene {
+            name: "shadow".into(),
+            materials: vec![lamp, floor, black],
+            polygons: vec![
+                // A small lamp at height 2 facing down; an occluder 0.6 wide at height 1
+                // facing up (its back, black, faces the floor); the floor 4 × 4.
+                quad(
+                    [
+                        [-0.1, 2., -0.1],
+                        [0.1, 2., -0.1],
+                        [0.1, 2., 0.1],
+                        [-0.1, 2., 0.1],
+                    ],
+                    0,
+                ),
+                quad(
+                    [
+                        [-0.3, 1., -0.3],
+                        [-0.3, 1., 0.3],
+                        [0.3, 1., 0.3],
+                        [0.3, 1., -0.3],
+                    ],
+                    2,
+                ),
+                quad(
+                    [[-2., 0., -2.], [-2., 0., 2.], [2., 0., 2.], [2., 0., -2.]],
+                    1,
+                ),
+            ],
+            ..Scene::default()
+        };
+        let s = solve(&scene, Params::default());
+        // The umbra/penumbra edge of the occluder's shadow is near |x| or |z| = 0.6.
+        let (mut near, mut far) = ((0.0, 0usize), (0.0, 0usize));
+        for p in &s.mesh.patches {
+            if p.surface != 2 {
+                continue;
+            }
+            let m = p.centre.x.abs().max(p.centre.z.abs());
+            let d = (m - 0.6).abs();
+            if d < 0.1 {
+                near = (near.0 + p.area as f64, near.1 + 1);
+            } else if m < 1.5 {
+                far = (far.0 + p.area as f64, far.1 + 1);
+            }
+        }
+        let density = |(a, c): (f64, usize)| c as f64 / a;
+        assert!(
+            density(near) > 2.0 * density(far),
+            "near {near:?}, far {far:?}"
+        );
+    }
+
+    /// Vertex values are continuous across T-vertices: every mesh vertex lying inside the
+    /// edge of a leaf (found here by brute-force geometry, not by the mesh's own list) has the
+    /// value that the leaf interpolates there.
+    #[test]
+    fn vertex_values_are_continuous_across_t_vertices() {
+        let scene = crate::scene::builtin::by_name("cornell").unwrap();
+        let s = solve(
+            &scene,
+            Params {
+                link_error: 1e-4,
+                ..Default::default()
+            },
+        );
+        assert!(!s.mesh.hanging.is_empty());
+        let values = s.vertex_display_radiosity();
+        // Vertices by surface, for the brute-force search.
+        let mut by_surface: std::collections::HashMap<u32, Vec<u32>> = Default::default();
+        for p in &s.mesh.patches {
+            let n = if p.is_triangle() { 3 } else { 4 };
+            by_surface
+                .entry(p.surface)
+                .or_default()
+                .extend(&p.vertices[..n]);
+        }
+        for v in by_surface.values_mut() {
+            v.sort_unstable();
+            v.dedup();
+        }
+        let mut checked = 0;
+        for p in &s.mesh.patches {
+            let n = if p.is_triangle() { 3 } else { 4 };
+            for k in 0..n {
+                let (a, b) = (p.vertices[k], p.vertices[(k + 1) % n]);
+                let (pa, pb) = (s.mesh.vertices[a as usize], s.mesh.vertices[b as usize]);
+                let len = (pb - pa).length();
+                for &v in &by_surface[&p.surface] {
+                    let pv = s.mesh.vertices[v as usize];
+                    let (da, db, dv) = (pa.as_dvec3(), pb.as_dvec3(), pv.as_dvec3());
+                    let t = (dv - da).dot(db - da) / (db - da).length_squared();
+                    let off = (dv - (da + (db - da) * t)).length() as f32;
+                    let t = t as f32;
+                    if t <= 1e-4 || t >= 1.0 - 1e-4 || off > 1e-4 * len {
+                        continue;
+                    }
+                    let t = (dv - da).dot(db - da) / (db - da).length_squared();
+                    let want = values[a as usize] * (1.0 - t) + values[b as usize] * t;
+                    assert!(
+                        values[v as usize].max_abs_diff(want)
+                            <= 1e-4 * values[a as usize].max_abs_diff(values[b as usize]) + 1e-12,
+                        "vertex {v} at {pv:?} on edge ({a}, {b}) {pa:?} {pb:?} t {t}: {:?} vs {want:?}; constraint {:?}",
+                        values[v as usize],
+                        s.mesh.hanging.iter().find(|h| h[0] == v)
+                    );
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 100, "{checked} T-vertices");
+    }
+
+    /// Parameters out of range are refused before any work.
+    #[test]
+    fn bad_parameters_are_refused() {
+        for p in [
+            Params {
+                link_error: 0.0,
+                ..Default::default()
+            },
+            Params {
+                min_area: f64::NAN,
+                ..Default::default()
+            },
+            Params {
+                visibility_rays: 0,
+                ..Default::default()
+            },
+            Params {
+                tolerance: -1.0,
+                ..Default::default()
+            },
+        ] {
+            assert!(matches!(
+                p.validate(),
+                Err(HierarchicalError::Parameter { .. })
+            ));
+        }
+    }
 }

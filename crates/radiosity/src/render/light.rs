@@ -169,9 +169,7 @@ pub(crate) mod tests {
     /// Howell B-3: a differential area and a parallel rectangle a × b at distance c, the area
     /// under one corner.
     pub(crate) fn corner_factor(a: f64, b: f64, c: f64) -> f64 {
-        let (x, y) = (a / c, b / c);
-        let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
-        (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
+        crate::formfactor::closed_form::point_parallel_rectangle(a, b, c)
     }
 
     /// A scene meshed, with its hierarchy and per-patch materials: what the integrators' tests
