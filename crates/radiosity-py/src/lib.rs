@@ -543,7 +543,7 @@ fn trace_dict<'py>(py: Python<'py>, csv: &str) -> PyResult<Bound<'py, PyDict>> {
 
 /// Solve a scene (the CLI's `solve`): mesh, form factors, the solver.
 #[pyfunction]
-#[pyo3(signature = (scene, solver = "progressive", patches = 10000, tolerance = 0.01, seed = 1, threads = None, form_factor_method = "monte-carlo", rays = 256, max_iterations = None, trace = false, progress = None, omega = 1.1, photons = 1000, iteration_rays = 16, resolution = 128, samples = 16))]
+#[pyo3(signature = (scene, solver = "progressive", patches = 10000, tolerance = 0.01, seed = 1, threads = None, form_factor_method = "monte-carlo", rays = 256, max_iterations = None, trace = false, progress = None, omega = 1.1, photons = 1000, iteration_rays = 16, resolution = 128, samples = 16, link_error = 2e-5))]
 #[allow(clippy::too_many_arguments)]
 fn solve(
     py: Python<'_>,
@@ -563,6 +563,7 @@ fn solve(
     iteration_rays: u32,
     resolution: u32,
     samples: u32,
+    link_error: f64,
 ) -> PyResult<Solution> {
     if patches == 0 {
         return Err(value_error("patches: at least one patch is needed"));
@@ -572,7 +573,25 @@ fn solve(
             "tolerance {tolerance}: must be a positive number"
         )));
     }
+    // `hierarchical` is a method of scenes, not of linear systems: it has its own parameters.
+    let hierarchical = (solver == "hierarchical").then(|| radiosity::hierarchical::Params {
+        link_error,
+        tolerance,
+        seed,
+        max_iterations: max_iterations
+            .unwrap_or(radiosity::hierarchical::Params::default().max_iterations),
+        ..Default::default()
+    });
+    if let Some(p) = &hierarchical {
+        p.validate().map_err(value_error)?;
+        if trace {
+            return Err(value_error(
+                "trace: the hierarchical solver has no stored matrix to trace against",
+            ));
+        }
+    }
     let settings = Settings {
+        hierarchical,
         mesh: MeshParams::Patches(patches),
         form_factors: FormFactorParams {
             method: method_by_name(form_factor_method)?,
@@ -582,7 +601,11 @@ fn solve(
             seed,
             ..FormFactorParams::shooting()
         },
-        solver: solver_by_name(solver)?,
+        solver: if hierarchical.is_some() {
+            Solver::Progressive
+        } else {
+            solver_by_name(solver)?
+        },
         params: SolverParams {
             tolerance,
             max_iterations: max_iterations.unwrap_or(u64::MAX),
@@ -1023,6 +1046,14 @@ fn methods(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item(
         "solvers",
         Solver::ALL.iter().map(|s| s.name()).collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "scene_solvers",
+        Solver::ALL
+            .iter()
+            .map(|s| s.name())
+            .chain(["hierarchical"])
+            .collect::<Vec<_>>(),
     )?;
     d.set_item(
         "form_factors",

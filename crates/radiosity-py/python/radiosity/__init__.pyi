@@ -73,6 +73,7 @@ def solve(
     iteration_rays: int = 16,
     resolution: int = 128,
     samples: int = 16,
+    link_error: float = 2e-5,
 ) -> Solution: ...
 def form_factors(
     scene: Scene,
