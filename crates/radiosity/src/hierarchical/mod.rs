@@ -308,15 +308,6 @@ impl Hierarchy {
         out
     }
 
-    /// The radiosity of a link's source (a cluster's area mean).
-    pub fn source_radiosity(&self, source: u32) -> Rgb {
-        if source & CLUSTER != 0 {
-            self.cluster_radiosity[(source & !CLUSTER) as usize]
-        } else {
-            self.radiosity[source as usize]
-        }
-    }
-
     /// The radiosity a link gathers: what its source element sends, or what its source
     /// cluster's surfaces send towards the receiver (projected-area weighted, from the six
     /// axis bins; the area mean where no surface faces that way).
