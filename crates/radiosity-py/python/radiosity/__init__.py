@@ -50,12 +50,15 @@ def solve(
     iteration_rays: int = 16,
     resolution: int = 128,
     samples: int = 16,
+    link_error: float = 2e-5,
 ) -> Solution:
     """Solve `scene` as `radiosity solve` does: about `patches` patches, form factors by
     `form_factor_method` (Monte Carlo rows on demand with `rays` rays for an average shooter;
     `resolution` and `samples` for the projection methods), `solver` until the unshot energy is
     `tolerance` of the emitted energy (`omega` for sor, `photons` for stochastic,
-    `iteration_rays` for stochastic-jacobi). Same seed, same numbers as the CLI.
+    `iteration_rays` for stochastic-jacobi). `solver="hierarchical"` refines elements and links
+    instead of meshing (`link_error`; `patches` and the form-factor options are then unused);
+    its leaves are the solution's patches. Same seed, same numbers as the CLI.
     `progress(stage, done, total)` is called now and then; an exception it raises, or Ctrl-C,
     stops the solve at its next iteration and is raised."""
     return _native.solve(
@@ -75,6 +78,7 @@ def solve(
         iteration_rays=iteration_rays,
         resolution=resolution,
         samples=samples,
+        link_error=link_error,
     )
 
 
