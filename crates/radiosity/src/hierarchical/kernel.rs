@@ -169,17 +169,19 @@ fn quarter(tri: bool, p: usize) -> usize {
     }
 }
 
-/// The fraction of root element `e` (input piece `piece`) that is not hidden by a coincident
-/// twin: a ray from just behind each of four points through the surface must meet `piece`
-/// itself first, not another polygon lying in the same place (which the hierarchy reports
-/// first, and which therefore receives the light in its stead).
+/// The fraction of root element `e` (input piece `piece`) that is open in front: a ray from
+/// just behind each of four points through the surface must not meet another polygon within
+/// a few ray offsets, front or back. Such a polygon is a coincident twin (which the hierarchy
+/// reports first, and which receives the light in its stead) or a surface lying flush against
+/// this one (a panel on a wall): gathering from points lifted off the surface would see
+/// through it, where no light arrives.
 pub fn untwinned(e: &Element, piece: u32, bvh: &Bvh) -> f32 {
     let off = bvh.ray_offset();
     let points = e.receiver_points(&[0.5; 2 * POINTS]);
     let mut seen = 0;
     for x in points.into_iter().step_by(4) {
-        let hit = bvh.closest_hit(&Ray::new(x - e.normal * (2.0 * off), e.normal), 4.0 * off);
-        if !matches!(hit, Some(h) if h.patch != piece && h.front) {
+        let hit = bvh.closest_hit(&Ray::new(x - e.normal * (2.0 * off), e.normal), 8.0 * off);
+        if !matches!(hit, Some(h) if h.patch != piece) {
             seen += 1;
         }
     }

@@ -350,7 +350,8 @@ const ELEMENT_BYTES: u64 = std::mem::size_of::<Element>() as u64 + 4 * 24 + 8;
 
 struct State<'a> {
     h: Hierarchy,
-    /// Fraction of each root not hidden by a coincident twin ([`kernel::untwinned`]).
+    /// Fraction of each root open in front: not under a coincident twin or flush against
+    /// another surface ([`kernel::untwinned`]).
     untwinned: Vec<f32>,
     /// Which root elements emit.
     emits: Vec<bool>,
