@@ -50,10 +50,11 @@
 //! radiosity of its children weighted by their exposed area, not by their whole area, which
 //! would dilute the light of the floor next to the box with the darkness under it.
 //!
-//! **Solution.** Jacobi iterations of gather (every link, in parallel), push (what an element
-//! gathered is added to its descendants) and pull (an element's radiosity is the area mean of its
-//! children's; a cluster's the area mean of its members'), from B = E, until the power the
-//! last iteration changed is at most `tolerance × Φ`. Then every link is judged again with
+//! **Solution.** Jacobi iterations of gather (every link, in parallel, one value for each
+//! quarter of its receiver), push (each quarter's value to the child in that quarter, and on
+//! to its descendants) and pull (an element's radiosity is the area mean of its children's; what
+//! it sends, their mean over exposed area; a cluster's, its members' by direction), from
+//! B = E, until the power the last iteration changed is at most `tolerance × Φ`. Then every link is judged again with
 //! the new radiosities and refined where needed, and the solve repeated, until a pass refines
 //! nothing (or `max_passes`).
 //!
