@@ -90,8 +90,8 @@ impl Clusters {
         let right = self.split(roots, hi, first + mid);
         let bounds = ids
             .iter()
-            .flat_map(|&e| roots[e as usize].polygon().to_vec())
-            .fold(Aabb::EMPTY, Aabb::grow);
+            .flat_map(|&e| roots[e as usize].polygon())
+            .fold(Aabb::EMPTY, |b, p| b.grow(*p));
         let area = ids.iter().map(|&e| roots[e as usize].area as f64).sum();
         self.nodes.push(Cluster {
             bounds,

@@ -79,6 +79,25 @@ impl Element {
         }
     }
 
+    /// The root elements of `mesh`'s patches (one per input piece; element `i` is patch `i`).
+    pub fn roots(mesh: &crate::mesh::Mesh) -> Vec<Element> {
+        mesh.patches
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let v = |k: usize| {
+                    let k = if p.vertices[k] == crate::mesh::Patch::NONE {
+                        2
+                    } else {
+                        k
+                    };
+                    mesh.vertices[p.vertices[k] as usize]
+                };
+                Element::new([v(0), v(1), v(2), v(3)], p.is_triangle(), i as u32, NONE, 0)
+            })
+            .collect()
+    }
+
     /// The corners that exist (3 or 4).
     pub fn polygon(&self) -> &[Vec3] {
         if self.tri {
@@ -154,10 +173,11 @@ impl Element {
     /// seen by some points and missed by others, which is what the oracle looks for.
     pub fn receiver_points(&self, u: &[f32; 2 * POINTS]) -> [Vec3; POINTS] {
         if self.tri {
-            let kids = self.child_corners();
+            let grandchildren = self
+                .child_corners()
+                .map(|corners| Element { corners, ..*self }.child_corners());
             std::array::from_fn(|k| {
-                let child = Element::new(kids[k / 4], true, 0, NONE, 0);
-                let [a, b, c, _] = child.child_corners()[k % 4];
+                let [a, b, c, _] = grandchildren[k / 4][k % 4];
                 let (s, t) = crate::sampling::uniform_triangle(u[2 * k], u[2 * k + 1]);
                 a + (b - a) * s + (c - a) * t
             })

@@ -175,7 +175,7 @@ fn quarter(tri: bool, p: usize) -> usize {
 /// reports first, and which receives the light in its stead) or a surface lying flush against
 /// this one (a panel on a wall): gathering from points lifted off the surface would see
 /// through it, where no light arrives.
-pub fn untwinned(e: &Element, piece: u32, bvh: &Bvh) -> f32 {
+pub fn open_in_front(e: &Element, piece: u32, bvh: &Bvh) -> f32 {
     let off = bvh.ray_offset();
     let points = e.receiver_points(&[0.5; 2 * POINTS]);
     let mut seen = 0;
