@@ -21,6 +21,7 @@
 
 pub mod accel;
 pub mod color;
+pub mod distributed;
 pub mod experiment;
 pub mod export;
 pub mod formfactor;
@@ -65,6 +66,9 @@ pub enum Error {
     /// A heat-transfer problem could not be solved.
     #[error(transparent)]
     Thermal(#[from] thermal::ThermalError),
+    /// What was asked for does not run over several ranks.
+    #[error("{0}")]
+    NotDistributed(String),
     /// The job would not fit in memory.
     #[error(
         "{what} would need about {} MiB but only {} MiB are available; use {}",

@@ -845,6 +845,45 @@ pub fn thermal_boundaries(
     Ok(boundary_of)
 }
 
+/// The memory check of a thermal problem's stored F.
+pub fn thermal_memory(p: &crate::formfactor::Params, limit: u64) -> MemoryCheck {
+    use crate::formfactor::FormFactorMethod as M;
+    MemoryCheck {
+        limit,
+        stored_rows: true,
+        rays: match p.method {
+            M::MonteCarlo => p.rays,
+            M::Hemicube | M::Tetrahedron | M::Hemisphere => {
+                ((p.resolution as u64).pow(2) * 3 * p.samples as u64).min(u32::MAX as u64) as u32
+            }
+            M::Analytic => u32::MAX,
+        },
+    }
+}
+
+/// The thermal system of `mesh`'s patches: areas in m², each patch's boundary.
+pub fn thermal_system(
+    mesh: &Mesh,
+    area: &[f64],
+    boundary_of: &[Option<u32>],
+    boundaries: &[crate::thermal::Boundary],
+    settings: &ThermalSettings,
+    closed: bool,
+) -> crate::thermal::ThermalSystem {
+    let unit2 = settings.unit_metres * settings.unit_metres;
+    crate::thermal::ThermalSystem {
+        area: area.iter().map(|a| a * unit2).collect(),
+        group: mesh
+            .patches
+            .iter()
+            .map(|p| boundary_of[p.material as usize].unwrap_or(u32::MAX))
+            .collect(),
+        boundaries: boundaries.to_vec(),
+        environment: settings.environment,
+        closed,
+    }
+}
+
 /// Solve a radiative heat-transfer problem on `scene`: `boundary_of` (from
 /// [`thermal_boundaries`]) gives each material's boundary in `boundaries`. Meshes, computes
 /// F (memory checked first), enforces reciprocity (and closure when closed), solves.
@@ -855,24 +894,14 @@ pub fn thermal(
     settings: &ThermalSettings,
     observer: &dyn Observer,
 ) -> Result<ThermalOutcome, Error> {
-    use crate::formfactor::{enforce, summary, Enforce, Estimator, FormFactorMethod as M};
+    use crate::formfactor::{enforce, summary, Enforce, Estimator};
     scene.validate_geometry()?;
     let limit = match settings.memory_limit {
         0 => available_memory().unwrap_or(u64::MAX),
         l => l,
     };
     let mut params = settings.form_factors;
-    let check = |p: &crate::formfactor::Params| MemoryCheck {
-        limit,
-        stored_rows: true,
-        rays: match p.method {
-            M::MonteCarlo => p.rays,
-            M::Hemicube | M::Tetrahedron | M::Hemisphere => {
-                ((p.resolution as u64).pow(2) * 3 * p.samples as u64).min(u32::MAX as u64) as u32
-            }
-            M::Analytic => u32::MAX,
-        },
-    };
+    let check = |p: &crate::formfactor::Params| thermal_memory(p, limit);
     if settings.default_rays {
         params.rays = 10_000;
     }
@@ -910,18 +939,7 @@ pub fn thermal(
         },
     );
     let after = summary(&matrix, &area);
-    let unit2 = settings.unit_metres * settings.unit_metres;
-    let system = crate::thermal::ThermalSystem {
-        area: area.iter().map(|a| a * unit2).collect(),
-        group: mesh
-            .patches
-            .iter()
-            .map(|p| boundary_of[p.material as usize].unwrap_or(u32::MAX))
-            .collect(),
-        boundaries: boundaries.to_vec(),
-        environment: settings.environment,
-        closed,
-    };
+    let system = thermal_system(&mesh, &area, boundary_of, boundaries, settings, closed);
     observer.event(Event::Stage(Stage::Solve));
     let solution = crate::thermal::solve(
         &system,

@@ -72,6 +72,8 @@ pub struct StochasticJacobi<'s> {
     iterations: u64,
     gathered: bool,
     estimated_error: f64,
+    /// Ranks sharing the rays of each iteration, if distributed.
+    ranks: Option<&'s crate::distributed::Ranks<'s>>,
 }
 
 impl<'s> StochasticJacobi<'s> {
@@ -108,8 +110,17 @@ impl<'s> StochasticJacobi<'s> {
             iterations: 0,
             gathered: false,
             estimated_error: 0.0,
+            ranks: None,
             system,
         })
+    }
+
+    /// Share every iteration's rays among `ranks`: each traces a contiguous run of the
+    /// iteration's chunks and the hits are all-gathered (4 bytes a ray), so every rank reduces
+    /// the same hits in the same order and B is the same bytes as on one process.
+    pub fn distributed(mut self, ranks: &'s crate::distributed::Ranks<'s>) -> Self {
+        self.ranks = Some(ranks);
+        self
     }
 
     /// Rays of one iteration: the per-patch budget times N.
@@ -178,18 +189,42 @@ impl<'s> StochasticJacobi<'s> {
         while done < rays {
             let batch = (rays - done).min(BATCH as u64) as usize;
             let first_chunk = done / CHUNK as u64;
-            buf[..batch]
-                .par_chunks_mut(CHUNK)
-                .enumerate()
-                .for_each(|(c, out)| {
-                    let mut rng = stream(seed, iteration, first_chunk + c as u64, 1);
-                    let start = done + (c * CHUNK) as u64;
-                    for (slot, k) in out.iter_mut().zip(start..) {
-                        let i = source_of(k);
-                        let hit = sampler.sample(i, &mut rng).unwrap_or(u32::MAX);
-                        *slot = (i as u32, hit);
+            let trace = |c: usize, out: &mut [(u32, u32)]| {
+                let mut rng = stream(seed, iteration, first_chunk + c as u64, 1);
+                let start = done + (c * CHUNK) as u64;
+                for (slot, k) in out.iter_mut().zip(start..) {
+                    let i = source_of(k);
+                    let hit = sampler.sample(i, &mut rng).unwrap_or(u32::MAX);
+                    *slot = (i as u32, hit);
+                }
+            };
+            match self.ranks {
+                None => buf[..batch]
+                    .par_chunks_mut(CHUNK)
+                    .enumerate()
+                    .for_each(|(c, out)| trace(c, out)),
+                Some(ranks) => {
+                    // This rank's chunks of the batch; then everyone's hits, in chunk order.
+                    let chunks = batch.div_ceil(CHUNK);
+                    let mine = &crate::distributed::balance(&vec![1.0; chunks], ranks.size())
+                        [ranks.rank()];
+                    let (lo, hi) = (mine.start * CHUNK, (mine.end * CHUNK).min(batch));
+                    buf[lo..hi]
+                        .par_chunks_mut(CHUNK)
+                        .enumerate()
+                        .for_each(|(c, out)| trace(mine.start + c, out));
+                    let hits: Vec<u32> = buf[lo..hi].iter().map(|&(_, j)| j).collect();
+                    let all = ranks.all_gather(&hits);
+                    let mut i = 0;
+                    for (k, (slot, j)) in buf[..batch].iter_mut().zip(all).enumerate() {
+                        let k = done + k as u64;
+                        while end[i] <= k {
+                            i += 1;
+                        }
+                        *slot = (i as u32, j);
                     }
-                });
+                }
+            }
             for &(i, j) in &buf[..batch] {
                 let i = i as usize;
                 let w = weight(i);
@@ -243,39 +278,45 @@ impl<'s> StochasticJacobi<'s> {
             (&self.rays, &self.hits, &self.direct, &self.direct_sq);
         let seed = self.seed;
         // Per patch: the gathered B and the variance of its estimate (channels summed).
-        let gathered: Vec<(Rgb, f64)> = (0..n)
-            .into_par_iter()
-            .map(|j| {
-                let mut rng = stream(seed, GATHER, j as u64, 2);
-                // The variate only where s_j has an independent estimate.
-                let (cv, s) = if rays[j] > 0 {
-                    (beta, hits[j] as f64 / rays[j] as f64)
-                } else {
-                    (Rgb::BLACK, 0.0)
+        let gather_one = |j: usize| {
+            let mut rng = stream(seed, GATHER, j as u64, 2);
+            // The variate only where s_j has an independent estimate.
+            let (cv, s) = if rays[j] > 0 {
+                (beta, hits[j] as f64 / rays[j] as f64)
+            } else {
+                (Rgb::BLACK, 0.0)
+            };
+            let (mut sum, mut sum_sq) = (Rgb::BLACK, 0.0f64);
+            for _ in 0..per {
+                let v = match sampler.sample(j, &mut rng) {
+                    Some(i) => old[i as usize] - sys.emission[i as usize] - cv,
+                    None => Rgb::BLACK,
                 };
-                let (mut sum, mut sum_sq) = (Rgb::BLACK, 0.0f64);
-                for _ in 0..per {
-                    let v = match sampler.sample(j, &mut rng) {
-                        Some(i) => old[i as usize] - sys.emission[i as usize] - cv,
-                        None => Rgb::BLACK,
-                    };
-                    sum += v;
-                    sum_sq += v.sum() * v.sum();
-                }
-                let mean = sum * (1.0 / per as f64);
-                let var = if per > 1 {
-                    (sum_sq / per as f64 - mean.sum() * mean.sum()).max(0.0) / (per - 1) as f64
-                } else {
-                    0.0
-                };
-                let rho = sys.reflectance[j];
-                let direct = direct.get(j).copied().unwrap_or(Rgb::BLACK);
-                let b = sys.emission[j] + direct + rho * (cv * s + mean);
-                let rho_mean = rho.sum() / 3.0;
-                let direct_var = direct_sq.get(j).copied().unwrap_or(0.0);
-                (b, rho_mean * rho_mean * var + direct_var)
-            })
-            .collect();
+                sum += v;
+                sum_sq += v.sum() * v.sum();
+            }
+            let mean = sum * (1.0 / per as f64);
+            let var = if per > 1 {
+                (sum_sq / per as f64 - mean.sum() * mean.sum()).max(0.0) / (per - 1) as f64
+            } else {
+                0.0
+            };
+            let rho = sys.reflectance[j];
+            let direct = direct.get(j).copied().unwrap_or(Rgb::BLACK);
+            let b = sys.emission[j] + direct + rho * (cv * s + mean);
+            let rho_mean = rho.sum() / 3.0;
+            let direct_var = direct_sq.get(j).copied().unwrap_or(0.0);
+            (b, rho_mean * rho_mean * var + direct_var)
+        };
+        let range = match self.ranks {
+            None => 0..n,
+            Some(r) => crate::distributed::balance(&vec![1.0; n], r.size())[r.rank()].clone(),
+        };
+        let mine: Vec<(Rgb, f64)> = range.into_par_iter().map(gather_one).collect();
+        let gathered = match self.ranks {
+            None => mine,
+            Some(r) => r.all_gather(&mine),
+        };
         let (mut err, mut norm) = (0.0, 0.0);
         for (j, (b, var)) in gathered.into_iter().enumerate() {
             self.b[j] = b;

@@ -32,6 +32,7 @@
 
 pub mod boundary;
 
+use crate::distributed::{Ranks, Serial};
 use crate::system::SparseMatrix;
 use faer::linalg::solvers::Solve;
 use rayon::prelude::*;
@@ -88,14 +89,21 @@ pub enum LinearSolver {
     Direct,
     /// BiCGSTAB on the stored sparse F: O(nnz) per iteration.
     Iterative,
+    /// Jacobi sweeps `J ← b + D K J` on the stored F, O(nnz) a sweep; converges for every
+    /// solvable problem (the spectral radius of D K is below 1 when some surface has a
+    /// prescribed temperature or sees an opening), at a rate set by the reflectances. The method
+    /// that runs distributed over ranks ([`crate::distributed`]): each rank sweeps its block
+    /// of patches and the blocks are all-gathered.
+    Jacobi,
 }
 
 impl LinearSolver {
     /// Every choice.
-    pub const ALL: [LinearSolver; 3] = [
+    pub const ALL: [LinearSolver; 4] = [
         LinearSolver::Auto,
         LinearSolver::Direct,
         LinearSolver::Iterative,
+        LinearSolver::Jacobi,
     ];
 
     /// The command-line name.
@@ -104,6 +112,7 @@ impl LinearSolver {
             LinearSolver::Auto => "auto",
             LinearSolver::Direct => "direct",
             LinearSolver::Iterative => "iterative",
+            LinearSolver::Jacobi => "jacobi",
         }
     }
 }
@@ -363,6 +372,18 @@ pub fn solve(
     f: &SparseMatrix,
     params: ThermalParams,
 ) -> Result<ThermalSolution, ThermalError> {
+    solve_ranks(system, f, params, &Ranks::new(&Serial))
+}
+
+/// [`solve`] over `ranks`, every one of which holds the whole F: `jacobi` sweeps split over
+/// them (the same bytes for any number of ranks); the direct and BiCGSTAB solves run on every
+/// rank alike.
+pub fn solve_ranks(
+    system: &ThermalSystem,
+    f: &SparseMatrix,
+    params: ThermalParams,
+    ranks: &Ranks<'_>,
+) -> Result<ThermalSolution, ThermalError> {
     system.validate(f)?;
     let start = std::time::Instant::now();
     let n = system.area.len();
@@ -378,7 +399,7 @@ pub fn solve(
     }
     let direct = match params.linear {
         LinearSolver::Direct => true,
-        LinearSolver::Iterative => false,
+        LinearSolver::Iterative | LinearSolver::Jacobi => false,
         LinearSolver::Auto => n <= DIRECT_MAX && direct_bytes(n) <= params.memory_limit,
     };
     let (j, iterations) = if direct {
@@ -391,6 +412,8 @@ pub fn solve(
             });
         }
         (solve_direct(system, f, &a), 0)
+    } else if params.linear == LinearSolver::Jacobi {
+        solve_jacobi(system, f, &a, params, ranks)?
     } else {
         solve_iterative(system, f, &a, params)?
     };
@@ -459,7 +482,13 @@ pub fn solve(
         temperature,
         flux,
         info: ThermalInfo {
-            method: if direct { "direct" } else { "iterative" },
+            method: if direct {
+                "direct"
+            } else if params.linear == LinearSolver::Jacobi {
+                "jacobi"
+            } else {
+                "iterative"
+            },
             iterations,
             residual,
             total_power,
@@ -487,6 +516,63 @@ fn solve_direct(system: &ThermalSystem, f: &SparseMatrix, a: &Assembled) -> Vec<
     let rhs = faer::Mat::<f64>::from_fn(n, 1, |i, _| a.b[i]);
     let x = m.partial_piv_lu().solve(&rhs);
     (0..n).map(|i| x[(i, 0)]).collect()
+}
+
+/// Jacobi sweeps `J ← b + D K J` from J = b, each rank relaxing its block of patches (blocks
+/// balanced by the stored entries of their columns) and the blocks all-gathered. The residual
+/// of the sweep's start, `b − M J = J_new − J`, comes free; its norm is summed over the
+/// gathered vector in patch order, so every rank stops after the same sweep.
+fn solve_jacobi(
+    system: &ThermalSystem,
+    f: &SparseMatrix,
+    a: &Assembled,
+    params: ThermalParams,
+    ranks: &Ranks<'_>,
+) -> Result<(Vec<f64>, usize), ThermalError> {
+    let n = system.area.len();
+    let costs: Vec<f64> = (0..n)
+        .map(|i| 1.0 + f.column_entries(i).len() as f64)
+        .collect();
+    let mine = crate::distributed::balance(&costs, ranks.size())[ranks.rank()].clone();
+    let bn = norm(&a.b).max(f64::MIN_POSITIVE);
+    let mut x = a.b.clone();
+    let mut k = 0;
+    loop {
+        let block: Vec<f64> = mine
+            .clone()
+            .into_par_iter()
+            .map(|i| {
+                let g: f64 = f
+                    .column_entries(i)
+                    .iter()
+                    .map(|&(j, v)| {
+                        let j = j as usize;
+                        system.area[j] * a.scale[j] * v as f64 * x[j]
+                    })
+                    .sum();
+                a.b[i] + a.d[i] * g / system.area[i]
+            })
+            .collect();
+        let new = ranks.all_gather(&block);
+        let res = new
+            .iter()
+            .zip(&x)
+            .map(|(y, x)| (y - x) * (y - x))
+            .sum::<f64>()
+            .sqrt()
+            / bn;
+        x = new;
+        k += 1;
+        if res <= params.tolerance {
+            return Ok((x, k));
+        }
+        if k >= params.max_iterations {
+            return Err(ThermalError::NotConverged {
+                iterations: k,
+                residual: res,
+            });
+        }
+    }
 }
 
 /// BiCGSTAB (van der Vorst 1992), unpreconditioned: M's diagonal is 1 (a planar patch does not
@@ -593,8 +679,14 @@ mod tests {
         )
     }
 
-    fn both(system: &ThermalSystem, f: &SparseMatrix) -> [ThermalSolution; 2] {
-        [LinearSolver::Direct, LinearSolver::Iterative].map(|linear| {
+    /// Every linear solver's solution (Jacobi included).
+    fn both(system: &ThermalSystem, f: &SparseMatrix) -> [ThermalSolution; 3] {
+        [
+            LinearSolver::Direct,
+            LinearSolver::Iterative,
+            LinearSolver::Jacobi,
+        ]
+        .map(|linear| {
             solve(
                 system,
                 f,

@@ -1,0 +1,211 @@
+// The distributed methods on ranks simulated by threads ([`Local`]): the same bytes for any
+// number of ranks, and the same answer as the serial methods. (The MPI transport itself is
+// tested by the CLI's tests under `mpirun`.)
+
+use radiosity::distributed::{self, rows, Local, Ranks};
+use radiosity::formfactor::{Estimator, Params, Storage};
+use radiosity::mesh::{Mesh, MeshParams};
+use radiosity::observe::Silent;
+use radiosity::pipeline::{self, Settings};
+use radiosity::scene::builtin;
+use radiosity::solve::{Solver, SolverParams};
+
+fn settings(solver: Solver, patches: usize) -> Settings {
+    Settings {
+        mesh: MeshParams::Patches(patches),
+        form_factors: Params::monte_carlo(4000, 11),
+        solver,
+        params: SolverParams {
+            tolerance: 1e-7,
+            iteration_rays: 64,
+            seed: 5,
+            ..SolverParams::default()
+        },
+        ..Settings::default()
+    }
+}
+
+#[test]
+fn jacobi_is_the_same_bytes_on_any_number_of_ranks_and_agrees_with_lu() {
+    let scene = builtin::cornell();
+    let s = settings(Solver::Jacobi, 300);
+    let runs: Vec<Vec<_>> = [1, 2, 3]
+        .iter()
+        .map(|&k| {
+            Local::run(k, |c| {
+                let ranks = Ranks::new(c);
+                let (sol, report) = distributed::solve::solve(&scene, &s, &ranks, &Silent).unwrap();
+                assert_eq!(report.blocks.len(), k);
+                assert!(sol.info.converged);
+                sol.radiosity
+            })
+        })
+        .collect();
+    for run in &runs {
+        for b in run {
+            assert_eq!(
+                b, &runs[0][0],
+                "a rank or a rank count gave different bytes"
+            );
+        }
+    }
+    // The LU solution of the very matrix: the serial pipeline's F is the same (rows keyed by
+    // their index), solved by Gauss elimination.
+    let lu = pipeline::solve(
+        &scene,
+        &Settings {
+            solver: Solver::Gauss,
+            ..s
+        },
+        &Silent,
+    )
+    .unwrap();
+    let b = &runs[0][0];
+    let mut worst: f64 = 0.0;
+    for (x, y) in b.iter().zip(&lu.radiosity) {
+        worst = worst.max((x.sum() - y.sum()).abs() / y.sum().max(1e-12));
+    }
+    assert!(worst < 1e-5, "Jacobi over ranks against LU: {worst}");
+}
+
+#[test]
+fn stochastic_jacobi_over_ranks_is_the_serial_run_byte_for_byte() {
+    let scene = builtin::cornell();
+    let s = Settings {
+        params: SolverParams {
+            tolerance: 0.01,
+            ..settings(Solver::StochasticJacobi, 400).params
+        },
+        ..settings(Solver::StochasticJacobi, 400)
+    };
+    let serial = pipeline::solve(&scene, &s, &Silent).unwrap();
+    for k in [1, 2, 4] {
+        let runs = Local::run(k, |c| {
+            let ranks = Ranks::new(c);
+            let (sol, report) = distributed::solve::solve(&scene, &s, &ranks, &Silent).unwrap();
+            // Every rank sent its share of the hits.
+            assert!(report.traffic.iter().all(|t| t.bytes_sent > 0));
+            (sol.radiosity, sol.info.absorbed, sol.info.escaped)
+        });
+        for r in &runs {
+            assert_eq!(r.0, serial.radiosity, "{k} ranks");
+            assert_eq!(r.1, serial.info.absorbed);
+            assert_eq!(r.2, serial.info.escaped);
+        }
+    }
+}
+
+#[test]
+fn rows_gathered_from_ranks_are_the_serial_matrix() {
+    let scene = builtin::cornell();
+    let mesh = Mesh::build(&scene, MeshParams::Patches(250)).unwrap();
+    let bvh = radiosity::accel::Bvh::build(&mesh);
+    let est = Estimator::new(&mesh, &bvh, Params::monte_carlo(3000, 3)).unwrap();
+    let serial = est.matrix(Storage::Sparse, &Silent).into_sparse();
+    for k in [1, 2, 3] {
+        let got = Local::run(k, |c| {
+            let ranks = Ranks::new(c);
+            let costs = rows::row_costs(&est, &ranks);
+            let blocks = rows::blocks(&costs, &ranks);
+            let block = rows::compute(&est, blocks[ranks.rank()].clone(), k as u64, &Silent);
+            (
+                rows::gather_matrix(&block, mesh.len(), 0, &ranks),
+                rows::all_gather_matrix(&block, mesh.len(), &ranks),
+            )
+        });
+        for (r, (root, all)) in got.into_iter().enumerate() {
+            assert_eq!(root.is_some(), r == 0);
+            if let Some(m) = root {
+                assert!(m.triplets().eq(serial.triplets()), "{k} ranks");
+            }
+            assert!(all.triplets().eq(serial.triplets()), "{k} ranks, rank {r}");
+        }
+    }
+}
+
+#[test]
+fn sequential_methods_are_refused_over_ranks() {
+    let scene = builtin::cornell();
+    for solver in [
+        Solver::Progressive,
+        Solver::Southwell,
+        Solver::GaussSeidel,
+        Solver::Gauss,
+    ] {
+        let errors = Local::run(2, |c| {
+            let ranks = Ranks::new(c);
+            distributed::solve::solve(&scene, &settings(solver, 50), &ranks, &Silent)
+                .err()
+                .map(|e| e.to_string())
+        });
+        for e in errors {
+            let e = e.expect("refused");
+            assert!(
+                e.contains(solver.name()) && e.contains("stochastic-jacobi"),
+                "{e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn thermal_jacobi_over_ranks_is_the_same_bytes_and_agrees_with_lu() {
+    use radiosity::pipeline::ThermalSettings;
+    use radiosity::thermal::{Boundary, Condition, LinearSolver};
+    let scene = builtin::cornell();
+    // A hot light, a cool floor, every other surface re-radiating (adiabatic).
+    let boundary_of: Vec<Option<u32>> =
+        (0..scene.materials.len()).map(|m| Some(m as u32)).collect();
+    let boundaries: Vec<Boundary> = (0..scene.materials.len())
+        .map(|m| Boundary {
+            emissivity: 0.3 + 0.1 * (m % 5) as f64,
+            condition: match m {
+                0 => Condition::Temperature(900.0),
+                1 => Condition::Temperature(300.0),
+                _ => Condition::Adiabatic,
+            },
+        })
+        .collect();
+    let s = ThermalSettings {
+        mesh: MeshParams::Patches(200),
+        form_factors: Params::monte_carlo(3000, 9),
+        default_rays: false,
+        linear: LinearSolver::Jacobi,
+        ..ThermalSettings::default()
+    };
+    let mut first = None;
+    for k in [1, 2, 3] {
+        let runs = Local::run(k, |c| {
+            let ranks = Ranks::new(c);
+            let (out, _) = distributed::thermal::thermal(
+                &scene,
+                &boundary_of,
+                &boundaries,
+                &s,
+                &ranks,
+                &Silent,
+            )
+            .unwrap();
+            (out.solution.radiosity, out.solution.temperature)
+        });
+        for r in runs {
+            let f = first.get_or_insert_with(|| r.clone());
+            assert_eq!(&r, f, "{k} ranks");
+        }
+    }
+    let lu = pipeline::thermal(
+        &scene,
+        &boundary_of,
+        &boundaries,
+        &ThermalSettings {
+            linear: LinearSolver::Direct,
+            ..s
+        },
+        &Silent,
+    )
+    .unwrap();
+    let (j, _) = first.unwrap();
+    for (x, y) in j.iter().zip(&lu.solution.radiosity) {
+        assert!((x - y).abs() <= 1e-9 * y.abs(), "Jacobi {x} against LU {y}");
+    }
+}
