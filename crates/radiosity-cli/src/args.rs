@@ -307,6 +307,9 @@ pub enum LinearSolverArg {
     Direct,
     /// BiCGSTAB on the sparse F, to a relative residual of 1e-12.
     Iterative,
+    /// Jacobi sweeps on the sparse F, to a relative residual of 1e-12; split over the ranks
+    /// under mpirun (the default there).
+    Jacobi,
 }
 
 /// `radiosity thermal`.
@@ -757,6 +760,13 @@ pub struct BenchArgs {
     /// by monte-carlo and by hemicube, with time and peak memory.
     #[arg(long, help_heading = FORM_FACTORS)]
     pub city: bool,
+    /// Instead: the distributed methods (Jacobi on stored rows, stochastic Jacobi) on this scene
+    /// at `--patches`, over the ranks of this run (run it under `mpirun -np K`; alone it is one
+    /// rank): time per stage, per iteration, bytes exchanged, load balance and parallel
+    /// efficiency against one rank (rank 0 alone, measured first in the same run), medians of
+    /// `--runs`.
+    #[arg(long, value_name = "SCENE", help_heading = SCENE)]
+    pub ranks: Option<String>,
     /// Instead: solve this scene at each of `--sizes` (patch counts), each in a fresh process,
     /// and print rays, wall and CPU time, the time of each stage, peak resident memory and the
     /// fitted exponents against N.

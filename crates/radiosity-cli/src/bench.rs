@@ -85,6 +85,13 @@ fn solvers(sizes: &[usize], runs: usize) -> Result<()> {
 
 /// Run the benchmark and print its table.
 pub fn run(a: BenchArgs) -> Result<()> {
+    if let Some(scene) = &a.ranks {
+        if a.runs == 0 || a.patches == 0 {
+            bail!("--runs and --patches must be positive");
+        }
+        return crate::ranks_bench::run(&a, scene);
+    }
+    crate::ranks::refuse_unless_single("bench (except --ranks)")?;
     // `--rays` is a count, a scene, or both (given twice).
     let mut count = 2_000_000usize;
     let mut ray_scene = None;

@@ -9,6 +9,8 @@ mod embree;
 mod experiment;
 mod fuzz;
 mod pictures;
+mod ranks;
+mod ranks_bench;
 mod rays;
 mod report;
 mod scale;
@@ -42,19 +44,28 @@ fn main() -> ExitCode {
         }
         Err(e) => e.exit(),
     };
+    if let Err(e) = ranks::start() {
+        eprintln!("radiosity: error: {e:#}");
+        return ExitCode::FAILURE;
+    }
+    let single = |what: &str| ranks::refuse_unless_single(what);
     let result = match cli.command {
-        Command::Render(a) => render(a),
+        Command::Render(a) => single("render").and_then(|()| render(a)),
         Command::Solve(a) => solve(a),
-        Command::View(a) => view(a),
+        Command::View(a) => single("view").and_then(|()| view(a)),
         Command::Bench(a) => bench::run(a),
-        Command::SolveSystem(a) => solve_system(a),
+        Command::SolveSystem(a) => single("solve-system").and_then(|()| solve_system(a)),
         Command::FormFactors(a) => view_factors::run(a),
-        Command::Experiment(a) => experiment::run(a),
-        Command::Fuzz(a) => fuzz::run_all(a),
+        Command::Experiment(a) => single("experiment").and_then(|()| experiment::run(a)),
+        Command::Fuzz(a) => single("fuzz").and_then(|()| fuzz::run_all(a)),
         Command::Thermal(a) => thermal::run(a),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => {
+            ranks::finish();
+            ExitCode::SUCCESS
+        }
+        Err(e) if ranks::distributed() => ranks::fail(&format!("{e:#}")),
         Err(e) => {
             // The chain once: each error's text says what went wrong at its level, and a
             // library error about a parameter is given the option's name.
@@ -69,6 +80,7 @@ fn main() -> ExitCode {
                 }
                 _ => eprintln!("radiosity: error: {e:#}{hint}"),
             }
+            ranks::finish();
             ExitCode::FAILURE
         }
     }
@@ -116,25 +128,50 @@ fn usage_error(e: &clap::Error) -> String {
 /// Load the scene named on the command line and print its warnings.
 pub(crate) fn load_scene(name: &str, one_sided: bool) -> Result<Scene> {
     let scene = scene::load_with(name, &scene::LoadOptions { one_sided })?;
-    for w in &scene.warnings {
-        eprintln!("radiosity: warning: {w}");
+    // Every rank loads the scene; one says what is wrong with it.
+    if ranks::is_root() {
+        for w in &scene.warnings {
+            eprintln!("radiosity: warning: {w}");
+        }
     }
     Ok(scene)
 }
 
-/// Load and solve, with a progress bar (and the trace, if asked).
-fn solve_scene(a: &SolveArgs) -> Result<(Scene, Solution)> {
+/// Load and solve, with a progress bar (and the trace, if asked). Under mpirun, the
+/// distributed methods (and, over several ranks, every method, to be refused if sequential)
+/// run over the ranks, and their report comes back too.
+fn solve_scene(
+    a: &SolveArgs,
+) -> Result<(
+    Scene,
+    Solution,
+    Option<radiosity::distributed::solve::Report>,
+)> {
     let settings = settings::settings(a)?;
     let scene = load_scene(&a.scene, a.one_sided)?;
     let progress = report::Progress::new(settings.params.tolerance);
-    let solution = pipeline::solve(&scene, &settings, &progress);
+    let over_ranks = ranks::current().filter(|r| {
+        r.size() > 1
+            || (settings.hierarchical.is_none()
+                && radiosity::distributed::solve::DISTRIBUTED_SOLVERS.contains(&settings.solver))
+    });
+    let mut distributed = None;
+    let solution = match over_ranks {
+        Some(r) => radiosity::distributed::solve::solve(&scene, &settings, r, &progress).map(
+            |(s, report)| {
+                distributed = Some(report);
+                s
+            },
+        ),
+        None => pipeline::solve(&scene, &settings, &progress),
+    };
     progress.finish();
     let solution = solution?;
     if let (Some(path), Some(t)) = (&a.trace, &solution.trace) {
         write_text(path, t.csv()).context("writing the trace")?;
         println!("trace       {} ({} rows)", path.display(), t.len());
     }
-    Ok((scene, solution))
+    Ok((scene, solution, distributed))
 }
 
 fn solve_system(a: SolveSystemArgs) -> Result<()> {
@@ -288,7 +325,7 @@ fn render(mut a: RenderArgs) -> Result<()> {
         );
         return Ok(());
     }
-    let (scene, solution) = solve_scene(&a.solve)?;
+    let (scene, solution, _) = solve_scene(&a.solve)?;
     let camera = settings::camera(solution.default_camera(&scene), &a.camera)?;
     let t = Instant::now();
     let progress = report::Progress::new(settings.params.tolerance);
@@ -405,7 +442,10 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     }
     settings::settings(&a.solve)?;
     settings::threads(a.solve.threads)?;
-    let (scene, solution) = solve_scene(&a.solve)?;
+    let (scene, solution, distributed) = solve_scene(&a.solve)?;
+    if !ranks::is_root() {
+        return Ok(());
+    }
     if let Some(h) = &solution.hierarchy {
         if let Some(p) = &a.links_out {
             radiosity::export::write_links_csv(p, &h.hierarchy)?;
@@ -440,6 +480,9 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     }
     let write_s = t.elapsed().as_secs_f64();
     report::summary(&scene, &solution, None);
+    if let Some(r) = &distributed {
+        report::ranks(r);
+    }
     println!(
         "wrote       {} ({} patches) in {write_s:.3} s",
         a.out.display(),

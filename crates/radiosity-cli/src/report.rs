@@ -202,3 +202,45 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
         None => println!("memory      heap allocated at most {heap:.1} MiB"),
     }
 }
+
+/// The lines of a distributed run: ranks and their blocks, traffic, balance, sweeps.
+pub fn ranks(r: &radiosity::distributed::solve::Report) {
+    let blocks: Vec<String> = r
+        .blocks
+        .iter()
+        .map(|b| format!("{}–{}", b.start, b.end.saturating_sub(1)))
+        .collect();
+    let shown = blocks.len().min(8);
+    println!(
+        "ranks       {} ({}): patches {}{}",
+        r.blocks.len(),
+        r.transport,
+        blocks[..shown].join(" | "),
+        if blocks.len() > shown { " | …" } else { "" }
+    );
+    let waiting = r.traffic.iter().map(|t| t.seconds).fold(0.0, f64::max);
+    let calls = r.traffic.first().map_or(0, |t| t.calls);
+    println!(
+        "traffic     {:.2} MiB sent by all ranks in {calls} collectives, {waiting:.3} s in them at most; load balance {:.2} (mean / busiest rank's work){}",
+        r.bytes_sent() as f64 / (1 << 20) as f64,
+        r.balance(),
+        if r.pilot_seconds > 0.0 {
+            format!("; cost pilot {:.3} s", r.pilot_seconds)
+        } else {
+            String::new()
+        }
+    );
+    if !r.sweeps.is_empty() {
+        let n = r.sweeps.len() as f64;
+        let mean = r.sweeps.iter().map(|s| s.seconds).sum::<f64>() / n;
+        let comm = r.sweeps.iter().map(|s| s.communication).sum::<f64>() / n;
+        println!(
+            "sweeps      {} of {:.4} s each ({:.4} s of it exchanging B), {:.3} MiB a rank a sweep",
+            r.sweeps.len(),
+            mean,
+            comm,
+            // Each rank all-gathers 48 bytes (B and H) a patch.
+            48.0 * r.blocks.last().map_or(0, |b| b.end) as f64 / (1 << 20) as f64
+        );
+    }
+}

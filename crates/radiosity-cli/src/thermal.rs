@@ -123,9 +123,12 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         },
         enclosure_hint: vs3.as_ref().map(|v| v.control.enclosure),
         linear: match a.linear_solver {
+            // Under mpirun the distributed method, on one rank too (the same bytes as on K).
+            LinearSolverArg::Auto if crate::ranks::current().is_some() => LinearSolver::Jacobi,
             LinearSolverArg::Auto => LinearSolver::Auto,
             LinearSolverArg::Direct => LinearSolver::Direct,
             LinearSolverArg::Iterative => LinearSolver::Iterative,
+            LinearSolverArg::Jacobi => LinearSolver::Jacobi,
         },
         memory_limit: 0,
     };
@@ -137,20 +140,35 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         .expect("valid template")
         .progress_chars("=> "),
     );
-    let outcome =
-        radiosity::pipeline::thermal(&scene, &boundary_of, &boundaries, &settings, &|e: Event<
-            '_,
-        >| {
-            if let Event::Progress {
-                stage: Stage::FormFactors,
-                done,
-                total,
-            } = e
-            {
-                bar.set_length(total);
-                bar.set_position(done)
-            }
-        });
+    let progress = |e: Event<'_>| {
+        if let Event::Progress {
+            stage: Stage::FormFactors,
+            done,
+            total,
+        } = e
+        {
+            bar.set_length(total);
+            bar.set_position(done)
+        }
+    };
+    let mut distributed = None;
+    let outcome = match crate::ranks::current() {
+        Some(ranks) => radiosity::distributed::thermal::thermal(
+            &scene,
+            &boundary_of,
+            &boundaries,
+            &settings,
+            ranks,
+            &progress,
+        )
+        .map(|(o, r)| {
+            distributed = Some(r);
+            o
+        }),
+        None => {
+            radiosity::pipeline::thermal(&scene, &boundary_of, &boundaries, &settings, &progress)
+        }
+    };
     bar.finish_and_clear();
     let outcome = outcome.map_err(|e| match e {
         radiosity::Error::Thermal(thermal::ThermalError::Unphysical { group, value }) => anyhow::anyhow!(
@@ -166,6 +184,9 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         ),
         e => e.into(),
     })?;
+    if !crate::ranks::is_root() {
+        return Ok(());
+    }
     let (mesh, system, solution, per) = (
         &outcome.mesh,
         &outcome.system,
@@ -296,6 +317,9 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         println!("… {} more in {}", rows.len() - 40, a.out.display());
     }
     println!("            (* prescribed temperature)");
+    if let Some(r) = &distributed {
+        crate::report::ranks(r);
+    }
     println!("wrote       {}", a.out.display());
     if let Some(p) = &a.patches_out {
         println!("wrote       {}", p.display());

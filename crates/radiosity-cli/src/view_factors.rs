@@ -88,7 +88,19 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         seed: a.seed,
         ..Params::default()
     };
-    let (mesh, matrix, _, compute_s) = compute(&scene, mesh_params, params, storage, None)?;
+    let mut distributed = None;
+    let (mesh, matrix, _, compute_s) = match crate::ranks::current() {
+        Some(ranks) => {
+            let (mesh, matrix, report, s) = compute_ranks(&scene, mesh_params, params, ranks)?;
+            // Rank 0 writes; the others are done.
+            let Some(matrix) = matrix else {
+                return Ok(());
+            };
+            distributed = Some(report);
+            (mesh, matrix, params, s)
+        }
+        None => compute(&scene, mesh_params, params, storage, None)?,
+    };
     let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
     if view3d {
         return write_view3d(&a, &scene, vs3.as_ref(), &mesh, &matrix, &area, compute_s);
@@ -183,6 +195,9 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         "reciprocity worst |A_i F_ij − A_j F_ji| / mean area = {:.3e}",
         s.worst_reciprocity
     );
+    if let Some(r) = &distributed {
+        crate::report::ranks(r);
+    }
     println!("wrote       {}", a.out.display());
     if let Some(p) = &a.patches_out {
         println!("wrote       {}", p.display());
@@ -261,6 +276,59 @@ pub fn compute(
     drop(estimator);
     drop(bvh);
     Ok((mesh, matrix, params, t.elapsed().as_secs_f64()))
+}
+
+/// [`compute`] over the ranks of a distributed run: each computes the rows of its block
+/// (balanced by estimated cost), and rank 0 gathers the matrix (`None` on the others).
+fn compute_ranks(
+    scene: &Scene,
+    mesh_params: MeshParams,
+    params: Params,
+    ranks: &radiosity::distributed::Ranks<'_>,
+) -> Result<(
+    Mesh,
+    Option<radiosity::system::SparseMatrix>,
+    radiosity::distributed::solve::Report,
+    f64,
+)> {
+    use radiosity::distributed::{rows, solve::Report};
+    let t = Instant::now();
+    let start = ranks.traffic();
+    let limit = radiosity::pipeline::available_memory().unwrap_or(u64::MAX);
+    let memory = radiosity::pipeline::thermal_memory(&params, limit);
+    memory.before_meshing(scene, mesh_params)?;
+    let mesh = Mesh::build(scene, mesh_params)?;
+    memory.check(mesh.len() as u64)?;
+    let bvh = Bvh::build(&mesh);
+    let estimator = Estimator::new(&mesh, &bvh, params)?;
+    let mut report = Report {
+        transport: ranks.communicator().describe(),
+        ..Report::default()
+    };
+    let pilot = Instant::now();
+    let costs = rows::row_costs(&estimator, ranks);
+    report.pilot_seconds = pilot.elapsed().as_secs_f64();
+    report.blocks = rows::blocks(&costs, ranks);
+    let bar = indicatif::ProgressBar::new(mesh.len() as u64);
+    let busy = Instant::now();
+    let block = rows::compute(
+        &estimator,
+        report.blocks[ranks.rank()].clone(),
+        ranks.size() as u64,
+        &|e: Event<'_>| {
+            if let Event::Progress { done, .. } = e {
+                bar.set_position(done)
+            }
+        },
+    );
+    let busy = busy.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    report.stored_entries = ranks.all_gather(&[block.nnz() as u64]);
+    let matrix = rows::gather_matrix(&block, mesh.len(), 0, ranks);
+    report.finish(busy, &start, ranks);
+    drop(estimator);
+    drop(bvh);
+    Ok((mesh, matrix, report, t.elapsed().as_secs_f64()))
 }
 
 /// `--format view3d`: one row per View3D surface (combined pieces merged, obstructions left

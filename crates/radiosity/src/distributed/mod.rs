@@ -99,6 +99,18 @@ pub struct Traffic {
     pub seconds: f64,
 }
 
+impl Traffic {
+    /// What was done after `earlier` (a snapshot of the same count).
+    pub fn since(&self, earlier: &Traffic) -> Traffic {
+        Traffic {
+            calls: self.calls - earlier.calls,
+            bytes_sent: self.bytes_sent - earlier.bytes_sent,
+            bytes_received: self.bytes_received - earlier.bytes_received,
+            seconds: self.seconds - earlier.seconds,
+        }
+    }
+}
+
 /// A communicator with typed collectives and a traffic count.
 pub struct Ranks<'c> {
     comm: &'c dyn Communicator,

@@ -45,9 +45,10 @@ impl Report {
         self.traffic.iter().map(|t| t.bytes_sent).sum()
     }
 
-    /// Gather every rank's busy time and traffic (this one's `busy` seconds).
-    pub fn finish(&mut self, busy: f64, ranks: &Ranks<'_>) {
-        let traffic = ranks.traffic();
+    /// Gather every rank's busy time and its traffic since `start` (this one's `busy`
+    /// seconds).
+    pub fn finish(&mut self, busy: f64, start: &Traffic, ranks: &Ranks<'_>) {
+        let traffic = ranks.traffic().since(start);
         let per_rank = ranks.all_gather(&[
             busy,
             traffic.calls as f64,
@@ -104,6 +105,7 @@ pub fn solve(
         ));
     }
     scene.validate()?;
+    let start = ranks.traffic();
     let limit = match settings.memory_limit {
         0 => crate::pipeline::available_memory().unwrap_or(u64::MAX),
         l => l,
@@ -210,7 +212,7 @@ pub fn solve(
         drop(solver);
         form_factors = source.stats();
     }
-    report.finish(busy, ranks);
+    report.finish(busy, &start, ranks);
     Ok((
         Solution {
             timings: Timings {

@@ -26,6 +26,7 @@ pub fn thermal(
     observer: &dyn Observer,
 ) -> Result<(ThermalOutcome, super::solve::Report), Error> {
     scene.validate_geometry()?;
+    let start = ranks.traffic();
     let limit = match settings.memory_limit {
         0 => crate::pipeline::available_memory().unwrap_or(u64::MAX),
         l => l,
@@ -104,7 +105,7 @@ pub fn thermal(
     )?;
     let busy = busy + t_solve.elapsed().as_secs_f64() - (ranks.traffic().seconds - before_solve);
     let per_boundary = solution.per_boundary(&system);
-    report.finish(busy, ranks);
+    report.finish(busy, &start, ranks);
     Ok((
         ThermalOutcome {
             mesh,

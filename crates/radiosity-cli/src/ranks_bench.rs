@@ -1,0 +1,158 @@
+//! `radiosity bench --ranks SCENE`: the distributed methods over the ranks of this run.
+
+use crate::args::BenchArgs;
+use anyhow::Result;
+use radiosity::distributed::{self, solve::Report, Ranks, Serial};
+use radiosity::formfactor::Params;
+use radiosity::mesh::MeshParams;
+use radiosity::observe::Silent;
+use radiosity::pipeline::Settings;
+use radiosity::solve::{Solver, SolverParams};
+use std::time::Instant;
+
+/// One timed run: wall seconds, the solution's stage times and report.
+struct Run {
+    wall: f64,
+    form_factors: f64,
+    solve: f64,
+    iterations: u64,
+    sweeps: usize,
+    report: Report,
+    patches: usize,
+    unshot: f64,
+}
+
+fn once(scene: &radiosity::scene::Scene, settings: &Settings, ranks: &Ranks<'_>) -> Result<Run> {
+    ranks.barrier();
+    let t = Instant::now();
+    let (sol, report) = distributed::solve::solve(scene, settings, ranks, &Silent)?;
+    ranks.barrier();
+    Ok(Run {
+        wall: t.elapsed().as_secs_f64(),
+        form_factors: sol.timings.form_factors,
+        solve: sol.timings.solve,
+        iterations: sol.info.iterations,
+        sweeps: report.sweeps.len(),
+        report,
+        patches: sol.mesh.len(),
+        unshot: sol.info.unshot_fraction,
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Run the benchmark.
+pub fn run(a: &BenchArgs, scene_name: &str) -> Result<()> {
+    crate::settings::threads(a.threads)?;
+    if !(a.tolerance > 0.0 && a.tolerance < 1.0) {
+        anyhow::bail!("--tolerance {}: must be in (0, 1)", a.tolerance);
+    }
+    let scene = crate::load_scene(scene_name, a.one_sided)?;
+    let serial = Ranks::new(&Serial);
+    let world = crate::ranks::current().unwrap_or(&serial);
+    let k = world.size();
+    let threads = rayon::current_num_threads();
+    println!(
+        "bench --ranks {}: {} patches asked, {k} rank{} × {threads} thread{} ({})",
+        scene.place(),
+        a.patches,
+        if k == 1 { "" } else { "s" },
+        if threads == 1 { "" } else { "s" },
+        world.communicator().describe()
+    );
+    println!("medians of {} runs; efficiency = T(1 rank) / (K × T(K ranks)), one rank measured first on rank 0 alone with the same threads", a.runs);
+    println!(
+        "{:<18} {:>7} {:>8} {:>8} {:>8} {:>9} {:>10} {:>9} {:>8} {:>8} {:>7} {:>7}",
+        "method",
+        "patches",
+        "wall s",
+        "ff s",
+        "solve s",
+        "iter",
+        "s/iter",
+        "MiB sent",
+        "comm s",
+        "balance",
+        "1-rank",
+        "effic."
+    );
+    for solver in [Solver::Jacobi, Solver::StochasticJacobi] {
+        let settings = Settings {
+            mesh: MeshParams::Patches(a.patches),
+            form_factors: Params::shooting(),
+            solver,
+            params: SolverParams {
+                tolerance: a.tolerance,
+                iteration_rays: a.iteration_rays,
+                ..SolverParams::default()
+            },
+            ..Settings::default()
+        };
+        // One rank: rank 0 alone, the others waiting.
+        let baseline = if k > 1 {
+            let mut t = 0.0;
+            if world.is_root() {
+                let runs: Result<Vec<f64>> = (0..a.runs)
+                    .map(|_| once(&scene, &settings, &serial).map(|r| r.wall))
+                    .collect();
+                t = median(runs?);
+            }
+            Some(world.agree(t))
+        } else {
+            None
+        };
+        let mut runs = Vec::with_capacity(a.runs);
+        for _ in 0..a.runs {
+            runs.push(once(&scene, &settings, world)?);
+        }
+        let wall = median(runs.iter().map(|r| r.wall).collect());
+        let ff = median(runs.iter().map(|r| r.form_factors).collect());
+        let solve = median(runs.iter().map(|r| r.solve).collect());
+        let last = runs.last().expect("--runs is positive");
+        let per_iteration = match solver {
+            Solver::Jacobi => median(last.report.sweeps.iter().map(|s| s.seconds).collect()),
+            _ => solve / last.iterations.max(1) as f64,
+        };
+        let iterations = match solver {
+            Solver::Jacobi => format!("{} sw", last.sweeps),
+            _ => format!("{}", last.iterations),
+        };
+        let comm = median(
+            runs.iter()
+                .map(|r| {
+                    r.report
+                        .traffic
+                        .iter()
+                        .map(|t| t.seconds)
+                        .fold(0.0, f64::max)
+                })
+                .collect(),
+        );
+        println!(
+            "{:<18} {:>7} {:>8.3} {:>8.3} {:>8.3} {:>9} {:>10.5} {:>9.2} {:>8.3} {:>8.2} {:>7} {:>7}",
+            solver.name(),
+            last.patches,
+            wall,
+            ff,
+            solve,
+            iterations,
+            per_iteration,
+            last.report.bytes_sent() as f64 / (1 << 20) as f64,
+            comm,
+            last.report.balance(),
+            baseline.map_or("—".into(), |b| format!("{b:.3}")),
+            baseline.map_or("—".into(), |b| format!("{:.2}", b / (k as f64 * wall))),
+        );
+        let _ = last.unshot;
+    }
+    println!("ff: form factors (Jacobi's rows; stochastic Jacobi casts its rays in the solve); sw: sweeps; comm s: the most any rank spent in collectives (waiting included); balance: mean / busiest rank's work");
+    Ok(())
+}
