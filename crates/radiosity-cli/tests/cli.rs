@@ -1878,6 +1878,7 @@ fn shared_view3d(name: &str) -> PathBuf {
         .join(name)
 }
 
+#[cfg(feature = "mpi")]
 fn shared_renderpark(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/scenes/renderpark")

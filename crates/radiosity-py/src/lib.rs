@@ -966,9 +966,10 @@ fn thermal<'py>(
             "auto" => LinearSolver::Auto,
             "direct" => LinearSolver::Direct,
             "iterative" => LinearSolver::Iterative,
+            "jacobi" => LinearSolver::Jacobi,
             e => {
                 return Err(value_error(format!(
-                    "linear_solver '{e}': auto, direct or iterative"
+                    "linear_solver '{e}': auto, direct, iterative or jacobi"
                 )))
             }
         },

@@ -226,6 +226,13 @@ def test_thermal_black_cube_and_the_cli_example():
         )
         assert abs(r["surfaces"][n]["flux"] - q) < 1e-6 * SIGMA * 800**4
     assert r["info"]["balance_error"] < 1e-9
+    # Grey faces: the Jacobi sweeps (the method that runs over MPI ranks) agree with LU.
+    grey = {n: {"emissivity": 0.5, "temperature": tt} for n, tt in zip(names, t)}
+    lu = radiosity.thermal(cube, grey, form_factor_method="analytic", linear_solver="direct")
+    jac = radiosity.thermal(cube, grey, form_factor_method="analytic", linear_solver="jacobi")
+    assert jac["info"]["method"] == "jacobi"
+    for n in names:
+        assert jac["surfaces"][n]["flux"] == pytest.approx(lu["surfaces"][n]["flux"], rel=1e-9, abs=1e-6)
     # The README's hot plate from its bc.csv, as the CLI reports it.
     ex = REPO / "examples"
     r = radiosity.thermal(radiosity.load(str(ex / "hot-plate.obj")), str(ex / "hot-plate-bc.csv"))

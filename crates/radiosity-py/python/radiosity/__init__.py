@@ -194,7 +194,8 @@ def thermal(
     and `temperature` (K) or `flux` (W/m², net leaving) or neither (adiabatic); or it is the
     path of a `bc.csv` (header `name,emissivity,temperature,flux`). `unit` is what a scene
     unit is (m, cm, mm, in, ft); `environment` the surroundings' temperature, K. One patch per
-    face unless `patches` or `max_edge`. Returns `{"surfaces": {name: {area, emissivity,
+    face unless `patches` or `max_edge`. `linear_solver` is auto, direct (LU), iterative
+    (BiCGSTAB) or jacobi. Returns `{"surfaces": {name: {area, emissivity,
     temperature, flux, power}}, "patches": {centre, area, surface, temperature, flux,
     radiosity, irradiation}, "info": {...}}`."""
     if unit not in _UNITS:
