@@ -152,6 +152,42 @@ pub fn run(a: &BenchArgs, scene_name: &str) -> Result<()> {
             baseline.map_or("—".into(), |b| format!("{:.2}", b / (k as f64 * wall))),
         );
         let _ = last.unshot;
+        // The parts of an iteration, for the model of larger runs (rank 0's view).
+        let n = last.patches as f64;
+        match (&last.report.shooting, solver) {
+            (Some(t), _) => {
+                let it = last.iterations.max(1) as f64;
+                println!(
+                    "{:<18} per iteration: {:.0} rays ({:.1} a patch), trace {:.4} s, exchange {:.4} s ({:.2} MiB of hits a rank), reduce {:.4} s (serial, {:.1} ns a ray)",
+                    "",
+                    t.rays as f64 / it,
+                    t.rays as f64 / it / n,
+                    t.trace / it,
+                    t.exchange / it,
+                    4.0 * t.rays as f64 / it / (1 << 20) as f64,
+                    t.reduce / it,
+                    1e9 * t.reduce / t.rays.max(1) as f64
+                );
+            }
+            (None, Solver::Jacobi) => {
+                let sweeps = &last.report.sweeps;
+                let s = sweeps.len().max(1) as f64;
+                let compute = sweeps.iter().map(|w| w.seconds - w.communication).sum::<f64>() / s;
+                let exchange = sweeps.iter().map(|w| w.communication).sum::<f64>() / s;
+                let nnz: u64 = last.report.stored_entries.iter().sum();
+                println!(
+                    "{:<18} per sweep: {} entries of F ({:.1} a row), rows {:.4} s ({:.2} ns an entry a rank), exchange {:.4} s ({:.2} MiB of B and H a rank)",
+                    "",
+                    nnz,
+                    nnz as f64 / n,
+                    compute,
+                    1e9 * compute * k as f64 / nnz.max(1) as f64,
+                    exchange,
+                    48.0 * n / (1 << 20) as f64
+                );
+            }
+            _ => {}
+        }
     }
     println!("ff: form factors (Jacobi's rows; stochastic Jacobi casts its rays in the solve); sw: sweeps; comm s: the most any rank spent in collectives (waiting included); balance: mean / busiest rank's work");
     Ok(())

@@ -37,6 +37,8 @@ pub struct Report {
     pub stored_entries: Vec<u64>,
     /// Jacobi: every sweep.
     pub sweeps: Vec<super::jacobi::Sweep>,
+    /// Stochastic Jacobi: where its shooting iterations' time went (this rank's view).
+    pub shooting: Option<crate::solve::stochastic_jacobi::Timing>,
 }
 
 impl Report {
@@ -201,6 +203,7 @@ pub fn solve(
             true
         });
         busy += i.seconds - (ranks.traffic().seconds - before);
+        report.shooting = Some(solver.timing());
         let mut b = Vec::new();
         solver.radiosity(&mut b);
         unshot = solver

@@ -74,6 +74,22 @@ pub struct StochasticJacobi<'s> {
     estimated_error: f64,
     /// Ranks sharing the rays of each iteration, if distributed.
     ranks: Option<&'s crate::distributed::Ranks<'s>>,
+    /// Where the shooting iterations' time went.
+    timing: Timing,
+}
+
+/// Seconds of the shooting iterations by part: tracing (parallel, shared among ranks),
+/// exchanging the hits (ranks only), reducing them in ray order (serial, on every rank).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timing {
+    /// Tracing rays.
+    pub trace: f64,
+    /// All-gathering the hits.
+    pub exchange: f64,
+    /// Reducing the hits into B and ΔB.
+    pub reduce: f64,
+    /// Rays cast by all ranks.
+    pub rays: u64,
 }
 
 impl<'s> StochasticJacobi<'s> {
@@ -111,8 +127,14 @@ impl<'s> StochasticJacobi<'s> {
             gathered: false,
             estimated_error: 0.0,
             ranks: None,
+            timing: Timing::default(),
             system,
         })
+    }
+
+    /// Where the shooting iterations' time went.
+    pub fn timing(&self) -> Timing {
+        self.timing
     }
 
     /// Share every iteration's rays among `ranks`: each traces a contiguous run of the
@@ -186,7 +208,9 @@ impl<'s> StochasticJacobi<'s> {
         let mut done = 0u64;
         let seed = self.seed;
         let iteration = self.iterations;
+        self.timing.rays += rays;
         while done < rays {
+            let t = std::time::Instant::now();
             let batch = (rays - done).min(BATCH as u64) as usize;
             let first_chunk = done / CHUNK as u64;
             let trace = |c: usize, out: &mut [(u32, u32)]| {
@@ -214,7 +238,10 @@ impl<'s> StochasticJacobi<'s> {
                         .enumerate()
                         .for_each(|(c, out)| trace(mine.start + c, out));
                     let hits: Vec<u32> = buf[lo..hi].iter().map(|&(_, j)| j).collect();
+                    self.timing.trace += t.elapsed().as_secs_f64();
+                    let t = std::time::Instant::now();
                     let all = ranks.all_gather(&hits);
+                    self.timing.exchange += t.elapsed().as_secs_f64();
                     let mut i = 0;
                     for (k, (slot, j)) in buf[..batch].iter_mut().zip(all).enumerate() {
                         let k = done + k as u64;
@@ -225,6 +252,10 @@ impl<'s> StochasticJacobi<'s> {
                     }
                 }
             }
+            if self.ranks.is_none() {
+                self.timing.trace += t.elapsed().as_secs_f64();
+            }
+            let t = std::time::Instant::now();
             for &(i, j) in &buf[..batch] {
                 let i = i as usize;
                 let w = weight(i);
@@ -244,6 +275,7 @@ impl<'s> StochasticJacobi<'s> {
                     self.absorbed += (Rgb::splat(1.0) - rho) * w;
                 }
             }
+            self.timing.reduce += t.elapsed().as_secs_f64();
             done += batch as u64;
         }
         for i in 0..n {
