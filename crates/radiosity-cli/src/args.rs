@@ -301,14 +301,15 @@ pub enum EnclosureArg {
 /// How the net-radiation system is solved (`thermal --linear-solver`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum LinearSolverArg {
-    /// Dense LU up to 3,000 patches, BiCGSTAB beyond.
+    /// Dense LU up to 3,000 patches, BiCGSTAB beyond (under mpirun, BiCGSTAB).
     Auto,
     /// Dense LU (O(N²) memory, O(N³) time), exact to rounding.
     Direct,
-    /// BiCGSTAB on the sparse F, to a relative residual of 1e-12.
+    /// BiCGSTAB on the sparse F, to a relative residual of 1e-12; its products split over the
+    /// ranks under mpirun.
     Iterative,
-    /// Jacobi sweeps on the sparse F, to a relative residual of 1e-12; split over the ranks
-    /// under mpirun (the default there).
+    /// Jacobi sweeps on the sparse F, to a relative residual of 1e-12, split over the ranks
+    /// under mpirun; slow where most surfaces re-radiate (adiabatic).
     Jacobi,
 }
 

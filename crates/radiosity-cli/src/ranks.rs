@@ -29,38 +29,28 @@ pub fn distributed() -> bool {
     current().is_some_and(|r| r.size() > 1)
 }
 
-/// The number of ranks an MPI launcher says this process is one of, from the environment
-/// (Open MPI, MPICH and Intel MPI, PMIx, Slurm's srun): `None` when not launched by one.
-pub fn launched_size() -> Option<usize> {
-    [
-        "OMPI_COMM_WORLD_SIZE",
-        "PMI_SIZE",
-        "PMIX_SIZE",
-        "MPI_LOCALNRANKS",
-        "SLURM_NTASKS",
-    ]
-    .iter()
-    .find_map(|v| std::env::var(v).ok()?.trim().parse().ok())
+/// Whether an MPI launcher started this process, and as one of how many ranks when it says:
+/// Open MPI's `mpirun` (`OMPI_COMM_WORLD_SIZE`), MPICH's and Intel MPI's Hydra and Slurm's
+/// `srun --mpi=pmi2` (`PMI_SIZE`), PMIx launchers such as `srun --mpi=pmix` (`PMIX_RANK`, the size
+/// then from `SLURM_NTASKS` when set). A plain command inside a batch job is not launched.
+pub fn launched() -> Option<Option<usize>> {
+    let number = |v: &str| std::env::var(v).ok()?.trim().parse::<usize>().ok();
+    if let Some(k) = number("OMPI_COMM_WORLD_SIZE").or_else(|| number("PMI_SIZE")) {
+        return Some(Some(k));
+    }
+    std::env::var_os("PMIX_RANK").map(|_| number("SLURM_NTASKS"))
 }
 
 /// Set up the ranks: MPI when launched by a launcher and built with the feature. An error when
 /// launched on several ranks without the feature (every process would run the whole job and
 /// write the same files).
 pub fn start() -> anyhow::Result<()> {
-    let Some(size) = launched_size() else {
+    let Some(size) = launched() else {
         return Ok(());
     };
-    // Slurm sets SLURM_NTASKS in every step of a job, also for a plain command: only an MPI
-    // launcher's own variables count as a launch of one rank.
-    if std::env::var_os("OMPI_COMM_WORLD_SIZE").is_none()
-        && std::env::var_os("PMI_SIZE").is_none()
-        && std::env::var_os("PMIX_RANK").is_none()
-        && size <= 1
-    {
-        return Ok(());
-    }
     #[cfg(feature = "mpi")]
     {
+        let _ = size;
         let ranks: &'static Ranks<'static> = Box::leak(Box::new(Ranks::new(mpi::world()?)));
         if !ranks.is_root() {
             mpi::silence_stdout();
@@ -70,7 +60,11 @@ pub fn start() -> anyhow::Result<()> {
     }
     #[cfg(not(feature = "mpi"))]
     {
-        if size > 1 {
+        let rank = ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"]
+            .iter()
+            .find_map(|v| std::env::var(v).ok()?.trim().parse::<usize>().ok());
+        if size.is_some_and(|k| k > 1) || rank.is_some_and(|r| r > 0) {
+            let size = size.map_or("several".to_string(), |k| k.to_string());
             anyhow::bail!(
                 "launched as one of {size} MPI ranks, but this radiosity was built without the mpi feature: every rank would run the whole job; build it with `cargo build --release -p radiosity-cli --features mpi` (see the README)"
             );

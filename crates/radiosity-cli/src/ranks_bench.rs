@@ -172,7 +172,11 @@ pub fn run(a: &BenchArgs, scene_name: &str) -> Result<()> {
             (None, Solver::Jacobi) => {
                 let sweeps = &last.report.sweeps;
                 let s = sweeps.len().max(1) as f64;
-                let compute = sweeps.iter().map(|w| w.seconds - w.communication).sum::<f64>() / s;
+                let compute = sweeps
+                    .iter()
+                    .map(|w| w.seconds - w.communication)
+                    .sum::<f64>()
+                    / s;
                 let exchange = sweeps.iter().map(|w| w.communication).sum::<f64>() / s;
                 let nnz: u64 = last.report.stored_entries.iter().sum();
                 println!(

@@ -123,8 +123,9 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         },
         enclosure_hint: vs3.as_ref().map(|v| v.control.enclosure),
         linear: match a.linear_solver {
-            // Under mpirun the distributed method, on one rank too (the same bytes as on K).
-            LinearSolverArg::Auto if crate::ranks::current().is_some() => LinearSolver::Jacobi,
+            // Under mpirun BiCGSTAB over the ranks, on one rank too (the same bytes as on K):
+            // dense LU would not split.
+            LinearSolverArg::Auto if crate::ranks::current().is_some() => LinearSolver::Iterative,
             LinearSolverArg::Auto => LinearSolver::Auto,
             LinearSolverArg::Direct => LinearSolver::Direct,
             LinearSolverArg::Iterative => LinearSolver::Iterative,

@@ -91,9 +91,9 @@ pub enum LinearSolver {
     Iterative,
     /// Jacobi sweeps `J ← b + D K J` on the stored F, O(nnz) a sweep; converges for every
     /// solvable problem (the spectral radius of D K is below 1 when some surface has a
-    /// prescribed temperature or sees an opening), at a rate set by the reflectances. The method
-    /// that runs distributed over ranks ([`crate::distributed`]): each rank sweeps its block
-    /// of patches and the blocks are all-gathered.
+    /// prescribed temperature or sees an opening), at a rate set by the reflectances: slowly
+    /// where most surfaces re-radiate. Over ranks ([`crate::distributed`]) each sweeps its block
+    /// of patches and the blocks are all-gathered, as BiCGSTAB's products are.
     Jacobi,
 }
 
@@ -336,17 +336,9 @@ fn assemble(system: &ThermalSystem, f: &SparseMatrix) -> Assembled {
 /// `y_i = (1/A_i) Σ_j A_j F'_ji x_j`, F' the row-capped F: the irradiation that radiosities
 /// `x` produce, gathered in parallel over the stored columns.
 fn gather(f: &SparseMatrix, area: &[f64], scale: &[f64], x: &[f64], y: &mut [f64]) {
-    y.par_iter_mut().enumerate().for_each(|(i, yi)| {
-        let s: f64 = f
-            .column_entries(i)
-            .iter()
-            .map(|&(j, v)| {
-                let j = j as usize;
-                area[j] * scale[j] * v as f64 * x[j]
-            })
-            .sum();
-        *yi = s / area[i];
-    });
+    y.par_iter_mut()
+        .enumerate()
+        .for_each(|(i, yi)| *yi = column_gather(f, area, scale, x, i));
 }
 
 /// `y = M x = x − D K x`.
@@ -358,8 +350,31 @@ fn apply(f: &SparseMatrix, system: &ThermalSystem, a: &Assembled, x: &[f64], y: 
         .for_each(|((yi, &xi), &di)| *yi = xi - di * *yi);
 }
 
+/// `(1/A_i) Σ_j A_j F'_ji x_j`, summed in the column's stored order.
+fn column_gather(f: &SparseMatrix, area: &[f64], scale: &[f64], x: &[f64], i: usize) -> f64 {
+    let s: f64 = f
+        .column_entries(i)
+        .iter()
+        .map(|&(j, v)| {
+            let j = j as usize;
+            area[j] * scale[j] * v as f64 * x[j]
+        })
+        .sum();
+    s / area[i]
+}
+
+/// This rank's block of rows of M, balanced by the stored entries of their columns.
+fn blocks(f: &SparseMatrix, n: usize, ranks: &Ranks<'_>) -> std::ops::Range<usize> {
+    let costs: Vec<f64> = (0..n)
+        .map(|i| 1.0 + f.column_entries(i).len() as f64)
+        .collect();
+    crate::distributed::balance(&costs, ranks.size())[ranks.rank()].clone()
+}
+
+/// Σ a_i b_i in index order: the same bits for any number of threads or ranks (a parallel
+/// sum's association follows the work splitting). O(N), small beside a product with F.
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.par_iter().zip(b.par_iter()).map(|(x, y)| x * y).sum()
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn norm(a: &[f64]) -> f64 {
@@ -375,9 +390,10 @@ pub fn solve(
     solve_ranks(system, f, params, &Ranks::new(&Serial))
 }
 
-/// [`solve`] over `ranks`, every one of which holds the whole F: `jacobi` sweeps split over
-/// them (the same bytes for any number of ranks); the direct and BiCGSTAB solves run on every
-/// rank alike.
+/// [`solve`] over `ranks`, every one of which holds the whole F: the products with M of the
+/// Jacobi sweeps and of BiCGSTAB are split over them by rows and all-gathered, and every other
+/// vector operation runs on the whole vectors on every rank in index order, so the result is
+/// the same bytes for any number of ranks. The dense LU runs on every rank alike.
 pub fn solve_ranks(
     system: &ThermalSystem,
     f: &SparseMatrix,
@@ -415,7 +431,7 @@ pub fn solve_ranks(
     } else if params.linear == LinearSolver::Jacobi {
         solve_jacobi(system, f, &a, params, ranks)?
     } else {
-        solve_iterative(system, f, &a, params)?
+        solve_iterative(system, f, &a, params, ranks)?
     };
     // Residual of the boundary equations.
     let mut mj = vec![0.0; n];
@@ -440,6 +456,7 @@ pub fn solve_ranks(
     let flux: Vec<f64> = (0..n).map(|i| j[i] - g[i]).collect();
     let mut temperature = vec![0.0; n];
     let mut worst: Vec<Option<f64>> = vec![None; system.boundaries.len()];
+    let j_max = j.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     for i in 0..n {
         let k = system.group[i] as usize;
         let bd = system.boundaries[k];
@@ -449,8 +466,10 @@ pub fn solve_ranks(
                 let e = bd.emissivity;
                 let eb = (j[i] - (1.0 - e) * g[i]) / e;
                 // Rounding can leave a black-body power of −1e-12 × the scale at a surface
-                // at 0 K; more than that is a prescription no temperature meets.
-                let scale = j[i].abs().max(g[i].abs()).max(1e-300);
+                // at 0 K (the scale being the problem's where the surface sees only the cold
+                // surroundings and its own J and G are rounding); more than that is a
+                // prescription no temperature meets.
+                let scale = j[i].abs().max(g[i].abs()).max(1e-6 * j_max).max(1e-300);
                 if eb < -1e-8 * scale {
                     let w = worst[k].get_or_insert(eb);
                     *w = w.min(eb);
@@ -530,10 +549,7 @@ fn solve_jacobi(
     ranks: &Ranks<'_>,
 ) -> Result<(Vec<f64>, usize), ThermalError> {
     let n = system.area.len();
-    let costs: Vec<f64> = (0..n)
-        .map(|i| 1.0 + f.column_entries(i).len() as f64)
-        .collect();
-    let mine = crate::distributed::balance(&costs, ranks.size())[ranks.rank()].clone();
+    let mine = blocks(f, n, ranks);
     let bn = norm(&a.b).max(f64::MIN_POSITIVE);
     let mut x = a.b.clone();
     let mut k = 0;
@@ -541,17 +557,7 @@ fn solve_jacobi(
         let block: Vec<f64> = mine
             .clone()
             .into_par_iter()
-            .map(|i| {
-                let g: f64 = f
-                    .column_entries(i)
-                    .iter()
-                    .map(|&(j, v)| {
-                        let j = j as usize;
-                        system.area[j] * a.scale[j] * v as f64 * x[j]
-                    })
-                    .sum();
-                a.b[i] + a.d[i] * g / system.area[i]
-            })
+            .map(|i| a.b[i] + a.d[i] * column_gather(f, &system.area, &a.scale, &x, i))
             .collect();
         let new = ranks.all_gather(&block);
         let res = new
@@ -582,8 +588,20 @@ fn solve_iterative(
     f: &SparseMatrix,
     a: &Assembled,
     params: ThermalParams,
+    ranks: &Ranks<'_>,
 ) -> Result<(Vec<f64>, usize), ThermalError> {
     let n = system.area.len();
+    // M x: each rank its block of rows, all-gathered (every rank holds the whole vector).
+    let mine = blocks(f, n, ranks);
+    let apply =
+        |f: &SparseMatrix, system: &ThermalSystem, a: &Assembled, x: &[f64], y: &mut Vec<f64>| {
+            let block: Vec<f64> = mine
+                .clone()
+                .into_par_iter()
+                .map(|i| x[i] - a.d[i] * column_gather(f, &system.area, &a.scale, x, i))
+                .collect();
+            *y = ranks.all_gather(&block);
+        };
     // Start from each surface's own black-body exitance where it is known, else the b scale.
     let mean_b = a.b.iter().sum::<f64>() / n as f64;
     let mut x: Vec<f64> = (0..n)
