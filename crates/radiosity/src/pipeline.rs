@@ -583,7 +583,7 @@ pub fn path_surface_means(
 }
 
 /// A system error about a patch, as an error at the place of the polygon it was cut from.
-fn located(e: crate::system::SystemError, scene: &Scene, mesh: &Mesh) -> Error {
+pub(crate) fn located(e: crate::system::SystemError, scene: &Scene, mesh: &Mesh) -> Error {
     use crate::system::SystemError as E;
     match &e {
         E::Area { patch, .. } | E::Reflectance { patch, .. } | E::Emission { patch, .. } => {

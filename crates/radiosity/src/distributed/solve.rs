@@ -137,7 +137,9 @@ pub fn solve(
     let bvh = Bvh::build(&mesh);
     let bvh_s = t.elapsed().as_secs_f64();
     let system = patch_system(scene, &mesh);
-    system.validate().map_err(SolveError::from)?;
+    system
+        .validate()
+        .map_err(|e| crate::pipeline::located(e, scene, &mesh))?;
     let estimator = Estimator::new(&mesh, &bvh, ff)?;
     let mut report = Report {
         transport: ranks.communicator().describe(),
