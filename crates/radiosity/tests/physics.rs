@@ -270,3 +270,71 @@ fn results_do_not_depend_on_the_thread_count() {
     assert!(b1 == b2, "radiosities differ between 1 and 2 threads");
     assert!(p1 == p2, "pictures differ between 1 and 2 threads");
 }
+
+/// Stochastic Jacobi's final gathering under a cover lying flush on a surface (a rug 0.7 ray
+/// offsets above the Cornell box's floor): no light reaches the floor under the rug, as every
+/// shooting method finds, so its reflected radiosity is 0. A gathering ray launched a ray offset
+/// above the floor starts above the rug and sees the room, which made the covered floor as
+/// bright as the rest. The rug itself is lit as usual.
+#[test]
+fn stochastic_jacobi_gathers_nothing_under_a_flush_cover() {
+    let mut scene = builtin::cornell();
+    let off = Bvh::build(&Mesh::build(&scene, MeshParams::Faces).unwrap()).ray_offset();
+    let h = 0.7 * off;
+    scene
+        .materials
+        .push(Material::diffuse("rug", Rgb::splat(0.5)));
+    let rug = scene.polygons.len();
+    scene.polygons.push(Polygon {
+        material: scene.materials.len() - 1,
+        ..quad([
+            [300.0, h, 100.0],
+            [100.0, h, 100.0],
+            [100.0, h, 300.0],
+            [300.0, h, 300.0],
+        ])
+    });
+    for solver in [
+        radiosity::solve::Solver::StochasticJacobi,
+        radiosity::solve::Solver::Progressive,
+    ] {
+        let s = pipeline::solve(
+            &scene,
+            &Settings {
+                mesh: MeshParams::Patches(3000),
+                solver,
+                params: SolverParams {
+                    iteration_rays: 64,
+                    ..SolverParams::default()
+                },
+                ..Settings::default()
+            },
+            &radiosity::observe::Silent,
+        )
+        .unwrap();
+        let (mut under, mut open, mut lit) = ((0.0, 0.0), (0.0, 0.0), (0.0, 0.0));
+        for (k, p) in s.mesh.patches.iter().enumerate() {
+            let a = p.area as f64;
+            let b = s.radiosity[k].sum() * a;
+            let c = p.centre;
+            let inside = (110.0..290.0).contains(&c.x) && (110.0..290.0).contains(&c.z);
+            let slot = match p.surface as usize {
+                0 if inside => &mut under,
+                0 if !(90.0..310.0).contains(&c.x) || !(90.0..310.0).contains(&c.z) => &mut open,
+                x if x == rug => &mut lit,
+                _ => continue,
+            };
+            slot.0 += a;
+            slot.1 += b;
+        }
+        let mean = |x: (f64, f64)| x.1 / x.0;
+        assert!(under.0 > 0.0 && lit.0 > 0.0);
+        assert!(
+            mean(under) < 1e-3 * mean(open),
+            "{solver}: floor under the rug {} against {} in the open",
+            mean(under),
+            mean(open)
+        );
+        assert!(mean(lit) > 0.3 * mean(open), "{solver}: rug {}", mean(lit));
+    }
+}

@@ -138,6 +138,36 @@ pub fn trace_random_rays(mesh: &Mesh, bvh: &Bvh, count: usize, seed: u64) -> u64
         .sum()
 }
 
+/// Where one *gathering* ray from patch `i` first lands: as [`sample_photon`], but a point that
+/// another surface covers sees nothing. Covered means: a coincident twin that the BVH reports
+/// before `i` (a probe from half a ray offset behind the point meets it first), or a surface
+/// within eight ray offsets in front (a panel lying flush on a wall). A shooting ray launched a
+/// ray offset above such a point can pass the cover and see the room, but the light arriving
+/// there is what the *cover* receives (rays towards the point meet the cover first), so a
+/// gather must not see it. The same draws are taken from `rng` either way.
+pub fn gather_photon(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> Option<u32> {
+    let p = mesh.sample_point(i, uniform(rng), uniform(rng), uniform(rng));
+    let n = mesh.patches[i].normal;
+    let (t, b) = orthonormal_basis(n);
+    let d = cosine_direction_in(n, t, b, uniform(rng), uniform(rng));
+    let off = bvh.ray_offset();
+    let twin = matches!(
+        bvh.closest_hit(&Ray::new(p - n * (0.5 * off), n), off),
+        Some(h) if h.patch as usize != i
+    );
+    if twin
+        || bvh
+            .closest_hit(&Ray::new(p + n * (0.5 * off), n), 8.0 * off)
+            .is_some()
+    {
+        return None;
+    }
+    match bvh.closest_hit(&Ray::new(p + n * off, d), f32::INFINITY) {
+        Some(h) if h.front && h.patch as usize != i => Some(h.patch),
+        _ => None,
+    }
+}
+
 /// Where one photon leaving patch `i` first lands: a ray from a uniform point of patch i in a
 /// cosine-distributed direction; `None` when it escapes or hits a back side.
 pub fn sample_photon(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> Option<u32> {

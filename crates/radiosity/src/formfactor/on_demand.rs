@@ -173,6 +173,12 @@ impl PhotonSampler for OnDemandRows<'_> {
         self.photon_rays.fetch_add(1, Ordering::Relaxed);
         monte_carlo::sample_photon(self.estimator.mesh(), self.estimator.bvh(), i, rng)
     }
+
+    /// The same ray, unless the point is covered ([`monte_carlo::gather_photon`]).
+    fn gather(&self, i: usize, rng: &mut Rng64) -> Option<u32> {
+        self.photon_rays.fetch_add(1, Ordering::Relaxed);
+        monte_carlo::gather_photon(self.estimator.mesh(), self.estimator.bvh(), i, rng)
+    }
 }
 
 #[cfg(test)]

@@ -26,7 +26,10 @@
 //! without the variate. Only the reflected part `B − E` is gathered: the direct light is taken
 //! from the first iteration, in which every emitter shoots all its emission from its own surface
 //! (so a gathering ray that sees the wrong one of two coincident surfaces, a light and a
-//! ceiling, cannot lose it). The standard error of B follows from the gathering rays' sample
+//! ceiling, cannot lose it). Gathering rays come from [`PhotonSampler::gather`], which a scene
+//! answers with nothing at points another surface covers (a coincident twin, a panel flush on a
+//! wall): a ray launched a ray offset above such a point would start above the cover and see
+//! light that only the cover receives. The standard error of B follows from the gathering rays' sample
 //! variance and the first iteration's arrivals, and is reported
 //! ([`super::Info::estimated_error`]).
 //!
@@ -320,7 +323,7 @@ impl<'s> StochasticJacobi<'s> {
             };
             let (mut sum, mut sum_sq) = (Rgb::BLACK, 0.0f64);
             for _ in 0..per {
-                let v = match sampler.sample(j, &mut rng) {
+                let v = match sampler.gather(j, &mut rng) {
                     Some(i) => old[i as usize] - sys.emission[i as usize] - cv,
                     None => Rgb::BLACK,
                 };

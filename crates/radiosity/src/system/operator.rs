@@ -69,4 +69,12 @@ pub trait Operator {
 pub trait PhotonSampler: Sync {
     /// One draw, from the random stream `rng`.
     fn sample(&self, i: usize, rng: &mut Rng64) -> Option<u32>;
+
+    /// One draw for *gathering* at patch `i` (a ray from i finding what i sees): as
+    /// [`Self::sample`], except where a scene knows that part of `i` is covered (by a
+    /// coincident twin or a flush surface), which then sees nothing. A stored matrix has no
+    /// such knowledge and draws from its row.
+    fn gather(&self, i: usize, rng: &mut Rng64) -> Option<u32> {
+        self.sample(i, rng)
+    }
 }
