@@ -15,6 +15,7 @@
 use crate::geom::{Aabb, Ray, Vec3};
 use crate::mesh::Mesh;
 use glam::Vec4;
+use rayon::prelude::*;
 
 /// Most triangles in a leaf.
 pub const MAX_LEAF: usize = 4;
@@ -218,29 +219,38 @@ struct Prim {
 impl Bvh {
     /// Build over every triangle of every patch of `mesh`.
     pub fn build(mesh: &Mesh) -> Bvh {
-        let mut prims: Vec<Prim> = Vec::with_capacity(mesh.len() * 2);
-        for (k, p) in mesh.patches.iter().enumerate() {
-            for (sub, t) in p.triangles().enumerate() {
-                let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
-                let bounds = Aabb::from_points(&[a, b, c]);
-                prims.push(Prim {
-                    bounds,
-                    centroid: bounds.centre(),
-                    tri: Tri {
-                        v0: a,
-                        e1: b - a,
-                        e2: c - a,
-                        id: (k as u32) << 1 | sub as u32,
-                    },
-                });
-            }
-        }
+        let prims: Vec<Prim> = mesh
+            .patches
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(k, p)| {
+                p.triangles().enumerate().map(move |(sub, t)| {
+                    let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+                    let bounds = Aabb::from_points(&[a, b, c]);
+                    Prim {
+                        bounds,
+                        centroid: bounds.centre(),
+                        tri: Tri {
+                            v0: a,
+                            e1: b - a,
+                            e2: c - a,
+                            id: (k as u32) << 1 | sub as u32,
+                        },
+                    }
+                })
+            })
+            .collect();
         Self::from_prims(prims)
     }
 
     fn from_prims(mut prims: Vec<Prim>) -> Bvh {
         let n = prims.len();
-        let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
+        let bounds = bounds_of(&prims, |p| p.bounds);
+        // The binary tree, subtrees built in parallel (each owns its slice of `prims`, and
+        // every choice depends only on that slice, so the tree and the order of `prims` are
+        // the same for any number of threads), then laid out depth first, left first, each
+        // node's two children side by side.
+        let tree = build_tree(&mut prims, 0);
         let mut nodes = Vec::with_capacity((2 * n / MAX_LEAF.max(1)).max(1) * 2);
         nodes.push(Node {
             min: [0.0; 3],
@@ -248,37 +258,8 @@ impl Bvh {
             max: [0.0; 3],
             count: 0,
         });
-        // Work stack: (node index, start, end).
-        let mut work = vec![(0usize, 0usize, n)];
-        while let Some((ni, start, end)) = work.pop() {
-            let slice = &mut prims[start..end];
-            let nb = slice.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
-            nodes[ni].min = nb.min.to_array();
-            nodes[ni].max = nb.max.to_array();
-            let count = end - start;
-            let split = if count <= 1 { None } else { sah_split(slice) };
-            match split {
-                Some(mid) => {
-                    let left = nodes.len();
-                    for _ in 0..2 {
-                        nodes.push(Node {
-                            min: [0.0; 3],
-                            first: 0,
-                            max: [0.0; 3],
-                            count: 0,
-                        });
-                    }
-                    nodes[ni].first = left as u32;
-                    nodes[ni].count = 0;
-                    work.push((left + 1, start + mid, end));
-                    work.push((left, start, start + mid));
-                }
-                None => {
-                    nodes[ni].first = start as u32;
-                    nodes[ni].count = count as u32;
-                }
-            }
-        }
+        lay_out(&tree, 0, &mut nodes);
+        drop(tree);
         if n == 0 {
             nodes[0].min = [f32::INFINITY; 3];
             nodes[0].max = [f32::NEG_INFINITY; 3];
@@ -638,23 +619,133 @@ fn collapse(
     me as u32
 }
 
+/// Slices at least this long are split over threads (bounds, bins, subtrees).
+const PARALLEL_MIN: usize = 16 * 1024;
+
+/// A node of the binary tree while it is built.
+enum Built {
+    Leaf {
+        bounds: Aabb,
+        first: u32,
+        count: u32,
+    },
+    Inner {
+        bounds: Aabb,
+        kids: Box<[Built; 2]>,
+    },
+}
+
+/// The union of `f(p)` over `prims`, in parallel for long slices: min and max are exact, so
+/// the result does not depend on how the work is split.
+fn bounds_of(prims: &[Prim], f: impl Fn(&Prim) -> Aabb + Sync) -> Aabb {
+    if prims.len() < PARALLEL_MIN {
+        return prims.iter().fold(Aabb::EMPTY, |b, p| b.union(f(p)));
+    }
+    prims
+        .par_chunks(PARALLEL_MIN / 4)
+        .map(|c| c.iter().fold(Aabb::EMPTY, |b, p| b.union(f(p))))
+        .reduce(|| Aabb::EMPTY, Aabb::union)
+}
+
+/// Build the binary tree over `prims` (which start at `first` in the whole array), reordering
+/// them so that every node's triangles are contiguous.
+fn build_tree(prims: &mut [Prim], first: usize) -> Built {
+    let count = prims.len();
+    let bounds = bounds_of(prims, |p| p.bounds);
+    match if count <= 1 { None } else { sah_split(prims) } {
+        Some(mid) => {
+            let (l, r) = prims.split_at_mut(mid);
+            let (a, b) = if count >= PARALLEL_MIN {
+                rayon::join(|| build_tree(l, first), || build_tree(r, first + mid))
+            } else {
+                (build_tree(l, first), build_tree(r, first + mid))
+            };
+            Built::Inner {
+                bounds,
+                kids: Box::new([a, b]),
+            }
+        }
+        None => Built::Leaf {
+            bounds,
+            first: first as u32,
+            count: count as u32,
+        },
+    }
+}
+
+/// Write `t` into `nodes[at]`, its children after the end of `nodes`, depth first.
+fn lay_out(t: &Built, at: usize, nodes: &mut Vec<Node>) {
+    let (b, first, count) = match t {
+        Built::Leaf {
+            bounds,
+            first,
+            count,
+        } => (*bounds, *first, *count),
+        Built::Inner { bounds, .. } => (*bounds, nodes.len() as u32, 0),
+    };
+    nodes[at] = Node {
+        min: b.min.to_array(),
+        first,
+        max: b.max.to_array(),
+        count,
+    };
+    if let Built::Inner { kids, .. } = t {
+        let left = nodes.len();
+        for _ in 0..2 {
+            nodes.push(Node {
+                min: [0.0; 3],
+                first: 0,
+                max: [0.0; 3],
+                count: 0,
+            });
+        }
+        lay_out(&kids[0], left, nodes);
+        lay_out(&kids[1], left + 1, nodes);
+    }
+}
+
+/// The binned SAH's bins of `prims` along `axis`: each bin's bounds and count, in parallel for
+/// long slices (exact, whatever the split).
+fn bins_of(prims: &[Prim], axis: usize, lo: f32, scale: f32) -> [(Aabb, usize); BINS] {
+    let fill = |c: &[Prim]| {
+        let mut bins = [(Aabb::EMPTY, 0usize); BINS];
+        for p in c {
+            let b = (((p.centroid[axis] - lo) * scale) as usize).min(BINS - 1);
+            bins[b].0 = bins[b].0.union(p.bounds);
+            bins[b].1 += 1;
+        }
+        bins
+    };
+    if prims.len() < PARALLEL_MIN {
+        return fill(prims);
+    }
+    prims.par_chunks(PARALLEL_MIN / 4).map(fill).reduce(
+        || [(Aabb::EMPTY, 0usize); BINS],
+        |mut a, b| {
+            for (x, y) in a.iter_mut().zip(b) {
+                x.0 = x.0.union(y.0);
+                x.1 += y.1;
+            }
+            a
+        },
+    )
+}
+
 /// Choose a split of `prims` by the binned SAH and partition them; `None` means "make a leaf".
 fn sah_split(prims: &mut [Prim]) -> Option<usize> {
     let n = prims.len();
-    let cb = prims.iter().fold(Aabb::EMPTY, |b, p| b.grow(p.centroid));
+    let cb = bounds_of(prims, |p| Aabb {
+        min: p.centroid,
+        max: p.centroid,
+    });
     let ext = cb.extent();
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bin boundary)
     for axis in 0..3 {
         if ext[axis] <= 0.0 {
             continue;
         }
-        let mut bins = [(Aabb::EMPTY, 0usize); BINS];
         let scale = BINS as f32 / ext[axis];
-        for p in prims.iter() {
-            let b = (((p.centroid[axis] - cb.min[axis]) * scale) as usize).min(BINS - 1);
-            bins[b].0 = bins[b].0.union(p.bounds);
-            bins[b].1 += 1;
-        }
+        let bins = bins_of(prims, axis, cb.min[axis], scale);
         // Sweep from the right to get the right-side areas and counts.
         let mut right = [(0.0f32, 0usize); BINS];
         let (mut rb, mut rc) = (Aabb::EMPTY, 0);
@@ -711,6 +802,24 @@ mod tests {
     use super::*;
     use crate::mesh::MeshParams;
     use crate::scene::builtin;
+
+    /// Subtrees are built in parallel, and the hierarchy is the same, node for node, on any
+    /// number of threads (the mesh is large enough for the top levels to split their work).
+    #[test]
+    fn build_is_the_same_on_any_number_of_threads() {
+        let mesh = Mesh::build(&builtin::cornell(), MeshParams::Patches(20_000)).unwrap();
+        assert!(Bvh::build(&mesh).info().triangles > 2 * PARALLEL_MIN);
+        let build = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            format!("{:?}", pool.install(|| Bvh::build(&mesh)))
+        };
+        let one = build(1);
+        assert_eq!(one, build(2));
+        assert_eq!(one, build(5));
+    }
 
     fn brute(mesh: &Mesh, ray: &Ray) -> Option<(f32, u32)> {
         let mut best: Option<(f32, u32)> = None;
