@@ -797,6 +797,11 @@ pub struct BenchArgs {
     /// traced with --reference-spp paths a pixel.
     #[arg(long, value_name = "REF.pfm", help_heading = SCENE)]
     pub reference: Option<PathBuf>,
+    /// `--pictures`: a second, independent reference (another `--seed`): the references' own
+    /// noise is then measured from their difference rather than fitted, and the pictures are
+    /// compared with their average.
+    #[arg(long = "reference-b", value_name = "REF2.pfm", requires = "reference", help_heading = SCENE)]
+    pub reference_b: Option<PathBuf>,
     /// `--pictures`: paths per pixel of the reference when it is made.
     #[arg(long, value_name = "N", default_value_t = 16384, help_heading = SCENE)]
     pub reference_spp: u32,

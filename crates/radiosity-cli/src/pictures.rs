@@ -63,6 +63,14 @@ fn ladder() -> Vec<Run> {
             spp as f64,
         );
     }
+    // The way to 1 %: a finer mesh, gathers followed one level deeper near corners, a finer
+    // cache, and enough samples for the direct light's noise.
+    add(
+        "gather",
+        "100000 patches, 512 spp, cache 4096, near 3",
+        "--integrator gather --patches 100000 --spp 512 --cache-samples 4096 --gather-near 3 --cache-accuracy 0.05",
+        512.0,
+    );
     for spp in [64, 256, 1024, 4096] {
         add(
             "path",
@@ -133,17 +141,40 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
             p
         }
     };
-    let reference = read_pfm(&reference_path)?;
-    if (reference.width, reference.height) != (a.size, a.size) {
-        bail!(
-            "{}: the reference is {}×{}, the pictures {}×{} (give --size)",
-            reference_path.display(),
-            reference.width,
-            reference.height,
-            a.size,
-            a.size
-        );
-    }
+    let read_reference = |path: &Path| -> Result<radiosity::render::Image> {
+        let image = read_pfm(path)?;
+        if (image.width, image.height) != (a.size, a.size) {
+            bail!(
+                "{}: the reference is {}×{}, the pictures {}×{} (give --size)",
+                path.display(),
+                image.width,
+                image.height,
+                a.size,
+                a.size
+            );
+        }
+        Ok(image)
+    };
+    let mut reference = read_reference(&reference_path)?;
+    // With a second reference: the noise of one is their difference over √2, and the pictures
+    // are compared with their average, whose noise is that over √2 again.
+    let measured_var = match &a.reference_b {
+        Some(p) => {
+            let b = read_reference(p)?;
+            let one = difference(&reference, &b).rmse / std::f64::consts::SQRT_2;
+            for (x, y) in reference.pixels.iter_mut().zip(&b.pixels) {
+                for c in 0..3 {
+                    x[c] = 0.5 * (x[c] + y[c]);
+                }
+            }
+            println!(
+                "references: each has σ_ref = {:.2}% (their difference over √2); comparing with their average",
+                100.0 * one
+            );
+            Some(one * one / 2.0)
+        }
+        None => None,
+    };
     println!(
         "{:<10} {:<34} {:>9} {:>9} {:>9} {:>9}",
         "integrator", "settings", "cpu s", "wall s", "rel RMSE", "bias"
@@ -175,12 +206,27 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
     let (mx, my) = (sx / m, sy / m);
     let sxx: f64 = path.iter().map(|p| (p.0 - mx).powi(2)).sum();
     let sxy: f64 = path.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
-    let ref_var = (my - slope * mx).max(0.0);
+    let (slope, ref_var) = match measured_var {
+        // σ_ref known: the path runs' e² − σ_ref² = s/n, least squares through the origin.
+        Some(v) => {
+            let sxx0: f64 = path.iter().map(|p| p.0 * p.0).sum();
+            let sxy0: f64 = path.iter().map(|p| p.0 * (p.1 - v)).sum();
+            (if sxx0 > 0.0 { sxy0 / sxx0 } else { 0.0 }, v)
+        }
+        None => {
+            let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+            (slope, (my - slope * mx).max(0.0))
+        }
+    };
     let corrected = |e: f64| (e * e - ref_var).max(0.0).sqrt();
     println!(
-        "reference noise σ_ref ≈ {:.2}% (fitted from the path runs: e² = {:.3}/n + σ_ref²)",
+        "reference noise σ ≈ {:.2}% ({}; the path runs: e² = {:.3}/n + σ²)",
         100.0 * ref_var.sqrt(),
+        if measured_var.is_some() {
+            "measured from the two references"
+        } else {
+            "fitted from the path runs"
+        },
         slope
     );
     // The path tracer's CPU time for a given error, from its own fit (time ∝ n).
