@@ -78,12 +78,21 @@ pub fn start() -> anyhow::Result<()> {
 /// every rank stops the whole run, so that none waits forever in a collective.
 pub fn fail(message: &str) -> ! {
     let r = current().expect("called only in a distributed run");
-    if r.is_root() {
-        eprintln!("radiosity: error: {message}");
+    // One write for the whole line, so that the launcher's own messages cannot split it; then
+    // a moment for the launcher to forward it before the abort's banner.
+    let line = if r.is_root() {
+        format!("radiosity: error: {message}\n")
     } else {
         std::thread::sleep(std::time::Duration::from_secs(2));
-        eprintln!("radiosity: error: rank {}: {message}", r.rank());
+        format!("radiosity: error: rank {}: {message}\n", r.rank())
+    };
+    {
+        use std::io::Write as _;
+        let mut err = std::io::stderr().lock();
+        let _ = err.write_all(line.as_bytes());
+        let _ = err.flush();
     }
+    std::thread::sleep(std::time::Duration::from_millis(200));
     #[cfg(feature = "mpi")]
     mpi::abort(1);
     #[cfg(not(feature = "mpi"))]

@@ -80,10 +80,10 @@ impl Report {
     }
 }
 
-/// The message for a method that does not run over several ranks.
-pub fn not_distributed(what: &str) -> Error {
+/// The message for a method that does not run over several ranks, and why.
+pub fn not_distributed(what: &str, why: &str) -> Error {
     Error::NotDistributed(format!(
-        "{what} does not run over several ranks (it relaxes one row or shoots one patch after another); the distributed methods are solve --solver jacobi or stochastic-jacobi, thermal --linear jacobi, and form-factors"
+        "{what} does not run over several ranks ({why}); the distributed methods are solve --solver jacobi or stochastic-jacobi, form-factors and thermal"
     ))
 }
 
@@ -96,14 +96,21 @@ pub fn solve(
     observer: &dyn Observer,
 ) -> Result<(Solution, Report), Error> {
     if settings.hierarchical.is_some() {
-        return Err(not_distributed("hierarchical radiosity"));
+        return Err(not_distributed(
+            "hierarchical radiosity",
+            "its links are refined and solved on one machine",
+        ));
     }
     if !DISTRIBUTED_SOLVERS.contains(&settings.solver) {
-        return Err(not_distributed(&format!("--solver {}", settings.solver)));
+        return Err(not_distributed(
+            &format!("--solver {}", settings.solver),
+            "it relaxes one row, or shoots one patch, after another",
+        ));
     }
     if settings.trace {
         return Err(not_distributed(
-            "a convergence trace (it needs the LU solution)",
+            "a convergence trace",
+            "it needs the LU solution of the whole matrix",
         ));
     }
     scene.validate()?;
