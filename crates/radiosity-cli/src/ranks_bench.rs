@@ -1,6 +1,7 @@
 //! `radiosity bench --ranks SCENE`: the distributed methods over the ranks of this run.
 
 use crate::args::BenchArgs;
+use crate::bench::median;
 use anyhow::Result;
 use radiosity::distributed::{self, solve::Report, Ranks, Serial};
 use radiosity::formfactor::Params;
@@ -37,16 +38,6 @@ fn once(scene: &radiosity::scene::Scene, settings: &Settings, ranks: &Ranks<'_>)
         patches: sol.mesh.len(),
         unshot: sol.info.unshot_fraction,
     })
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 /// Run the benchmark.

@@ -305,25 +305,14 @@ fn compute_ranks(
         transport: ranks.communicator().describe(),
         ..Report::default()
     };
-    let pilot = Instant::now();
-    let costs = rows::row_costs(&estimator, ranks);
-    report.pilot_seconds = pilot.elapsed().as_secs_f64();
-    report.blocks = rows::blocks(&costs, ranks);
     let bar = indicatif::ProgressBar::new(mesh.len() as u64);
-    let busy = Instant::now();
-    let block = rows::compute(
-        &estimator,
-        report.blocks[ranks.rank()].clone(),
-        ranks.size() as u64,
-        &|e: Event<'_>| {
-            if let Event::Progress { done, .. } = e {
-                bar.set_position(done)
-            }
-        },
-    );
-    let busy = busy.elapsed().as_secs_f64();
+    let progress = |e: Event<'_>| {
+        if let Event::Progress { done, .. } = e {
+            bar.set_position(done)
+        }
+    };
+    let (block, busy) = rows::split(&estimator, ranks, &progress, &mut report);
     bar.finish_and_clear();
-    report.stored_entries = ranks.all_gather(&[block.nnz() as u64]);
     let matrix = rows::gather_matrix(&block, mesh.len(), 0, ranks);
     report.finish(busy, &start, ranks);
     drop(estimator);

@@ -861,6 +861,41 @@ pub fn thermal_memory(p: &crate::formfactor::Params, limit: u64) -> MemoryCheck 
     }
 }
 
+/// A thermal problem's F made physical: closed or open as `settings` say (open or closed by its
+/// row sums when automatic), reciprocity enforced, rows rescaled to 1 when closed. Returns it,
+/// its summaries before and after, and whether it was treated as closed.
+pub fn thermal_enclosure(
+    matrix: crate::system::SparseMatrix,
+    area: &[f64],
+    settings: &ThermalSettings,
+) -> (
+    crate::system::SparseMatrix,
+    crate::formfactor::Summary,
+    crate::formfactor::Summary,
+    bool,
+) {
+    use crate::formfactor::{enforce, summary, Enforce};
+    let before = summary(&matrix, area);
+    let closed = match settings.enclosure {
+        Enclosure::Closed => true,
+        Enclosure::Open => false,
+        Enclosure::Auto => settings
+            .enclosure_hint
+            .unwrap_or(before.min_row_sum >= 0.99),
+    };
+    let matrix = enforce(
+        matrix,
+        area,
+        Enforce {
+            clamp: false,
+            normalize_rows: closed,
+            symmetrize: true,
+        },
+    );
+    let after = summary(&matrix, area);
+    (matrix, before, after, closed)
+}
+
 /// The thermal system of `mesh`'s patches: areas in m², each patch's boundary.
 pub fn thermal_system(
     mesh: &Mesh,
@@ -894,7 +929,7 @@ pub fn thermal(
     settings: &ThermalSettings,
     observer: &dyn Observer,
 ) -> Result<ThermalOutcome, Error> {
-    use crate::formfactor::{enforce, summary, Enforce, Estimator};
+    use crate::formfactor::Estimator;
     scene.validate_geometry()?;
     let limit = match settings.memory_limit {
         0 => available_memory().unwrap_or(u64::MAX),
@@ -921,24 +956,7 @@ pub fn thermal(
     let form_factor_seconds = t.elapsed().as_secs_f64();
     drop(bvh);
     let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
-    let before = summary(&matrix, &area);
-    let closed = match settings.enclosure {
-        Enclosure::Closed => true,
-        Enclosure::Open => false,
-        Enclosure::Auto => settings
-            .enclosure_hint
-            .unwrap_or(before.min_row_sum >= 0.99),
-    };
-    let matrix = enforce(
-        matrix,
-        &area,
-        Enforce {
-            clamp: false,
-            normalize_rows: closed,
-            symmetrize: true,
-        },
-    );
-    let after = summary(&matrix, &area);
+    let (matrix, before, after, closed) = thermal_enclosure(matrix, &area, settings);
     let system = thermal_system(&mesh, &area, boundary_of, boundaries, settings, closed);
     observer.event(Event::Stage(Stage::Solve));
     let solution = crate::thermal::solve(

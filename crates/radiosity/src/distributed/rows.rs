@@ -134,6 +134,31 @@ pub fn compute(
     }
 }
 
+/// This rank's share of F: the row costs estimated, the blocks recorded in `report` (with the
+/// pilot's time and every rank's stored entries), and this rank's rows computed. Returns them
+/// and the seconds the rows took.
+pub fn split(
+    estimator: &Estimator<'_>,
+    ranks: &Ranks<'_>,
+    observer: &dyn Observer,
+    report: &mut super::solve::Report,
+) -> (RowBlock, f64) {
+    let t = Instant::now();
+    let costs = row_costs(estimator, ranks);
+    report.pilot_seconds = t.elapsed().as_secs_f64();
+    report.blocks = blocks(&costs, ranks);
+    let t = Instant::now();
+    let block = compute(
+        estimator,
+        report.blocks[ranks.rank()].clone(),
+        ranks.size() as u64,
+        observer,
+    );
+    let busy = t.elapsed().as_secs_f64();
+    report.stored_entries = ranks.all_gather(&[block.nnz() as u64]);
+    (block, busy)
+}
+
 /// Every rank's block, assembled into the whole matrix on `root` (`None` elsewhere).
 pub fn gather_matrix(
     block: &RowBlock,

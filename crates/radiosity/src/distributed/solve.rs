@@ -157,13 +157,9 @@ pub fn solve(
     let (radiosity, unshot, info, solve_s);
     if jacobi {
         let t = Instant::now();
-        let costs = rows::row_costs(&estimator, ranks);
-        report.pilot_seconds = t.elapsed().as_secs_f64();
-        report.blocks = rows::blocks(&costs, ranks);
-        let mine = report.blocks[ranks.rank()].clone();
-        let t = Instant::now();
-        let block: RowBlock = rows::compute(&estimator, mine, ranks.size() as u64, observer);
-        busy += t.elapsed().as_secs_f64();
+        let (block, rows_s): (RowBlock, f64) =
+            rows::split(&estimator, ranks, observer, &mut report);
+        busy += rows_s;
         form_factors.rows = mesh.len() as u64;
         if ff.method == crate::formfactor::FormFactorMethod::MonteCarlo {
             form_factors.rays = mesh.len() as u64 * ff.rays as u64;
@@ -172,8 +168,6 @@ pub fn solve(
         ranks.barrier();
         form_factors.seconds = t.elapsed().as_secs_f64();
         observer.event(Event::Stage(Stage::Solve));
-        let stored = ranks.all_gather(&[block.nnz() as u64]);
-        report.stored_entries = stored;
         let (b, i, sweeps) = super::jacobi::solve(&system, &block, &params, ranks, &mut |s, _| {
             observer.event(Event::Progress {
                 stage: Stage::Solve,

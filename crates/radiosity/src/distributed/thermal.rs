@@ -8,10 +8,10 @@
 use super::rows;
 use super::Ranks;
 use crate::accel::Bvh;
-use crate::formfactor::{enforce, summary, Enforce, Estimator};
+use crate::formfactor::Estimator;
 use crate::mesh::Mesh;
 use crate::observe::{Event, Observer, Stage};
-use crate::pipeline::{thermal_default_rays, Enclosure, ThermalOutcome, ThermalSettings};
+use crate::pipeline::{thermal_default_rays, thermal_enclosure, ThermalOutcome, ThermalSettings};
 use crate::scene::Scene;
 use crate::Error;
 use std::time::Instant;
@@ -51,43 +51,14 @@ pub fn thermal(
         transport: ranks.communicator().describe(),
         ..Default::default()
     };
-    let t_pilot = Instant::now();
-    let costs = rows::row_costs(&estimator, ranks);
-    report.pilot_seconds = t_pilot.elapsed().as_secs_f64();
-    report.blocks = rows::blocks(&costs, ranks);
-    let t_rows = Instant::now();
-    let block = rows::compute(
-        &estimator,
-        report.blocks[ranks.rank()].clone(),
-        ranks.size() as u64,
-        observer,
-    );
-    let busy = t_rows.elapsed().as_secs_f64();
-    report.stored_entries = ranks.all_gather(&[block.nnz() as u64]);
+    let (block, busy) = rows::split(&estimator, ranks, observer, &mut report);
     let matrix = rows::all_gather_matrix(&block, mesh.len(), ranks);
     drop(block);
     let form_factor_seconds = t.elapsed().as_secs_f64();
     drop(estimator);
     drop(bvh);
     let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
-    let before = summary(&matrix, &area);
-    let closed = match settings.enclosure {
-        Enclosure::Closed => true,
-        Enclosure::Open => false,
-        Enclosure::Auto => settings
-            .enclosure_hint
-            .unwrap_or(before.min_row_sum >= 0.99),
-    };
-    let matrix = enforce(
-        matrix,
-        &area,
-        Enforce {
-            clamp: false,
-            normalize_rows: closed,
-            symmetrize: true,
-        },
-    );
-    let after = summary(&matrix, &area);
+    let (matrix, before, after, closed) = thermal_enclosure(matrix, &area, settings);
     let system =
         crate::pipeline::thermal_system(&mesh, &area, boundary_of, boundaries, settings, closed);
     observer.event(Event::Stage(Stage::Solve));

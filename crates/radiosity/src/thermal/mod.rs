@@ -371,6 +371,17 @@ fn blocks(f: &SparseMatrix, n: usize, ranks: &Ranks<'_>) -> std::ops::Range<usiz
     crate::distributed::balance(&costs, ranks.size())[ranks.rank()].clone()
 }
 
+/// `g(i)` for every patch: this rank's block `mine` in parallel, then every rank's block
+/// all-gathered, so that every rank holds the whole vector.
+fn over_ranks(
+    mine: &std::ops::Range<usize>,
+    ranks: &Ranks<'_>,
+    g: impl Fn(usize) -> f64 + Sync + Send,
+) -> Vec<f64> {
+    let block: Vec<f64> = mine.clone().into_par_iter().map(g).collect();
+    ranks.all_gather(&block)
+}
+
 /// Σ a_i b_i in index order: the same bits for any number of threads or ranks (a parallel
 /// sum's association follows the work splitting). O(N), small beside a product with F.
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -554,12 +565,9 @@ fn solve_jacobi(
     let mut x = a.b.clone();
     let mut k = 0;
     loop {
-        let block: Vec<f64> = mine
-            .clone()
-            .into_par_iter()
-            .map(|i| a.b[i] + a.d[i] * column_gather(f, &system.area, &a.scale, &x, i))
-            .collect();
-        let new = ranks.all_gather(&block);
+        let new = over_ranks(&mine, ranks, |i| {
+            a.b[i] + a.d[i] * column_gather(f, &system.area, &a.scale, &x, i)
+        });
         let res = new
             .iter()
             .zip(&x)
@@ -595,12 +603,9 @@ fn solve_iterative(
     let mine = blocks(f, n, ranks);
     let apply =
         |f: &SparseMatrix, system: &ThermalSystem, a: &Assembled, x: &[f64], y: &mut Vec<f64>| {
-            let block: Vec<f64> = mine
-                .clone()
-                .into_par_iter()
-                .map(|i| x[i] - a.d[i] * column_gather(f, &system.area, &a.scale, x, i))
-                .collect();
-            *y = ranks.all_gather(&block);
+            *y = over_ranks(&mine, ranks, |i| {
+                x[i] - a.d[i] * column_gather(f, &system.area, &a.scale, x, i)
+            });
         };
     // Start from each surface's own black-body exitance where it is known, else the b scale.
     let mean_b = a.b.iter().sum::<f64>() / n as f64;
