@@ -40,10 +40,15 @@ pub struct Surfaces<'a> {
 impl Lights {
     /// The emitters of `emission` (patches with any channel above 0), weighted by power.
     pub fn new(mesh: &Mesh, emission: &[Rgb]) -> Self {
+        Self::of(mesh, emission, |_| true)
+    }
+
+    /// The emitters of `emission` for which `keep(patch)` holds, weighted by power.
+    pub fn of(mesh: &Mesh, emission: &[Rgb], keep: impl Fn(usize) -> bool) -> Self {
         let mut patches = Vec::new();
         let mut weight = Vec::new();
         for (i, e) in emission.iter().enumerate() {
-            if e.max_channel() > 0.0 {
+            if e.max_channel() > 0.0 && keep(i) {
                 patches.push(i as u32);
                 // Luminance, but never 0 for a patch that emits in some channel.
                 let w = e.luminance().max(e.max_channel() * 1e-3) * mesh.patches[i].area as f64;
