@@ -2,7 +2,11 @@
 //! (at each `--link-errors`) and of uniform meshes solved by progressive refinement (at each
 //! `--sizes`), against path-traced surface means that know nothing of either
 //! ([`radiosity::pipeline::path_surface_means`]). Emitters are left out of the errors (their
-//! radiosity is mostly their own emission).
+//! radiosity is mostly their own emission). Coincident twins (the same polygon twice, as when
+//! a scene includes an object twice) are compared as one surface: the brightest of the group
+//! against the reference's group mean, since a shooting method lights whichever twin its rays
+//! meet first and leaves the other dark, while the path tracer and hierarchical radiosity
+//! light both.
 
 use crate::args::BenchArgs;
 use anyhow::{bail, Context, Result};
@@ -66,11 +70,55 @@ fn reference(
     Ok(means)
 }
 
+/// The scene's polygons grouped by coincidence: each group the polygons with the same
+/// vertices (as a set, to 10⁻⁶ of the scene's size) and the same side, in order.
+fn twin_groups(scene: &radiosity::scene::Scene) -> Vec<Vec<usize>> {
+    use std::collections::HashMap;
+    let (mut lo, mut hi) = (
+        radiosity::geom::Vec3::splat(f32::MAX),
+        radiosity::geom::Vec3::splat(f32::MIN),
+    );
+    for p in &scene.polygons {
+        for v in &p.vertices {
+            lo = lo.min(*v);
+            hi = hi.max(*v);
+        }
+    }
+    let step = ((hi - lo).length() * 1e-6).max(f32::MIN_POSITIVE);
+    let q = |v: f32, s: f32| (v / s).round() as i64;
+    let mut index: HashMap<Vec<i64>, usize> = HashMap::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (k, p) in scene.polygons.iter().enumerate() {
+        let mut corners: Vec<[i64; 3]> = p
+            .vertices
+            .iter()
+            .map(|v| [q(v.x, step), q(v.y, step), q(v.z, step)])
+            .collect();
+        corners.sort_unstable();
+        let mut key = corners.concat();
+        // Newell's normal: the side the polygon faces.
+        let n = p
+            .vertices
+            .iter()
+            .zip(p.vertices.iter().cycle().skip(1))
+            .fold(radiosity::geom::Vec3::ZERO, |acc, (a, b)| acc + a.cross(*b))
+            .normalize_or_zero();
+        key.extend([q(n.x, 1e-3), q(n.y, 1e-3), q(n.z, 1e-3)]);
+        let g = *index.entry(key).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[g].push(k);
+    }
+    groups
+}
+
 /// Relative errors of a solution's surface means (channel sums), emitters and surfaces the
-/// reference cannot resolve (standard error above 1 %) left out: (mean, worst, area-weighted
-/// L1, the reference's own noise floor of that L1).
+/// reference cannot resolve (standard error above 1 %) left out, twins as one surface: (mean,
+/// worst, area-weighted L1, the reference's own noise floor of that L1).
 fn errors(
     scene: &radiosity::scene::Scene,
+    groups: &[Vec<usize>],
     s: &Solution,
     reference: &[(Rgb, Rgb)],
 ) -> (f64, f64, f64, f64) {
@@ -83,21 +131,40 @@ fn errors(
     }
     let (mut total, mut worst, mut count) = (0.0, 0.0f64, 0usize);
     let (mut l1, mut floor, mut weight) = (0.0, 0.0, 0.0);
-    for k in 0..n {
-        let emits = scene.materials[scene.polygons[k].material]
-            .emission
-            .max_channel()
-            > 0.0;
-        let (b, se) = reference[k];
-        if emits || area[k] <= 0.0 || b.sum() <= 0.0 {
+    for group in groups {
+        let emits = group.iter().any(|&k| {
+            scene.materials[scene.polygons[k].material]
+                .emission
+                .max_channel()
+                > 0.0
+        });
+        let k = group[0];
+        if emits || group.iter().any(|&j| area[j] <= 0.0) {
             continue;
         }
-        let se = (se.r * se.r + se.g * se.g + se.b * se.b).sqrt();
-        let rel = (sum[k] / area[k] - b.sum()) / b.sum();
-        l1 += (sum[k] / area[k] - b.sum()).abs() * area[k];
+        let m = group.len() as f64;
+        let b: f64 = group.iter().map(|&j| reference[j].0.sum()).sum::<f64>() / m;
+        if b <= 0.0 {
+            continue;
+        }
+        let se = (group
+            .iter()
+            .map(|&j| {
+                let se = reference[j].1;
+                se.r * se.r + se.g * se.g + se.b * se.b
+            })
+            .sum::<f64>()
+            / (m * m))
+            .sqrt();
+        let run = group
+            .iter()
+            .map(|&j| sum[j] / area[j])
+            .fold(f64::MIN, f64::max);
+        let rel = (run - b) / b;
+        l1 += (run - b).abs() * area[k];
         floor += se * (2.0 / std::f64::consts::PI).sqrt() * area[k];
-        weight += b.sum() * area[k];
-        if se / b.sum() > 0.01 {
+        weight += b * area[k];
+        if se / b > 0.01 {
             continue;
         }
         total += rel.abs();
@@ -121,12 +188,17 @@ pub fn run(a: &BenchArgs, name: &str) -> Result<()> {
         .clone()
         .unwrap_or_else(|| std::path::PathBuf::from(format!("{}-surfaces.csv", scene.name)));
     let reference = reference(a, &scene, &path)?;
+    let groups = twin_groups(&scene);
+    let twins = scene.polygons.len() - groups.len();
+    if twins > 0 {
+        println!("twins       {twins} polygons coincide with an earlier one: each group compared as one surface");
+    }
     println!(
         "{:<28} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",
         "method", "elements", "links", "wall s", "mean %", "worst %", "L1 %", "floor %"
     );
     let row = |label: String, s: &Solution, links: usize, wall: f64| {
-        let (mean, worst, l1, floor) = errors(&scene, s, &reference);
+        let (mean, worst, l1, floor) = errors(&scene, &groups, s, &reference);
         println!(
             "{label:<28} {:>9} {:>9} {:>8.2} {:>8.3} {:>8.3} {:>8.3} {:>8.3}",
             s.mesh.len(),
@@ -144,6 +216,7 @@ pub fn run(a: &BenchArgs, name: &str) -> Result<()> {
             hierarchical: Some(HierarchicalParams {
                 link_error: e,
                 tolerance,
+                max_passes: a.passes.unwrap_or(HierarchicalParams::default().max_passes),
                 ..Default::default()
             }),
             ..Default::default()

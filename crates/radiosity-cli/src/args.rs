@@ -823,6 +823,9 @@ pub struct BenchArgs {
     /// `--hierarchical`: the link errors to try.
     #[arg(long, value_name = "E,E,…", value_delimiter = ',', num_args = 1.., help_heading = SOLVER)]
     pub link_errors: Option<Vec<f64>>,
+    /// `--hierarchical`: refinement passes of the hierarchical solves (default: the solver's).
+    #[arg(long, value_name = "N", help_heading = SOLVER)]
+    pub passes: Option<u32>,
     /// `--hierarchical`: paths of the reference in all (shared by area).
     #[arg(long, value_name = "N", default_value_t = 20_000_000, help_heading = SCENE)]
     pub reference_paths: u64,

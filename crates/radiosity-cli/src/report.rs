@@ -131,6 +131,12 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
                 hi.rays,
                 hi.bytes as f64 / (1024.0 * 1024.0)
             );
+            if hi.twins > 0 {
+                println!(
+                    "twins       {} input pieces coincide with an earlier one (same corners, same side): each pair solved as one surface",
+                    hi.twins
+                );
+            }
         }
         None => {
             println!(

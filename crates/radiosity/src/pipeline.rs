@@ -484,30 +484,31 @@ fn solve_hierarchical(
     let bvh = Bvh::build(&mesh);
     bvh_s += t.elapsed().as_secs_f64();
     let hi = h.info;
-    // Energy: emitted, and what arrived (Σ A H over leaves) against what left (Σ A B).
-    let emitted: Rgb = system
-        .emission
-        .iter()
-        .zip(&system.area)
-        .map(|(e, a)| *e * *a)
+    // Energy: emitted by every leaf; what arrived (Σ A H) against what left (Σ A B) over the
+    // leaves that are not a coincident twin's copy (the same surface, counted once).
+    let counted: Vec<bool> = (0..leaves.len())
+        .map(|k| h.twin_of[root_of(k)] as usize == root_of(k))
+        .collect();
+    let sum = |f: &dyn Fn(usize) -> Rgb| -> Rgb {
+        (0..leaves.len()).filter(|&k| counted[k]).map(f).sum()
+    };
+    let emitted: Rgb = (0..leaves.len())
+        .map(|k| system.emission[k] * system.area[k])
         .sum();
     // What arrived at each leaf, H A: through its own links and every ancestor's.
-    let incident: Vec<Rgb> = leaves
-        .iter()
-        .map(|&e| h.incident[e as usize] * h.elements.items[e as usize].area as f64)
-        .collect();
-    let arrived: Rgb = incident.iter().copied().sum();
-    let left: Rgb = radiosity
-        .iter()
-        .zip(&system.area)
-        .map(|(b, a)| *b * *a)
-        .sum();
-    let absorbed: Rgb = incident
-        .iter()
-        .zip(&system.reflectance)
-        .map(|(h, r)| *h * (Rgb::splat(1.0) - *r))
-        .sum();
-    let unshot_power: Rgb = unshot.iter().zip(&system.area).map(|(u, a)| *u * *a).sum();
+    let incident = |k: usize| {
+        let e = leaves[k] as usize;
+        h.incident[e] * h.elements.items[e].area as f64
+    };
+    let arrived = sum(&incident);
+    // A twin's emission leaves through the first of its group.
+    let left = sum(&|k| radiosity[k] * system.area[k])
+        + (0..leaves.len())
+            .filter(|&k| !counted[k])
+            .map(|k| system.emission[k] * system.area[k])
+            .sum::<Rgb>();
+    let absorbed = sum(&|k| incident(k) * (Rgb::splat(1.0) - system.reflectance[k]));
+    let unshot_power = sum(&|k| unshot[k] * system.area[k]);
     let info = Info {
         iterations: hi.iterations,
         converged: hi.converged,

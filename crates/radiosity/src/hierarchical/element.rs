@@ -98,6 +98,39 @@ impl Element {
             .collect()
     }
 
+    /// For each root, the first root (lowest index) that is the same polygon facing the same
+    /// way, or itself: coincident *twins*, such as a scene that includes an object twice.
+    /// Corners are compared as a set after rounding to a grid of `tolerance`, normals to
+    /// 10⁻³; only roots for which `eligible` holds are grouped.
+    pub fn twins(roots: &[Element], tolerance: f32, eligible: impl Fn(usize) -> bool) -> Vec<u32> {
+        use std::collections::HashMap;
+        let q = |v: f32, step: f32| (v / step).round() as i64;
+        let mut first: HashMap<Vec<i64>, u32> = HashMap::new();
+        let mut out: Vec<u32> = (0..roots.len() as u32).collect();
+        if tolerance.is_nan() || tolerance <= 0.0 {
+            return out;
+        }
+        for (i, e) in roots.iter().enumerate() {
+            if !eligible(i) || e.area <= 0.0 {
+                continue;
+            }
+            let mut corners: Vec<[i64; 3]> = e
+                .polygon()
+                .iter()
+                .map(|p| [q(p.x, tolerance), q(p.y, tolerance), q(p.z, tolerance)])
+                .collect();
+            corners.sort_unstable();
+            let mut key: Vec<i64> = corners.concat();
+            key.extend([
+                q(e.normal.x, 1e-3),
+                q(e.normal.y, 1e-3),
+                q(e.normal.z, 1e-3),
+            ]);
+            out[i] = *first.entry(key).or_insert(i as u32);
+        }
+        out
+    }
+
     /// The corners that exist (3 or 4).
     pub fn polygon(&self) -> &[Vec3] {
         if self.tri {

@@ -100,6 +100,10 @@ pub struct Context<'a> {
     pub seed: u64,
     /// Which input pieces emit.
     pub emits: &'a [bool],
+    /// The first of each input piece's coincident twins (itself when it has none,
+    /// [`super::element::Element::twins`]): a ray that meets a twin of its target has met
+    /// the target, and only the first of a group sends (the light of all).
+    pub twin_of: &'a [u32],
 }
 
 /// The fraction of element `e` (id `id`) that is exposed: at four jittered points (one in
@@ -169,19 +173,44 @@ fn quarter(tri: bool, p: usize) -> usize {
     }
 }
 
-/// The fraction of root element `e` (input piece `piece`) that is open in front: a ray from
-/// just behind each of four points through the surface must not meet another polygon within
-/// a few ray offsets, front or back. Such a polygon is a coincident twin (which the hierarchy
+/// The fraction of element `e` (id `id`, of input piece `piece`) that is open in front: a ray
+/// from just behind each of four jittered points (one in each quarter) through the surface
+/// must not meet another polygon within a few ray offsets, front or back. Such a polygon is a coincident twin (which the hierarchy
 /// reports first, and which receives the light in its stead) or a surface lying flush against
 /// this one (a panel on a wall): gathering from points lifted off the surface would see
-/// through it, where no light arrives.
-pub fn open_in_front(e: &Element, piece: u32, bvh: &Bvh) -> f32 {
+/// through it, where no light arrives. The piece's own coincident twins (`twin_of`) do not
+/// cover it: they are the same surface.
+pub fn open_in_front(e: &Element, id: u32, bvh: &Bvh, coincident: &[u32], seed: u64) -> f32 {
+    let mut rng = stream(seed, id as u64, 0, 0x4f50_454e);
+    let jitter: [f32; 2 * POINTS] = std::array::from_fn(|_| uniform(&mut rng));
     let off = bvh.ray_offset();
-    let points = e.receiver_points(&[0.5; 2 * POINTS]);
+    let piece = e.root;
+    let points = e.receiver_points(&jitter);
+    let group = coincident[piece as usize];
     let mut seen = 0;
     for x in points.into_iter().step_by(4) {
-        let hit = bvh.closest_hit(&Ray::new(x - e.normal * (2.0 * off), e.normal), 8.0 * off);
-        if !matches!(hit, Some(h) if h.patch != piece) {
+        let mut from = x - e.normal * (2.0 * off);
+        let mut reach = 8.0 * off;
+        let mut covered = false;
+        // Past the piece's twins (a few at most), to what lies beyond them.
+        for _ in 0..8 {
+            match bvh.closest_hit(&Ray::new(from, e.normal), reach) {
+                Some(h) if coincident[h.patch as usize] == group => {
+                    let step = h.t + 0.25 * off;
+                    from += e.normal * step;
+                    reach -= step;
+                    if reach <= 0.0 {
+                        break;
+                    }
+                }
+                Some(_) => {
+                    covered = true;
+                    break;
+                }
+                None => break,
+            }
+        }
+        if !covered {
             seen += 1;
         }
     }
@@ -211,6 +240,7 @@ impl Context<'_> {
             Some(h) => {
                 h.front
                     && (h.patch == piece
+                        || self.twin_of[h.patch as usize] == self.twin_of[piece as usize]
                         || (self.emits[piece as usize]
                             && (h.t - dist).abs() <= 1e-4 * dist + 4.0 * off))
             }
@@ -345,6 +375,10 @@ impl Context<'_> {
             let piece = self.clusters.pick(c, uniform(rng) as f64);
             let root = &self.elements[piece as usize];
             let y = root.sample(uniform(rng), uniform(rng), uniform(rng));
+            if self.twin_of[piece as usize] != piece {
+                // A twin's light is sent by its representative, drawn as often.
+                continue;
+            }
             let d = y - x;
             let d2 = d.length_squared();
             if d2 <= 0.0 {

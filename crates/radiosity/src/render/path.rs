@@ -113,8 +113,12 @@ pub fn radiosity_at(
 /// The area-weighted mean radiosity of each surface (input polygon) and its standard error,
 /// by one path from each of `samples[k]` points drawn uniformly over surface `k`. Independent
 /// of any radiosity solution: the reference that solutions' surface means are measured
-/// against. Points come in chunks of 4,096 with streams keyed by `(seed, surface, chunk)`,
-/// so the result does not depend on the thread count.
+/// against. A point that another surface covers (one lies within eight ray offsets in front of
+/// it: a panel flush on a wall, the floor under a box) receives nothing, and its radiosity is
+/// its emission: a path started a ray offset above it would pass the cover and see the room.
+/// A coincident twin (in the point's own plane) does not cover it. Points come in chunks of
+/// 4,096 with streams keyed by `(seed, surface, chunk)`, so the result does not depend on the
+/// thread count.
 pub fn surface_means(
     s: &Surfaces<'_>,
     lights: &Lights,
@@ -159,7 +163,13 @@ pub fn surface_means(
                 let (u1, u2, u3) = (uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
                 let x = s.mesh.sample_point(i, u1, u2, u3);
                 let nrm = s.mesh.patches[i].normal;
-                let (b, _) = radiosity_at(s, lights, x, nrm, i as u32, 1, &mut rng);
+                let off = s.bvh.ray_offset();
+                let probe = Ray::new(x + nrm * (0.25 * off), nrm);
+                let b = if s.bvh.closest_hit(&probe, 8.0 * off).is_some() {
+                    s.emission[i]
+                } else {
+                    radiosity_at(s, lights, x, nrm, i as u32, 1, &mut rng).0
+                };
                 s1 += b;
                 s2 += b * b;
             }
@@ -245,6 +255,54 @@ mod surface_means {
     use super::*;
     use crate::pipeline::{solve, Settings};
     use crate::sampling::stream;
+
+    /// Surface means see covers and twins as the radiosity methods do: a panel lying flush on
+    /// half of the floor under a lamp (2.5 ray offsets above it) leaves the floor half its
+    /// light (the lamp is black, so nothing the panel reflects comes back, and the lamp lights
+    /// both halves alike); a coincident copy of the floor does not cover it, and both copies
+    /// get the floor's light. Each within four standard errors.
+    #[test]
+    fn covered_points_receive_nothing_and_twins_do_not_cover() {
+        use crate::render::light::tests::lamp_over_floor;
+        use crate::scene::Polygon;
+        let paths = 400_000;
+        let plain = lamp_over_floor(1.0, 0.8, 10.0, 0.5);
+        let base = crate::pipeline::path_surface_means(&plain, paths, 3).unwrap()[1];
+        let v = Vec3::new;
+        let f = 20.0;
+        let mut panel = plain.clone();
+        panel.polygons.push(Polygon {
+            vertices: vec![
+                v(-f, 2e-4, -f),
+                v(-f, 2e-4, f),
+                v(0.0, 2e-4, f),
+                v(0.0, 2e-4, -f),
+            ],
+            material: 1,
+            line: 0,
+            group: 0,
+        });
+        let half = crate::pipeline::path_surface_means(&panel, paths, 4).unwrap()[1];
+        let se = (base.1.g * base.1.g * 0.25 + half.1.g * half.1.g).sqrt();
+        assert!(
+            (half.0.g - 0.5 * base.0.g).abs() < 4.0 * se,
+            "half covered {} vs {} ± {se}",
+            half.0.g,
+            0.5 * base.0.g
+        );
+        let mut twins = plain.clone();
+        twins.polygons.push(plain.polygons[1].clone());
+        let means = crate::pipeline::path_surface_means(&twins, paths, 5).unwrap();
+        for (k, m) in [(1, means[1]), (2, means[2])] {
+            let se = (base.1.g * base.1.g + m.1.g * m.1.g).sqrt();
+            assert!(
+                (m.0.g - base.0.g).abs() < 4.0 * se,
+                "twin {k}: {} vs {} ± {se}",
+                m.0.g,
+                base.0.g
+            );
+        }
+    }
 
     /// The path tracer against a radiosity solution of the bright cube (ρ ≈ 0.8, emitters on
     /// the ceiling): the area-weighted mean radiosity of each input polygon. The path tracer's
