@@ -145,7 +145,8 @@ pub fn trace_random_rays(mesh: &Mesh, bvh: &Bvh, count: usize, seed: u64) -> u64
 /// ray offset above such a point can pass the cover and see the room, but the light arriving
 /// there is what the *cover* receives (rays towards the point meet the cover first), so a
 /// gather must not see it. The same draws are taken from `rng` either way.
-pub fn gather_photon(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> Option<u32> {
+pub fn gather_photon(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> crate::system::Gathered {
+    use crate::system::Gathered;
     let p = mesh.sample_point(i, uniform(rng), uniform(rng), uniform(rng));
     let n = mesh.patches[i].normal;
     let (t, b) = orthonormal_basis(n);
@@ -160,11 +161,11 @@ pub fn gather_photon(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> Optio
             .closest_hit(&Ray::new(p + n * (0.5 * off), n), 8.0 * off)
             .is_some()
     {
-        return None;
+        return Gathered::Covered;
     }
     match bvh.closest_hit(&Ray::new(p + n * off, d), f32::INFINITY) {
-        Some(h) if h.front && h.patch as usize != i => Some(h.patch),
-        _ => None,
+        Some(h) if h.front && h.patch as usize != i => Gathered::Hit(h.patch),
+        _ => Gathered::Lost,
     }
 }
 

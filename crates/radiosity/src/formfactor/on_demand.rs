@@ -175,7 +175,7 @@ impl PhotonSampler for OnDemandRows<'_> {
     }
 
     /// The same ray, unless the point is covered ([`monte_carlo::gather_photon`]).
-    fn gather(&self, i: usize, rng: &mut Rng64) -> Option<u32> {
+    fn gather(&self, i: usize, rng: &mut Rng64) -> crate::system::Gathered {
         self.photon_rays.fetch_add(1, Ordering::Relaxed);
         monte_carlo::gather_photon(self.estimator.mesh(), self.estimator.bvh(), i, rng)
     }

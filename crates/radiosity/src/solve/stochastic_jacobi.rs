@@ -40,7 +40,7 @@
 use super::{Info, Operator, SolveError, Solver, SolverParams, SolverState, System};
 use crate::color::Rgb;
 use crate::sampling::{stream, uniform};
-use crate::system::PhotonSampler;
+use crate::system::{Gathered, PhotonSampler};
 use rayon::prelude::*;
 
 /// Rays per parallel task and per random stream.
@@ -324,8 +324,12 @@ impl<'s> StochasticJacobi<'s> {
             let (mut sum, mut sum_sq) = (Rgb::BLACK, 0.0f64);
             for _ in 0..per {
                 let v = match sampler.gather(j, &mut rng) {
-                    Some(i) => old[i as usize] - sys.emission[i as usize] - cv,
-                    None => Rgb::BLACK,
+                    Gathered::Hit(i) => old[i as usize] - sys.emission[i as usize] - cv,
+                    Gathered::Lost => Rgb::BLACK,
+                    // A covered point sees nothing: its share of the variate's own term
+                    // (cv · s, with s from rays that were shot from above the cover) is
+                    // taken back.
+                    Gathered::Covered => Rgb::BLACK - cv,
                 };
                 sum += v;
                 sum_sq += v.sum() * v.sum();

@@ -72,9 +72,24 @@ pub trait PhotonSampler: Sync {
 
     /// One draw for *gathering* at patch `i` (a ray from i finding what i sees): as
     /// [`Self::sample`], except where a scene knows that part of `i` is covered (by a
-    /// coincident twin or a flush surface), which then sees nothing. A stored matrix has no
-    /// such knowledge and draws from its row.
-    fn gather(&self, i: usize, rng: &mut Rng64) -> Option<u32> {
-        self.sample(i, rng)
+    /// coincident twin or a flush surface), which then sees nothing ([`Gathered::Covered`]).
+    /// A stored matrix has no such knowledge and draws from its row.
+    fn gather(&self, i: usize, rng: &mut Rng64) -> Gathered {
+        match self.sample(i, rng) {
+            Some(j) => Gathered::Hit(j),
+            None => Gathered::Lost,
+        }
     }
+}
+
+/// What one gathering draw found ([`PhotonSampler::gather`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Gathered {
+    /// The ray from the point met patch `j` first.
+    Hit(u32),
+    /// It left the scene or met a back side.
+    Lost,
+    /// The point lies under another surface (a coincident twin reported first, or a surface
+    /// flush in front of it): it sees nothing at all, whatever the patch's shooting rays saw.
+    Covered,
 }
