@@ -173,13 +173,13 @@ fn quarter(tri: bool, p: usize) -> usize {
     }
 }
 
-/// The fraction of element `e` (id `id`, of input piece `piece`) that is open in front: a ray
-/// from just behind each of four jittered points (one in each quarter) through the surface
-/// must not meet another polygon within a few ray offsets, front or back. Such a polygon is a coincident twin (which the hierarchy
-/// reports first, and which receives the light in its stead) or a surface lying flush against
-/// this one (a panel on a wall): gathering from points lifted off the surface would see
-/// through it, where no light arrives. The piece's own coincident twins (`twin_of`) do not
-/// cover it: they are the same surface.
+/// The fraction of element `e` (id `id`) that is open in front: a ray from just behind each
+/// of four jittered points (one in each quarter) through the surface must not meet another
+/// polygon within a few ray offsets, front or back. Such a polygon lies flush against this
+/// one (a panel on a wall): gathering from points lifted off the surface would see through
+/// it, where no light arrives. The piece's own coincident twins (`coincident`, as
+/// [`super::element::Element::twins`] groups them) do not cover it: they are the same
+/// surface, and the ray goes on past them.
 pub fn open_in_front(e: &Element, id: u32, bvh: &Bvh, coincident: &[u32], seed: u64) -> f32 {
     let mut rng = stream(seed, id as u64, 0, 0x4f50_454e);
     let jitter: [f32; 2 * POINTS] = std::array::from_fn(|_| uniform(&mut rng));
