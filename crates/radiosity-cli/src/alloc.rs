@@ -1,7 +1,14 @@
 //! The program's global allocator: the system allocator, counting the bytes in use and their
 //! peak, so that `radiosity experiment complexity` can report each case's peak heap memory
 //! exactly (the library cannot own the allocator). Two relaxed atomic operations per
-//! allocation; the engine's hot loops do not allocate. With the optional Embree binding
+//! allocation; the engine's hot loops do not allocate.
+//!
+//! On Linux it also asks for transparent huge pages (`madvise(MADV_HUGEPAGE)`) for the whole
+//! 2 MiB pages inside every allocation of at least [`HUGE`] bytes: the per-patch arrays, the
+//! mesh and the BVH, which the solvers and the ray caster read at random. With 4 KiB pages
+//! nearly every such read at 10⁵–10⁶ patches also misses the TLB; with them the hospital at
+//! 400k patches solves 17 % faster (progressive, rays 14 %, its bookkeeping 25 %). Where the
+//! system's setting is `never`, the advice is ignored; where it is `always`, it changes nothing. With the optional Embree binding
 //! (`embree.rs`), this is the only unsafe code in the project: `GlobalAlloc` is an unsafe trait.
 #![allow(unsafe_code)]
 
@@ -16,6 +23,31 @@ pub struct Counting;
 
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
+
+/// Allocations at least this large get the huge-page advice.
+const HUGE: usize = 4 << 20;
+
+/// Advise huge pages for the 2 MiB pages wholly inside `[p, p + size)`.
+#[cfg(target_os = "linux")]
+fn advise(p: *mut u8, size: usize) {
+    const PAGE: usize = 2 << 20;
+    if size < HUGE {
+        return;
+    }
+    let start = (p as usize).next_multiple_of(PAGE);
+    let end = (p as usize + size) / PAGE * PAGE;
+    if end > start {
+        // SAFETY: the range lies inside an allocation that was just made for the caller;
+        // MADV_HUGEPAGE only changes how the kernel backs it, never its contents, and a
+        // failure (no transparent huge pages) leaves it as it was.
+        unsafe {
+            libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE);
+        }
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn advise(_: *mut u8, _: usize) {}
 
 fn grow(bytes: usize) {
     let now = CURRENT.fetch_add(bytes as u64, Relaxed) + bytes as u64;
@@ -34,6 +66,7 @@ unsafe impl GlobalAlloc for Counting {
         let p = unsafe { System.alloc(layout) };
         if !p.is_null() {
             grow(layout.size());
+            advise(p, layout.size());
         }
         p
     }
@@ -43,6 +76,7 @@ unsafe impl GlobalAlloc for Counting {
         let p = unsafe { System.alloc_zeroed(layout) };
         if !p.is_null() {
             grow(layout.size());
+            advise(p, layout.size());
         }
         p
     }
@@ -59,6 +93,7 @@ unsafe impl GlobalAlloc for Counting {
         if !p.is_null() {
             if new_size >= layout.size() {
                 grow(new_size - layout.size());
+                advise(p, new_size);
             } else {
                 shrink(layout.size() - new_size);
             }

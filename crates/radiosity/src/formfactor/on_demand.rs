@@ -160,6 +160,12 @@ impl Operator for OnDemandRows<'_> {
         &self.column
     }
 
+    /// The row itself: the solver applies reciprocity as it reads each receiver.
+    fn shot_column(&mut self, i: usize, share: f64) -> crate::system::Column<'_> {
+        let cached = self.ensure_row(i, share);
+        crate::system::Column::Reciprocal(self.row_slice(i, cached))
+    }
+
     /// Monte Carlo only: photons are single rays, which threads can cast at once. Rows of the
     /// other methods are computed when asked, which a shared sampler cannot do.
     fn photons(&self) -> Option<&dyn PhotonSampler> {

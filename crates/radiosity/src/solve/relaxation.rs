@@ -12,10 +12,10 @@
 //! and `1 − ρ_j` is absorbed; the rest escapes. Then emitted = absorbed + escaped + Σ r_i A_i
 //! holds exactly at every step (the terms cancel in pairs), also for negative δ.
 
-use super::select::{AmbientTree, MaxTree};
+use super::select::{AmbientTree, Leaves, MaxTree};
 use super::{Info, Operator, System};
 use crate::color::Rgb;
-use crate::system::Entry;
+use crate::system::{Column, Entry};
 
 /// The [`super::SolverState`] methods that every relaxation method implements the same way from its
 /// `core: Relaxation` field: the output (x, or x + r when the type's `plus_residual()` says so),
@@ -87,6 +87,123 @@ enum Select {
     Residual(MaxTree),
     /// The largest `|r_i + ρ_i · ambient|₁ A_i` (overshooting with the ambient term).
     Ambient(AmbientTree),
+}
+
+/// What a shot's receivers add to the bookkeeping, summed over a range of them.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sums {
+    /// Power arriving.
+    arrived: Rgb,
+    /// Power absorbed.
+    absorbed: Rgb,
+    /// Change of Σ r_j A_j.
+    signed: Rgb,
+    /// Change of Σ |r_j| A_j.
+    abs: f64,
+}
+
+impl std::ops::Add for Sums {
+    type Output = Sums;
+    fn add(self, o: Sums) -> Sums {
+        Sums {
+            arrived: self.arrived + o.arrived,
+            absorbed: self.absorbed + o.absorbed,
+            signed: self.signed + o.signed,
+            abs: self.abs + o.abs,
+        }
+    }
+}
+
+/// The receivers of a shot with patch indices from `first` on: their column entries, and the
+/// residuals, energies and max-tree keys from `first` on.
+struct Span<'a> {
+    first: usize,
+    column: &'a [Entry],
+    r: &'a mut [Rgb],
+    energy: &'a mut [f64],
+    leaves: Option<Leaves<'a>>,
+}
+
+/// A span of at most this many receivers is updated by one thread: ~20 µs of work.
+const SPAN: usize = 512;
+
+/// Update the receivers of `span` for a shot of `delta`: `r_j += ρ_j δ F_ji` and everything
+/// that follows from it. Spans longer than [`SPAN`] are halved at a block boundary near their
+/// middle receiver and the halves updated by `rayon::join`, so that the receivers' cache misses
+/// (arrays of 10⁶ patches do not fit in any cache) are shared by the threads; the sums of the
+/// halves are added left to right, so the result depends on the column only.
+fn update(
+    sys: &System,
+    delta: Rgb,
+    residual: bool,
+    reciprocal: Option<f32>,
+    span: Span<'_>,
+) -> Sums {
+    let (first, column) = (span.first, span.column);
+    if column.len() > SPAN {
+        // The block boundary at or below the middle receiver, or the next one up if that is
+        // the span's start: both halves keep at least a quarter of the receivers.
+        let middle = column[column.len() / 2].0 as usize;
+        let mut at = MaxTree::block_start(middle);
+        if at <= first {
+            at = MaxTree::block_start(middle + MaxTree::BLOCK);
+        }
+        let k = column.partition_point(|e| (e.0 as usize) < at);
+        let (r0, r1) = span.r.split_at_mut(at - first);
+        let (e0, e1) = span.energy.split_at_mut(at - first);
+        let (l0, l1) = match span.leaves {
+            Some(l) => {
+                let (a, b) = l.split_at(at);
+                (Some(a), Some(b))
+            }
+            None => (None, None),
+        };
+        let left = Span {
+            first,
+            column: &column[..k],
+            r: r0,
+            energy: e0,
+            leaves: l0,
+        };
+        let right = Span {
+            first: at,
+            column: &column[k..],
+            r: r1,
+            energy: e1,
+            leaves: l1,
+        };
+        let (a, b) = rayon::join(
+            || update(sys, delta, residual, reciprocal, left),
+            || update(sys, delta, residual, reciprocal, right),
+        );
+        return a + b;
+    }
+    let Span {
+        r,
+        energy,
+        mut leaves,
+        ..
+    } = span;
+    let mut sums = Sums::default();
+    for &(j, f) in column {
+        let j = j as usize;
+        let k = j - first;
+        let (a, rho) = (sys.area[j], sys.reflectance[j]);
+        let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
+        let power = delta * (f * a);
+        sums.arrived += power;
+        sums.absorbed += (Rgb::splat(1.0) - rho) * power;
+        let rj = r[k] + rho * delta * f;
+        sums.signed += (rj - r[k]) * a;
+        let e = abs_sum(rj) * a;
+        sums.abs += e - energy[k];
+        r[k] = rj;
+        energy[k] = e;
+        if let Some(l) = &mut leaves {
+            l.set(j, if residual { e / a } else { e });
+        }
+    }
+    sums
 }
 
 fn abs_sum(c: Rgb) -> f64 {
@@ -199,23 +316,86 @@ impl<'s> Relaxation<'s> {
     }
 
     /// Change `x_i` by `delta`, with `column` = column i of F (`(j, F_ji)`).
+    ///
+    /// The receivers are updated in parallel over disjoint ranges of patches,
+    /// split where the column is (not by thread), so the result does not depend on the
+    /// thread count; the shooter's max-tree is settled afterwards, one flag per receiving block.
     pub fn add(&mut self, i: usize, delta: Rgb, column: &[Entry]) {
+        self.add_column(i, delta, Column::Entries(column));
+    }
+
+    /// [`Self::add`] with the column as [`Operator::shot_column`] gives it: by reciprocity
+    /// from row i, `F_ji = F_ij A_i / A_j`, applied per receiver.
+    pub fn add_column(&mut self, i: usize, delta: Rgb, column: Column<'_>) {
         let sys = self.system;
+        let reciprocal = match column {
+            Column::Entries(_) => None,
+            Column::Reciprocal(_) => Some(sys.area[i] as f32),
+        };
+        let column = column.entries();
         self.x[i] += delta;
         let ri = self.r[i] - delta;
         self.set_r(i, ri);
-        let mut arrived = Rgb::BLACK;
-        for &(j, f) in column {
-            let j = j as usize;
-            let f = f as f64;
-            let power = delta * (f * sys.area[j]);
-            arrived += power;
-            let rho = sys.reflectance[j];
-            self.absorbed += (Rgb::splat(1.0) - rho) * power;
-            let rj = self.r[j] + rho * delta * f;
-            self.set_r(j, rj);
-        }
-        self.escaped += delta * sys.area[i] - arrived;
+        let residual = matches!(self.select, Select::Residual(_));
+        let sums = match &mut self.select {
+            Select::Ambient(tree) => {
+                let mut sums = Sums::default();
+                for &(j, f) in column {
+                    let j = j as usize;
+                    let f = reciprocal.map_or(f, |ai| f * ai / sys.area[j] as f32) as f64;
+                    let power = delta * (f * sys.area[j]);
+                    sums.arrived += power;
+                    sums.absorbed += (Rgb::splat(1.0) - sys.reflectance[j]) * power;
+                    let rj = self.r[j] + sys.reflectance[j] * delta * f;
+                    let a = sys.area[j];
+                    sums.signed += (rj - self.r[j]) * a;
+                    let e = abs_sum(rj) * a;
+                    sums.abs += e - self.energy[j];
+                    self.r[j] = rj;
+                    self.energy[j] = e;
+                    tree.set(j, rj, a);
+                }
+                sums
+            }
+            select => {
+                let tree = match select {
+                    Select::Energy(t) | Select::Residual(t) => Some(t),
+                    _ => None,
+                };
+                let (sums, tree) = match tree {
+                    Some(t) => {
+                        let span = Span {
+                            first: 0,
+                            column,
+                            r: &mut self.r,
+                            energy: &mut self.energy,
+                            leaves: Some(t.leaves()),
+                        };
+                        (update(sys, delta, residual, reciprocal, span), Some(t))
+                    }
+                    None => {
+                        let span = Span {
+                            first: 0,
+                            column,
+                            r: &mut self.r,
+                            energy: &mut self.energy,
+                            leaves: None,
+                        };
+                        (update(sys, delta, residual, reciprocal, span), None)
+                    }
+                };
+                if let Some(t) = tree {
+                    for &(j, _) in column {
+                        t.settle(MaxTree::block_of(j as usize));
+                    }
+                }
+                sums
+            }
+        };
+        self.signed_unshot += sums.signed;
+        self.abs_unshot += sums.abs;
+        self.absorbed += sums.absorbed;
+        self.escaped += delta * sys.area[i] - sums.arrived;
         self.updates += column.len() as u64 + 1;
         if self.updates > 8 * self.r.len() as u64 + 1024 {
             self.resum();
@@ -238,10 +418,20 @@ impl<'s> Relaxation<'s> {
             return false;
         }
         let share = self.energy[i] / self.emitted_total;
-        let column = source.column(i, share);
-        let m = self.diagonal(i, column);
+        let column = source.shot_column(i, share);
+        let m = match column {
+            Column::Entries(c) => self.diagonal(i, c),
+            Column::Reciprocal(row) => {
+                // F_ii by reciprocity from itself, rounded as every other entry.
+                let ai = self.system.area[i] as f32;
+                let f_ii = row
+                    .binary_search_by_key(&(i as u32), |e| e.0)
+                    .map_or(0.0, |k| (row[k].1 * ai / ai) as f64);
+                Rgb::splat(1.0) - self.system.reflectance[i] * f_ii
+            }
+        };
         let delta = Rgb::new(r.r / m.r, r.g / m.g, r.b / m.b) * omega;
-        self.add(i, delta, column);
+        self.add_column(i, delta, column);
         self.iterations += 1;
         true
     }

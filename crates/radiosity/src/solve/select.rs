@@ -7,25 +7,48 @@
 
 use crate::color::Rgb;
 
-/// A binary max-tree over N keys: update and arg-max in O(log N); ties to the lowest index.
+/// Keys a leaf block of [`MaxTree`] holds: one cache line of `f64`.
+const BLOCK: usize = 8;
+
+/// A max-tree over N keys: update and arg-max in O(log N); ties to the lowest index.
+///
+/// The keys are kept in blocks of [`MaxTree::BLOCK`], one cache line each, and the binary tree is built
+/// over the blocks' maxima, so that it is a sixteenth of the size of a tree over single keys
+/// and its lower levels stay in the cache. Setting a key that is not its block's maximum and
+/// does not become it touches only the key and the block's node; a block's maximum that falls
+/// is found again by scanning its line.
 #[derive(Clone, Debug)]
 pub struct MaxTree {
+    keys: Vec<f64>,
     size: usize,
     node: Vec<(f64, u32)>,
+    /// Blocks whose node [`Leaves::set`] changed and [`MaxTree::settle`] has not yet carried up.
+    dirty: Vec<bool>,
 }
 
 impl MaxTree {
     /// A tree over `keys`.
     pub fn new(keys: &[f64]) -> Self {
-        let size = keys.len().next_power_of_two().max(1);
-        let mut node = vec![(f64::NEG_INFINITY, 0u32); 2 * size];
-        for (i, &k) in keys.iter().enumerate() {
-            node[size + i] = (k, i as u32);
+        let blocks = keys.len().div_ceil(BLOCK);
+        let size = blocks.next_power_of_two().max(1);
+        let mut tree = Self {
+            keys: keys.to_vec(),
+            size,
+            node: vec![(f64::NEG_INFINITY, 0u32); 2 * size],
+            dirty: vec![false; blocks],
+        };
+        for b in 0..blocks {
+            tree.node[size + b] = tree.block_max(b);
         }
         for p in (1..size).rev() {
-            node[p] = Self::better(node[2 * p], node[2 * p + 1]);
+            tree.node[p] = Self::better(tree.node[2 * p], tree.node[2 * p + 1]);
         }
-        Self { size, node }
+        tree
+    }
+
+    /// The largest key of block `b` and its index, the lowest on ties.
+    fn block_max(&self, b: usize) -> (f64, u32) {
+        block_max(&self.keys[b * BLOCK..], b * BLOCK)
     }
 
     /// The larger of two entries; `a` (the left, lower indices) on ties.
@@ -39,18 +62,23 @@ impl MaxTree {
 
     /// Set key `i`.
     pub fn set(&mut self, i: usize, key: f64) {
-        let mut p = self.size + i;
-        let old = self.node[p].0;
+        let old = self.keys[i];
         if old == key {
             return;
         }
-        self.node[p].0 = key;
-        p /= 2;
+        self.keys[i] = key;
+        let mut p = self.size + i / BLOCK;
+        let me = (key, i as u32);
+        let cur = self.node[p];
         if key > old {
-            // A key that grows only climbs while it beats the maximum above it (a parent holds
+            // A key that grows only climbs while it beats the maximum above it (a node holds
             // the larger of its children, the lower index on ties): one read a level, and most
-            // receivers of a shot stop at the first.
-            let me = (key, i as u32);
+            // receivers of a shot stop at their block.
+            if cur.1 != me.1 && (cur.0 > key || (cur.0 == key && cur.1 < me.1)) {
+                return;
+            }
+            self.node[p] = me;
+            p /= 2;
             while p >= 1 {
                 let cur = self.node[p];
                 if cur.0 > key || (cur.0 == key && cur.1 < me.1) {
@@ -61,6 +89,12 @@ impl MaxTree {
             }
             return;
         }
+        // A key that falls matters only if it was its block's maximum.
+        if cur.1 != me.1 {
+            return;
+        }
+        self.node[p] = self.block_max(i / BLOCK);
+        p /= 2;
         while p >= 1 {
             let b = Self::better(self.node[2 * p], self.node[2 * p + 1]);
             if self.node[p] == b {
@@ -71,15 +105,154 @@ impl MaxTree {
         }
     }
 
+    /// The keys and the blocks' nodes, to set keys of disjoint ranges from several threads
+    /// ([`Leaves::split_at`]). The nodes above the blocks are brought up to date by
+    /// [`Self::settle`] afterwards; [`Self::max`] is stale until then.
+    pub fn leaves(&mut self) -> Leaves<'_> {
+        let blocks = self.dirty.len();
+        Leaves {
+            first: 0,
+            keys: &mut self.keys,
+            blocks: &mut self.node[self.size..self.size + blocks],
+            dirty: &mut self.dirty,
+        }
+    }
+
+    /// Carry the change of block `b`'s node made by [`Leaves::set`] up the tree, if it changed.
+    /// Cheap for a block that did not: one flag.
+    pub fn settle(&mut self, b: usize) {
+        if !std::mem::take(&mut self.dirty[b]) {
+            return;
+        }
+        let mut p = (self.size + b) / 2;
+        while p >= 1 {
+            let best = Self::better(self.node[2 * p], self.node[2 * p + 1]);
+            if self.node[p] == best {
+                break;
+            }
+            self.node[p] = best;
+            p /= 2;
+        }
+    }
+
+    /// Keys a block holds.
+    pub const BLOCK: usize = BLOCK;
+
+    /// The block of key `i`, for [`Self::settle`].
+    pub fn block_of(i: usize) -> usize {
+        i / BLOCK
+    }
+
+    /// The first key of the block of key `i`: where [`Leaves::split_at`] can split.
+    pub fn block_start(i: usize) -> usize {
+        i / BLOCK * BLOCK
+    }
+
     /// The largest key and its index (the lowest index among equal keys).
     pub fn max(&self) -> (f64, usize) {
         let (k, i) = self.node[1];
         (k, i as usize)
     }
 
+    /// Read key `i` and its block's node: what [`Self::set`] reads first. Returns their sum,
+    /// for a caller that loads them ahead of the update only to bring them into the cache.
+    #[inline]
+    pub fn touch(&self, i: usize) -> f64 {
+        self.keys[i] + self.node[self.size + i / BLOCK].0
+    }
+
     /// Key `i`.
     pub fn get(&self, i: usize) -> f64 {
-        self.node[self.size + i].0
+        self.keys[i]
+    }
+}
+
+/// The largest of `keys[..BLOCK]` (fewer at the end) and its index plus `first`, the lowest on
+/// ties.
+fn block_max(keys: &[f64], first: usize) -> (f64, u32) {
+    let keys = &keys[..keys.len().min(BLOCK)];
+    let mut best = (keys[0], first as u32);
+    for (k, &key) in keys.iter().enumerate().skip(1) {
+        if key > best.0 {
+            best = (key, (first + k) as u32);
+        }
+    }
+    best
+}
+
+/// The keys `first..` of a [`MaxTree`] and their blocks' nodes, borrowed to be set apart from
+/// the nodes above (which [`MaxTree::settle`] updates afterwards). `first` is a multiple of the
+/// block size, so that disjoint spans own disjoint blocks.
+#[derive(Debug)]
+pub struct Leaves<'a> {
+    first: usize,
+    keys: &'a mut [f64],
+    blocks: &'a mut [(f64, u32)],
+    dirty: &'a mut [bool],
+}
+
+impl<'a> Leaves<'a> {
+    /// The first key index of the span.
+    pub fn first(&self) -> usize {
+        self.first
+    }
+
+    /// Split into the keys before `at` (a key index, rounded down to a block) and from it.
+    pub fn split_at(self, at: usize) -> (Leaves<'a>, Leaves<'a>) {
+        let at = (at / BLOCK * BLOCK).clamp(self.first, self.first + self.keys.len());
+        let (k0, k1) = self.keys.split_at_mut(at - self.first);
+        let b = (at - self.first) / BLOCK;
+        let (b0, b1) = self.blocks.split_at_mut(b);
+        let (d0, d1) = self.dirty.split_at_mut(b);
+        (
+            Leaves {
+                first: self.first,
+                keys: k0,
+                blocks: b0,
+                dirty: d0,
+            },
+            Leaves {
+                first: at,
+                keys: k1,
+                blocks: b1,
+                dirty: d1,
+            },
+        )
+    }
+
+    /// Read key `i`: what [`Self::set`] reads first, for a caller that loads it ahead.
+    #[inline]
+    pub fn get(&self, i: usize) -> f64 {
+        self.keys[i - self.first]
+    }
+
+    /// Set key `i` (an index of the whole tree, inside the span) and its block's node; the
+    /// block is marked for [`MaxTree::settle`] if its node changed.
+    pub fn set(&mut self, i: usize, key: f64) {
+        let k = i - self.first;
+        let old = self.keys[k];
+        if old == key {
+            return;
+        }
+        self.keys[k] = key;
+        let b = k / BLOCK;
+        let cur = self.blocks[b];
+        let me = (key, i as u32);
+        let new = if cur.1 == me.1 {
+            if key > old {
+                me
+            } else {
+                block_max(&self.keys[b * BLOCK..], self.first + b * BLOCK)
+            }
+        } else if key > cur.0 || (key == cur.0 && me.1 < cur.1) {
+            me
+        } else {
+            return;
+        };
+        if new != cur {
+            self.blocks[b] = new;
+            self.dirty[b] = true;
+        }
     }
 }
 
@@ -200,11 +373,45 @@ mod tests {
         best
     }
 
+    /// Keys set through split spans of leaves, then settled, give the linear scan's arg-max.
+    #[test]
+    fn leaves_set_apart_then_settled_agree_with_a_linear_scan() {
+        let mut rng = stream(4, 0, 0, 0);
+        for n in [1usize, 9, 64, 1000] {
+            let mut keys: Vec<f64> = (0..n)
+                .map(|_| (uniform(&mut rng) * 8.0).floor() as f64)
+                .collect();
+            let mut tree = MaxTree::new(&keys);
+            for _ in 0..300 {
+                let cut = (uniform(&mut rng) * n as f32) as usize;
+                let changed: Vec<usize> = (0..1 + n / 10)
+                    .map(|_| (uniform(&mut rng) * n as f32) as usize % n)
+                    .collect();
+                {
+                    let (mut a, mut b) = tree.leaves().split_at(cut);
+                    for &i in &changed {
+                        keys[i] = (uniform(&mut rng) * 8.0).floor() as f64;
+                        if i < b.first() {
+                            a.set(i, keys[i]);
+                        } else {
+                            b.set(i, keys[i]);
+                        }
+                    }
+                }
+                for &i in &changed {
+                    tree.settle(MaxTree::block_of(i));
+                }
+                let (k, j) = tree.max();
+                assert_eq!((j, k), scan(&keys));
+            }
+        }
+    }
+
     /// After every random update the tree's arg-max is the linear scan's, ties included.
     #[test]
     fn max_tree_agrees_with_a_linear_scan() {
         let mut rng = stream(3, 0, 0, 0);
-        for n in [1usize, 2, 3, 7, 64, 1000] {
+        for n in [1usize, 2, 3, 7, 8, 9, 17, 64, 1000] {
             // Few distinct values, so ties are common.
             let mut keys: Vec<f64> = (0..n)
                 .map(|_| (uniform(&mut rng) * 8.0).floor() as f64)

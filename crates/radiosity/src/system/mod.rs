@@ -21,7 +21,7 @@
 mod operator;
 mod sparse;
 
-pub use operator::{Gathered, Operator, PhotonSampler};
+pub use operator::{Column, Gathered, Operator, PhotonSampler};
 pub use sparse::SparseMatrix;
 
 use crate::color::Rgb;

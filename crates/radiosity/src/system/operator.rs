@@ -29,6 +29,14 @@ pub trait Operator {
     /// Szirmay-Kalos & Márton 1995, eq. 23–24). `share` as for [`Operator::row`].
     fn column(&mut self, i: usize, share: f64) -> &[Entry];
 
+    /// Column `i` as a shooting solver takes it: [`Operator::column`], or row `i` itself when
+    /// the operator holds rows and would only turn the row into the column by reciprocity.
+    /// The solver then does that on the fly, with the system's areas, where it reads each
+    /// receiver anyway: one pass over the receivers instead of two.
+    fn shot_column(&mut self, i: usize, share: f64) -> Column<'_> {
+        Column::Entries(self.column(i, share))
+    }
+
     /// Rows `range`, in order, each handed to `each` with its index: the unit of work that
     /// distributed or blocked methods share out.
     fn rows(&mut self, range: Range<usize>, each: &mut dyn FnMut(usize, &[Entry])) {
@@ -60,6 +68,26 @@ pub trait Operator {
     /// and stochastic Jacobi solvers need it).
     fn photons(&self) -> Option<&dyn PhotonSampler> {
         None
+    }
+}
+
+/// Column `i` of F as [`Operator::shot_column`] hands it out.
+#[derive(Clone, Copy, Debug)]
+pub enum Column<'a> {
+    /// `(j, F_ji)`, sorted by `j`.
+    Entries(&'a [Entry]),
+    /// Row `i`, `(j, F_ij)` sorted by `j`, to be read as the column by reciprocity
+    /// (Szirmay-Kalos & Márton 1995, eq. 24): `F_ji = F_ij A_i / A_j`, computed in `f32` as
+    /// `(F_ij · A_i) / A_j` with the system's areas.
+    Reciprocal(&'a [Entry]),
+}
+
+impl<'a> Column<'a> {
+    /// The entries, whichever way they are to be read.
+    pub fn entries(&self) -> &'a [Entry] {
+        match *self {
+            Column::Entries(e) | Column::Reciprocal(e) => e,
+        }
     }
 }
 
