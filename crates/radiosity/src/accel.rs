@@ -16,17 +16,6 @@ use crate::geom::{Aabb, Ray, Vec3};
 use crate::mesh::Mesh;
 use glam::Vec4;
 use rayon::prelude::*;
-use std::cell::RefCell;
-
-thread_local! {
-    /// Each thread's traversal stack for [`Bvh::closest_hit`]: kept between rays, so that a
-    /// ray neither allocates nor zeroes a fixed array (the 1 KiB `memset` that was 4 % of a
-    /// solve's samples, though no faster without it), and a tree of any depth fits: the fixed
-    /// 128 entries held 42 levels.
-    static CLOSEST_STACK: RefCell<Vec<(u32, f32)>> = RefCell::new(Vec::with_capacity(128));
-    /// The same for [`Bvh::occluded`].
-    static OCCLUDED_STACK: RefCell<Vec<u32>> = RefCell::new(Vec::with_capacity(128));
-}
 
 /// Most triangles in a leaf.
 pub const MAX_LEAF: usize = 4;
@@ -347,19 +336,13 @@ impl Bvh {
         if self.tris.is_empty() {
             return None;
         }
-        CLOSEST_STACK.with_borrow_mut(|stack| self.closest_hit_with(ray, t_max, stack))
-    }
-
-    /// [`Bvh::closest_hit`] with the traversal stack given: emptied first, grown as deep as
-    /// the tree needs and kept, so a ray neither clears a fixed array nor allocates.
-    #[inline]
-    fn closest_hit_with(&self, ray: &Ray, t_max: f32, stack: &mut Vec<(u32, f32)>) -> Option<Hit> {
-        stack.clear();
         let r = Ray4::new(ray);
         let mut best_t = t_max;
         let tie_abs = self.tie;
         let mut best = u32::MAX; // triangle id of the closest hit
         let (mut bu, mut bv, mut bdet) = (0.0f32, 0.0f32, 0.0f32);
+        let mut stack: [(u32, f32); 128] = [(0, 0.0); 128];
+        let mut sp = 0usize;
         let mut cur = 0u32;
         'outer: loop {
             if cur & LEAF != 0 {
@@ -413,14 +396,19 @@ impl Bvh {
                         k += 1;
                     }
                     if k > 0 {
-                        stack.extend(hits[1..k].iter().rev());
+                        for h in hits[1..k].iter().rev() {
+                            stack[sp] = *h;
+                            sp += 1;
+                        }
                         cur = hits[0].0;
                         continue 'outer;
                     }
                 }
             }
             // Pop the next node still worth visiting.
-            while let Some((c, dist)) = stack.pop() {
+            while sp > 0 {
+                sp -= 1;
+                let (c, dist) = stack[sp];
                 if dist <= best_t * (1.0 + TIE) + tie_abs {
                     cur = c;
                     continue 'outer;
@@ -448,14 +436,9 @@ impl Bvh {
         if self.tris.is_empty() {
             return false;
         }
-        OCCLUDED_STACK.with_borrow_mut(|stack| self.occluded_with(ray, t_max, stack))
-    }
-
-    /// [`Bvh::occluded`] with the traversal stack given, as [`Bvh::closest_hit_with`].
-    #[inline]
-    fn occluded_with(&self, ray: &Ray, t_max: f32, stack: &mut Vec<u32>) -> bool {
-        stack.clear();
         let r = Ray4::new(ray);
+        let mut stack: [u32; 128] = [0; 128];
+        let mut sp = 0usize;
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
@@ -472,14 +455,16 @@ impl Bvh {
                     mask &= mask - 1;
                     let c = n.child[lane];
                     if c != EMPTY_LANE {
-                        stack.push(c);
+                        stack[sp] = c;
+                        sp += 1;
                     }
                 }
             }
-            match stack.pop() {
-                Some(c) => cur = c,
-                None => return false,
+            if sp == 0 {
+                return false;
             }
+            sp -= 1;
+            cur = stack[sp];
         }
     }
 
