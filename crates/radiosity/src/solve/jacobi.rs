@@ -63,7 +63,7 @@ impl SolverState for Jacobi<'_> {
         let den = Rgb::splat(1.0) - rho * f_ii;
         let new = Rgb::new(num.r / den.r, num.g / den.g, num.b / den.b);
         let delta = new - self.core.x[i];
-        let share = self.core.energy[i] / self.core.emitted_total();
+        let share = self.core.energy(i) / self.core.emitted_total();
         let column = source.column(i, share);
         self.core.add(i, delta, column);
         self.core.iterations += 1;

@@ -50,8 +50,6 @@ pub struct Relaxation<'s> {
     pub x: Vec<Rgb>,
     /// The residuals r = E + ρ F x − x.
     pub r: Vec<Rgb>,
-    /// |r_i| A_i summed over channels: each patch's unshot energy.
-    pub energy: Vec<f64>,
     /// Σ r_i A_i (signed), per channel.
     pub signed_unshot: Rgb,
     abs_unshot: f64,
@@ -120,7 +118,6 @@ struct Span<'a> {
     first: usize,
     column: &'a [Entry],
     r: &'a mut [Rgb],
-    energy: &'a mut [f64],
     leaves: Option<Leaves<'a>>,
 }
 
@@ -150,7 +147,6 @@ fn update(
         }
         let k = column.partition_point(|e| (e.0 as usize) < at);
         let (r0, r1) = span.r.split_at_mut(at - first);
-        let (e0, e1) = span.energy.split_at_mut(at - first);
         let (l0, l1) = match span.leaves {
             Some(l) => {
                 let (a, b) = l.split_at(at);
@@ -162,14 +158,12 @@ fn update(
             first,
             column: &column[..k],
             r: r0,
-            energy: e0,
             leaves: l0,
         };
         let right = Span {
             first: at,
             column: &column[k..],
             r: r1,
-            energy: e1,
             leaves: l1,
         };
         let (a, b) = rayon::join(
@@ -178,12 +172,7 @@ fn update(
         );
         return a + b;
     }
-    let Span {
-        r,
-        energy,
-        mut leaves,
-        ..
-    } = span;
+    let Span { r, mut leaves, .. } = span;
     let mut sums = Sums::default();
     for &(j, f) in column {
         let j = j as usize;
@@ -196,9 +185,8 @@ fn update(
         let rj = r[k] + rho * delta * f;
         sums.signed += (rj - r[k]) * a;
         let e = abs_sum(rj) * a;
-        sums.abs += e - energy[k];
+        sums.abs += e - abs_sum(r[k]) * a;
         r[k] = rj;
-        energy[k] = e;
         if let Some(l) = &mut leaves {
             l.set(j, if residual { e / a } else { e });
         }
@@ -216,12 +204,11 @@ impl<'s> Relaxation<'s> {
         let n = system.len();
         let emitted = system.emitted_power();
         let r = system.emission.to_vec();
-        let energy: Vec<f64> = (0..n).map(|i| abs_sum(r[i]) * system.area[i]).collect();
+        let energy = (0..n).map(|i| abs_sum(r[i]) * system.area[i]);
         Self {
             x: vec![Rgb::BLACK; n],
             signed_unshot: emitted,
-            abs_unshot: energy.iter().sum(),
-            energy,
+            abs_unshot: energy.sum(),
             r,
             emitted,
             emitted_total: emitted.sum(),
@@ -257,10 +244,11 @@ impl<'s> Relaxation<'s> {
     }
 
     fn rebuild_selection(&mut self) {
-        let (sys, r, energy) = (self.system, &self.r, &self.energy);
+        let (sys, r) = (self.system, &self.r);
+        let energy: Vec<f64> = (0..r.len()).map(|i| abs_sum(r[i]) * sys.area[i]).collect();
         match &mut self.select {
             Select::None => {}
-            Select::Energy(t) => *t = MaxTree::new(energy),
+            Select::Energy(t) => *t = MaxTree::new(&energy),
             Select::Residual(t) => {
                 let keys: Vec<f64> = (0..r.len()).map(|i| energy[i] / sys.area[i]).collect();
                 *t = MaxTree::new(&keys);
@@ -288,14 +276,18 @@ impl<'s> Relaxation<'s> {
         }
     }
 
+    /// Patch i's unshot energy `|r_i|₁ A_i`, derived from its residual whenever needed (one
+    /// array fewer to keep and to miss in the cache).
+    #[inline]
+    pub fn energy(&self, i: usize) -> f64 {
+        abs_sum(self.r[i]) * self.system.area[i]
+    }
+
     /// Recompute the sums from the residuals (against rounding drift).
     pub fn resum(&mut self) {
         let a = &self.system.area;
-        for i in 0..self.r.len() {
-            self.energy[i] = abs_sum(self.r[i]) * a[i];
-        }
         self.rebuild_selection();
-        self.abs_unshot = self.energy.iter().sum();
+        self.abs_unshot = (0..self.r.len()).map(|i| self.energy(i)).sum();
         self.signed_unshot = self.r.iter().zip(a).map(|(r, a)| *r * *a).sum();
         self.updates = 0;
     }
@@ -303,10 +295,9 @@ impl<'s> Relaxation<'s> {
     fn set_r(&mut self, j: usize, v: Rgb) {
         let a = self.system.area[j];
         self.signed_unshot += (v - self.r[j]) * a;
-        self.r[j] = v;
         let e = abs_sum(v) * a;
-        self.abs_unshot += e - self.energy[j];
-        self.energy[j] = e;
+        self.abs_unshot += e - abs_sum(self.r[j]) * a;
+        self.r[j] = v;
         match &mut self.select {
             Select::None => {}
             Select::Energy(t) => t.set(j, e),
@@ -350,9 +341,8 @@ impl<'s> Relaxation<'s> {
                     let a = sys.area[j];
                     sums.signed += (rj - self.r[j]) * a;
                     let e = abs_sum(rj) * a;
-                    sums.abs += e - self.energy[j];
+                    sums.abs += e - abs_sum(self.r[j]) * a;
                     self.r[j] = rj;
-                    self.energy[j] = e;
                     tree.set(j, rj, a);
                 }
                 sums
@@ -368,7 +358,6 @@ impl<'s> Relaxation<'s> {
                             first: 0,
                             column,
                             r: &mut self.r,
-                            energy: &mut self.energy,
                             leaves: Some(t.leaves()),
                         };
                         (update(sys, delta, residual, reciprocal, span), Some(t))
@@ -378,7 +367,6 @@ impl<'s> Relaxation<'s> {
                             first: 0,
                             column,
                             r: &mut self.r,
-                            energy: &mut self.energy,
                             leaves: None,
                         };
                         (update(sys, delta, residual, reciprocal, span), None)
@@ -417,7 +405,7 @@ impl<'s> Relaxation<'s> {
             self.iterations += 1;
             return false;
         }
-        let share = self.energy[i] / self.emitted_total;
+        let share = self.energy(i) / self.emitted_total;
         let column = source.shot_column(i, share);
         let m = match column {
             Column::Entries(c) => self.diagonal(i, c),
