@@ -61,6 +61,9 @@ pub struct Relaxation<'s> {
     pub iterations: u64,
     updates: u64,
     select: Select,
+    /// Each patch's reflectance and area side by side: a receiver's update reads both, and
+    /// from one array that is one cache miss instead of two.
+    receivers: Vec<(Rgb, f64)>,
 }
 
 /// Which patch a method shoots next.
@@ -125,12 +128,12 @@ struct Span<'a> {
 const SPAN: usize = 512;
 
 /// Update the receivers of `span` for a shot of `delta`: `r_j += ρ_j δ F_ji` and everything
-/// that follows from it. Spans longer than [`SPAN`] are halved at a block boundary near their
+/// that follows from it, with `receivers[j]` = `(ρ_j, A_j)`. Spans longer than [`SPAN`] are halved at a block boundary near their
 /// middle receiver and the halves updated by `rayon::join`, so that the receivers' cache misses
 /// (arrays of 10⁶ patches do not fit in any cache) are shared by the threads; the sums of the
 /// halves are added left to right, so the result depends on the column only.
 fn update(
-    sys: &System,
+    receivers: &[(Rgb, f64)],
     delta: Rgb,
     residual: bool,
     reciprocal: Option<f32>,
@@ -167,8 +170,8 @@ fn update(
             leaves: l1,
         };
         let (a, b) = rayon::join(
-            || update(sys, delta, residual, reciprocal, left),
-            || update(sys, delta, residual, reciprocal, right),
+            || update(receivers, delta, residual, reciprocal, left),
+            || update(receivers, delta, residual, reciprocal, right),
         );
         return a + b;
     }
@@ -177,7 +180,7 @@ fn update(
     for &(j, f) in column {
         let j = j as usize;
         let k = j - first;
-        let (a, rho) = (sys.area[j], sys.reflectance[j]);
+        let (rho, a) = receivers[j];
         let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
         let power = delta * (f * a);
         sums.arrived += power;
@@ -217,6 +220,12 @@ impl<'s> Relaxation<'s> {
             iterations: 0,
             updates: 0,
             select: Select::None,
+            receivers: system
+                .reflectance
+                .iter()
+                .zip(&system.area)
+                .map(|(&rho, &a)| (rho, a))
+                .collect(),
             system,
         }
     }
@@ -360,7 +369,10 @@ impl<'s> Relaxation<'s> {
                             r: &mut self.r,
                             leaves: Some(t.leaves()),
                         };
-                        (update(sys, delta, residual, reciprocal, span), Some(t))
+                        (
+                            update(&self.receivers, delta, residual, reciprocal, span),
+                            Some(t),
+                        )
                     }
                     None => {
                         let span = Span {
@@ -369,7 +381,10 @@ impl<'s> Relaxation<'s> {
                             r: &mut self.r,
                             leaves: None,
                         };
-                        (update(sys, delta, residual, reciprocal, span), None)
+                        (
+                            update(&self.receivers, delta, residual, reciprocal, span),
+                            None,
+                        )
                     }
                 };
                 if let Some(t) = tree {
