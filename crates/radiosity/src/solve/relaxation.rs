@@ -356,43 +356,27 @@ impl<'s> Relaxation<'s> {
                 }
                 sums
             }
-            select => {
-                let tree = match select {
-                    Select::Energy(t) | Select::Residual(t) => Some(t),
-                    _ => None,
+            Select::Energy(t) | Select::Residual(t) => {
+                let span = Span {
+                    first: 0,
+                    column,
+                    r: &mut self.r,
+                    leaves: Some(t.leaves()),
                 };
-                let (sums, tree) = match tree {
-                    Some(t) => {
-                        let span = Span {
-                            first: 0,
-                            column,
-                            r: &mut self.r,
-                            leaves: Some(t.leaves()),
-                        };
-                        (
-                            update(&self.receivers, delta, residual, reciprocal, span),
-                            Some(t),
-                        )
-                    }
-                    None => {
-                        let span = Span {
-                            first: 0,
-                            column,
-                            r: &mut self.r,
-                            leaves: None,
-                        };
-                        (
-                            update(&self.receivers, delta, residual, reciprocal, span),
-                            None,
-                        )
-                    }
-                };
-                if let Some(t) = tree {
-                    for &(j, _) in column {
-                        t.settle(MaxTree::block_of(j as usize));
-                    }
+                let sums = update(&self.receivers, delta, residual, reciprocal, span);
+                for &(j, _) in column {
+                    t.settle(MaxTree::block_of(j as usize));
                 }
                 sums
+            }
+            Select::None => {
+                let span = Span {
+                    first: 0,
+                    column,
+                    r: &mut self.r,
+                    leaves: None,
+                };
+                update(&self.receivers, delta, residual, reciprocal, span)
             }
         };
         self.signed_unshot += sums.signed;

@@ -38,17 +38,12 @@ impl MaxTree {
             dirty: vec![false; blocks],
         };
         for b in 0..blocks {
-            tree.node[size + b] = tree.block_max(b);
+            tree.node[size + b] = block_max(&tree.keys[b * BLOCK..], b * BLOCK);
         }
         for p in (1..size).rev() {
             tree.node[p] = Self::better(tree.node[2 * p], tree.node[2 * p + 1]);
         }
         tree
-    }
-
-    /// The largest key of block `b` and its index, the lowest on ties.
-    fn block_max(&self, b: usize) -> (f64, u32) {
-        block_max(&self.keys[b * BLOCK..], b * BLOCK)
     }
 
     /// The larger of two entries; `a` (the left, lower indices) on ties.
@@ -60,49 +55,10 @@ impl MaxTree {
         }
     }
 
-    /// Set key `i`.
+    /// Set key `i`: its block's node, then the nodes above it while they change.
     pub fn set(&mut self, i: usize, key: f64) {
-        let old = self.keys[i];
-        if old == key {
-            return;
-        }
-        self.keys[i] = key;
-        let mut p = self.size + i / BLOCK;
-        let me = (key, i as u32);
-        let cur = self.node[p];
-        if key > old {
-            // A key that grows only climbs while it beats the maximum above it (a node holds
-            // the larger of its children, the lower index on ties): one read a level, and most
-            // receivers of a shot stop at their block.
-            if cur.1 != me.1 && (cur.0 > key || (cur.0 == key && cur.1 < me.1)) {
-                return;
-            }
-            self.node[p] = me;
-            p /= 2;
-            while p >= 1 {
-                let cur = self.node[p];
-                if cur.0 > key || (cur.0 == key && cur.1 < me.1) {
-                    break;
-                }
-                self.node[p] = me;
-                p /= 2;
-            }
-            return;
-        }
-        // A key that falls matters only if it was its block's maximum.
-        if cur.1 != me.1 {
-            return;
-        }
-        self.node[p] = self.block_max(i / BLOCK);
-        p /= 2;
-        while p >= 1 {
-            let b = Self::better(self.node[2 * p], self.node[2 * p + 1]);
-            if self.node[p] == b {
-                break;
-            }
-            self.node[p] = b;
-            p /= 2;
-        }
+        self.leaves().set(i, key);
+        self.settle(i / BLOCK);
     }
 
     /// The keys and the blocks' nodes, to set keys of disjoint ranges from several threads
