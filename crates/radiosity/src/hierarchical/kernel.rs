@@ -84,6 +84,11 @@ pub struct Estimate {
     /// The largest point value with every ray counted as arriving: the kernel's bound when
     /// visibility is uncertain.
     pub unoccluded: f32,
+    /// From an element: the share of `k` that comes from each of the source's four children
+    /// (in child order, summing to 1): where on the source the receiver's view falls, so that
+    /// the link can gather from the source's parts rather than from their mean. Even shares
+    /// from a cluster.
+    pub sources: [f32; 4],
 }
 
 /// What link estimation reads.
@@ -160,6 +165,43 @@ fn hit_polygon(x: Vec3, d: Vec3, s: &Element) -> Option<Vec3> {
                 >= 0.0
         })
         .then_some(y)
+}
+
+/// The four children of a source element, as polygons, for the share of a point's factor
+/// that each receives ([`Estimate::sources`]).
+struct Parts {
+    corners: [[Vec3; 4]; 4],
+    n: usize,
+}
+
+impl Parts {
+    fn of(e: &Element) -> Self {
+        Self {
+            corners: e.child_corners(),
+            n: if e.tri { 3 } else { 4 },
+        }
+    }
+
+    /// The exact unoccluded factor from `x` (normal `n`) to each child.
+    fn factors(&self, x: Vec3, n: Vec3, ns: Vec3) -> [f64; 4] {
+        std::array::from_fn(|q| point_polygon(x, n, &self.corners[q][..self.n], ns))
+    }
+
+    /// The differential kernel from `x` (normal `n`) to each child's centre, times its area:
+    /// the children's shares from a distant receiver, up to a common factor.
+    fn far(&self, x: Vec3, n: Vec3, ns: Vec3) -> [f64; 4] {
+        std::array::from_fn(|q| {
+            let c = Element::new(self.corners[q], self.n == 3, 0, 0, 0);
+            let d = c.centre - x;
+            let d2 = d.length_squared() as f64;
+            let w = (n.dot(d) as f64).max(0.0) * (-ns.dot(d) as f64).max(0.0) / (d2 * d2);
+            if w.is_finite() {
+                w * c.area as f64
+            } else {
+                0.0
+            }
+        })
+    }
 }
 
 /// The child of an element that holds its receiver point `p` ([`Element::receiver_points`]).
@@ -253,8 +295,9 @@ impl Context<'_> {
     /// cluster index tagged with [`CLUSTER`]).
     /// `round` keys the random stream: the estimate that decides a link and the one it keeps
     /// are independent, so that keeping a link because its points happened to agree (all in
-    /// shadow, say) does not bias its coefficient.
-    pub fn estimate(&self, r: u32, source: u32, round: u64) -> Estimate {
+    /// shadow, say) does not bias its coefficient. `shares`: also find the source children's
+    /// shares ([`Estimate::sources`]; even shares otherwise), which only a kept link needs.
+    pub fn estimate(&self, r: u32, source: u32, round: u64, shares: bool) -> Estimate {
         let re = &self.elements[r as usize];
         let mut rng = stream(self.seed, r as u64, source as u64, 0x4c49_4e4b_0000 + round);
         let mut out = Estimate {
@@ -263,18 +306,41 @@ impl Context<'_> {
         };
         let m = self.rays.max(1);
         let mut sum = 0.0f64;
+        let mut sources = [0.0f64; 4];
+        // The source's four children, for the shares of `k` that each sends: in the near
+        // field the exact factor to each from one point in each quarter of the receiver
+        // (four exact factors per point cost as much as the rest of the estimate, and the
+        // shares vary slowly over the receiver); in the far field (centres more
+        // than twice the radii apart) the kernel from the receiver's centre to each child's,
+        // which varies little over the receiver there.
+        let mut parts = None;
+        if shares && source & CLUSTER == 0 {
+            let s = &self.elements[source as usize];
+            let p = Parts::of(s);
+            if (s.centre - re.centre).length() > 2.0 * (s.radius + re.radius) {
+                sources = p.far(re.centre, re.normal, s.normal);
+            } else {
+                parts = Some(p);
+            }
+        }
         let jitter: [f32; 2 * POINTS] = std::array::from_fn(|_| uniform(&mut rng));
         for (p, x) in re.receiver_points(&jitter).into_iter().enumerate() {
             let mut vis = [0u32; 2];
             let (f, bound) = if source & CLUSTER == 0 {
-                self.element_factor(
-                    x,
-                    re.normal,
-                    &self.elements[source as usize],
-                    m,
-                    &mut rng,
-                    &mut vis,
-                )
+                let s = &self.elements[source as usize];
+                let (f, bound) = self.element_factor(x, re.normal, s, m, &mut rng, &mut vis);
+                if let (Some(parts), true) = (&parts, f > 0.0 && matches!(p, 0 | 6 | 9 | 15)) {
+                    // The point's factor shared among the source's children by their exact
+                    // unoccluded factors (visibility taken as the point's, over all of them).
+                    let each = parts.factors(x, re.normal, s.normal);
+                    let total: f64 = each.iter().sum();
+                    if total > 0.0 {
+                        for (acc, fq) in sources.iter_mut().zip(each) {
+                            *acc += f * fq / total;
+                        }
+                    }
+                }
+                (f, bound)
             } else {
                 self.cluster_factor(x, re.normal, source & !CLUSTER, m, &mut rng, &mut vis)
             };
@@ -287,6 +353,12 @@ impl Context<'_> {
             out.lo = out.lo.min(f as f32);
         }
         out.k = (sum / POINTS as f64) as f32;
+        let total: f64 = sources.iter().sum();
+        out.sources = if total > 0.0 {
+            sources.map(|v| (v / total) as f32)
+        } else {
+            [0.25; 4]
+        };
         out
     }
 
