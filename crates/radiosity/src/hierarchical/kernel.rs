@@ -111,19 +111,21 @@ pub struct Context<'a> {
     pub twin_of: &'a [u32],
 }
 
-/// The fraction of element `e` (id `id`) that is exposed: at four jittered points (one in
-/// each quarter), two rays
+/// The fraction of element `e` (id `id`) that is exposed: at its sixteen jittered receiver
+/// points ([`Element::receiver_points`]), two rays
 /// (along the normal and one cosine-distributed) are cast, and a point is *covered* when both
 /// first meet the back of a surface (it lies inside a closed solid, such as the floor under a
 /// box standing on it). A covered point can neither receive nor send light, so the mean
-/// radiosity a source shows is taken over its exposed part.
+/// radiosity a source shows is taken over its exposed part, and a leaf's reflected light is
+/// divided by it (its covered points gathered nothing): sixteen points, not four, because a
+/// leaf across a box's edge sends in inverse proportion to this fraction.
 pub fn exposure(e: &Element, id: u32, bvh: &Bvh, seed: u64) -> f32 {
     let mut rng = stream(seed, id as u64, 0, 0x4558_504f);
     let jitter: [f32; 2 * POINTS] = std::array::from_fn(|_| uniform(&mut rng));
     let off = bvh.ray_offset();
     let (t, b) = crate::geom::orthonormal_basis(e.normal);
     let mut exposed = 0;
-    for x in e.receiver_points(&jitter).into_iter().step_by(4) {
+    for x in e.receiver_points(&jitter) {
         let d = crate::sampling::cosine_direction_in(
             e.normal,
             t,
@@ -141,8 +143,13 @@ pub fn exposure(e: &Element, id: u32, bvh: &Bvh, seed: u64) -> f32 {
             exposed += 1;
         }
     }
-    exposed as f32 / 4.0
+    exposed as f32 / POINTS as f32
 }
+
+/// One receiver point in each quarter of an element ([`Element::receiver_points`]; the
+/// quarters of [`quarter`]): for quads, on the 4 × 4 grid (i, j) = (0, 0), (2, 1), (1, 2),
+/// (3, 3); for triangles, the first point of each child's four.
+const ONE_PER_QUARTER: [usize; 4] = [0, 6, 9, 15];
 
 /// Where the ray from `x` along `d` meets the front of element `s`, if it does.
 fn hit_polygon(x: Vec3, d: Vec3, s: &Element) -> Option<Vec3> {
@@ -230,7 +237,7 @@ pub fn open_in_front(e: &Element, id: u32, bvh: &Bvh, coincident: &[u32], seed: 
     let points = e.receiver_points(&jitter);
     let group = coincident[piece as usize];
     let mut seen = 0;
-    for x in points.into_iter().step_by(4) {
+    for x in ONE_PER_QUARTER.map(|p| points[p]) {
         let mut from = x - e.normal * (2.0 * off);
         let mut reach = 8.0 * off;
         let mut covered = false;
@@ -329,7 +336,7 @@ impl Context<'_> {
             let (f, bound) = if source & CLUSTER == 0 {
                 let s = &self.elements[source as usize];
                 let (f, bound) = self.element_factor(x, re.normal, s, m, &mut rng, &mut vis);
-                if let (Some(parts), true) = (&parts, f > 0.0 && matches!(p, 0 | 6 | 9 | 15)) {
+                if let (Some(parts), true) = (&parts, f > 0.0 && ONE_PER_QUARTER.contains(&p)) {
                     // The point's factor shared among the source's children by their exact
                     // unoccluded factors (visibility taken as the point's, over all of them).
                     let each = parts.factors(x, re.normal, s.normal);
