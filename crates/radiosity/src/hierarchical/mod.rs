@@ -66,7 +66,11 @@
 //! their base, came out 0.3–0.7 % darker at `link_error` 1e-5). Part of an
 //! element may also lie under a surface flush against it (a panel on a wall): rays from four
 //! jittered points of each element find the fraction open in front ([`kernel::open_in_front`]),
-//! and what arrives at a leaf is scaled by it.
+//! and what arrives at a leaf is scaled by it, except where the cover is a solid's face lying
+//! flush (a cabinet's bottom on the floor): the points under it are inside the solid and
+//! gathered nothing already, so the light is scaled by `min(exposed, open) / exposed`
+//! (`a_flush_bottom_face_covers_nothing_twice`; on the hospital, where cabinets have bottoms,
+//! the floor of one room went from −4.6 % to −2.8 % against the path-traced reference).
 //!
 //! **Coincident twins.** A scene that includes an object twice has every polygon of it twice,
 //! in the same place ([`Element::twins`]; half the pieces of RenderPark's hospital). Twins are
@@ -767,7 +771,19 @@ impl State<'_> {
                     continue;
                 }
                 let g = &gathered[e];
-                let here = (down[e] + (g[0] + g[1] + g[2] + g[3]) * 0.25) * self.open[e] as f64;
+                // The mean over the element's points of what they gathered: zero at points
+                // inside a closed solid (covered), the full light at points under a surface
+                // flush in front that still see the room. Arriving: over the part both exposed
+                // and open, taken as min(exposure, open) (a solid's bottom face flush on the
+                // floor covers the same points twice); what the exposed part reflects: the
+                // gathered mean over the exposed fraction.
+                let gathered_mean = down[e] + (g[0] + g[1] + g[2] + g[3]) * 0.25;
+                let (x, o) = (self.h.exposure[e] as f64, self.open[e] as f64);
+                let (here, lit) = if x > 0.0 {
+                    (gathered_mean * (o.min(x) / x), gathered_mean / x)
+                } else {
+                    (gathered_mean * o, gathered_mean * o)
+                };
                 self.h.incident[e] = here;
                 let b = if el.is_leaf() {
                     let root = el.root as usize;
@@ -778,8 +794,6 @@ impl State<'_> {
                     let m = mean(b) as f32;
                     lo[e] = m;
                     hi[e] = m;
-                    let x = self.h.exposure[e] as f64;
-                    let lit = if x > 0.0 { here / x } else { here };
                     self.h.sent[e] = self.group_emission[root] + self.reflectance[root] * lit;
                     arrived[e] = here;
                     arrived_sent[e] = lit;
@@ -1493,6 +1507,111 @@ mod tests {
             "{:?}",
             &h.exposure[..7]
         );
+    }
+
+    /// A closed box standing on a floor, with and without a bottom face lying flush on the
+    /// floor: the bottom covers only floor that the box's solid already covers, so the floor
+    /// must come out the same. Counting the flush bottom's cover (light scaled by the open
+    /// fraction) on top of the points inside the solid that gather nothing darkened the leaves
+    /// across the box's edge twice. The floor's mean radiosity agrees within 1 % (measured:
+    /// −0.5 %; counting the cover twice, −2.4 %).
+    #[test]
+    fn a_flush_bottom_face_covers_nothing_twice() {
+        let floor_mean = |bottom: bool| {
+            let grey = Material::diffuse("grey", Rgb::splat(0.5));
+            let lamp = Material::emitter("lamp", Rgb::splat(0.0), Rgb::splat(1.0));
+            let mut polygons = vec![
+                quad([[0., 0., 0.], [0., 0., 1.], [1., 0., 1.], [1., 0., 0.]], 0),
+                quad(
+                    [
+                        [0.3, 0.4, 0.3],
+                        [0.3, 0.4, 0.7],
+                        [0.7, 0.4, 0.7],
+                        [0.7, 0.4, 0.3],
+                    ],
+                    0,
+                ),
+                quad(
+                    [
+                        [0.3, 0., 0.3],
+                        [0.3, 0., 0.7],
+                        [0.3, 0.4, 0.7],
+                        [0.3, 0.4, 0.3],
+                    ],
+                    0,
+                ),
+                quad(
+                    [
+                        [0.7, 0., 0.3],
+                        [0.7, 0.4, 0.3],
+                        [0.7, 0.4, 0.7],
+                        [0.7, 0., 0.7],
+                    ],
+                    0,
+                ),
+                quad(
+                    [
+                        [0.3, 0., 0.3],
+                        [0.3, 0.4, 0.3],
+                        [0.7, 0.4, 0.3],
+                        [0.7, 0., 0.3],
+                    ],
+                    0,
+                ),
+                quad(
+                    [
+                        [0.3, 0., 0.7],
+                        [0.7, 0., 0.7],
+                        [0.7, 0.4, 0.7],
+                        [0.3, 0.4, 0.7],
+                    ],
+                    0,
+                ),
+                quad(
+                    [
+                        [0.2, 2., 0.2],
+                        [0.8, 2., 0.2],
+                        [0.8, 2., 0.8],
+                        [0.2, 2., 0.8],
+                    ],
+                    1,
+                ),
+            ];
+            if bottom {
+                polygons.push(quad(
+                    [
+                        [0.3, 0., 0.3],
+                        [0.7, 0., 0.3],
+                        [0.7, 0., 0.7],
+                        [0.3, 0., 0.7],
+                    ],
+                    0,
+                ));
+            }
+            let scene = Scene {
+                name: "box on a floor".into(),
+                materials: vec![grey, lamp],
+                polygons,
+                ..Scene::default()
+            };
+            let s = solve(
+                &scene,
+                Params {
+                    link_error: 1e-4,
+                    ..Default::default()
+                },
+            );
+            let (mut b, mut a) = (0.0, 0.0);
+            for (k, p) in s.mesh.patches.iter().enumerate() {
+                if p.surface == 0 {
+                    b += s.radiosity[k].g * s.system.area[k];
+                    a += s.system.area[k];
+                }
+            }
+            b / a
+        };
+        let (without, with) = (floor_mean(false), floor_mean(true));
+        assert!((with / without - 1.0).abs() < 0.01, "{with} vs {without}");
     }
 
     /// A square lamp over a floor with a square occluder between them: the leaves crowd along
