@@ -111,20 +111,38 @@ pub struct Context<'a> {
     pub twin_of: &'a [u32],
 }
 
-/// The fraction of element `e` (id `id`) that is exposed: at its sixteen jittered receiver
-/// points ([`Element::receiver_points`]), two rays
-/// (along the normal and one cosine-distributed) are cast, and a point is *covered* when both
-/// first meet the back of a surface (it lies inside a closed solid, such as the floor under a
-/// box standing on it). A covered point can neither receive nor send light, so the mean
-/// radiosity a source shows is taken over its exposed part, and a leaf's reflected light is
-/// divided by it (its covered points gathered nothing): sixteen points, not four, because a
-/// leaf across a box's edge sends in inverse proportion to this fraction.
-pub fn exposure(e: &Element, id: u32, bvh: &Bvh, seed: u64) -> f32 {
+/// How much of an element light can reach ([`cover`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cover {
+    /// The fraction not inside a closed solid (the floor under a box standing on it): a
+    /// covered point can neither receive nor send light, so the mean radiosity a source shows
+    /// is taken over its exposed part, and a leaf's reflected light is what it gathered
+    /// divided by this fraction (its covered points gathered nothing).
+    pub exposed: f32,
+    /// The fraction both exposed and open in front: not under another polygon lying flush
+    /// against the surface (a panel on a wall, a cabinet's bottom on the floor), where
+    /// gathering from points lifted off the surface would see through the cover. What arrives
+    /// at the element is what it gathered × `free / exposed`.
+    pub free: f32,
+}
+
+/// The cover of element `e` (id `id`) at its sixteen jittered receiver points
+/// ([`Element::receiver_points`]). A point is *inside a solid* when two rays (along the
+/// normal and one cosine-distributed) both first meet the back of a surface, and *under a
+/// flush polygon* when a ray from just behind it through the surface meets another polygon
+/// within a few ray offsets, front or back. The piece's own coincident twins (`coincident`,
+/// as [`super::element::Element::twins`] groups them) do not cover it: they are the same
+/// surface, and the ray goes on past them. Both tests at the same points, so that a solid's
+/// face lying flush (inside the solid and under the face at once) is not counted twice; and
+/// sixteen points rather than four, because a leaf across a box's edge sends in inverse
+/// proportion to its exposed fraction.
+pub fn cover(e: &Element, id: u32, bvh: &Bvh, coincident: &[u32], seed: u64) -> Cover {
     let mut rng = stream(seed, id as u64, 0, 0x4558_504f);
     let jitter: [f32; 2 * POINTS] = std::array::from_fn(|_| uniform(&mut rng));
     let off = bvh.ray_offset();
     let (t, b) = crate::geom::orthonormal_basis(e.normal);
-    let mut exposed = 0;
+    let group = coincident[e.root as usize];
+    let (mut exposed, mut free) = (0, 0);
     for x in e.receiver_points(&jitter) {
         let d = crate::sampling::cosine_direction_in(
             e.normal,
@@ -133,23 +151,49 @@ pub fn exposure(e: &Element, id: u32, bvh: &Bvh, seed: u64) -> f32 {
             uniform(&mut rng),
             uniform(&mut rng),
         );
-        let covered = [e.normal, d].iter().all(|&dir| {
+        let inside = [e.normal, d].iter().all(|&dir| {
             matches!(
                 bvh.closest_hit(&Ray::new(x + e.normal * off, dir), f32::INFINITY),
                 Some(h) if !h.front
             )
         });
-        if !covered {
-            exposed += 1;
+        if inside {
+            continue;
+        }
+        exposed += 1;
+        if !under_flush(x, e.normal, bvh, coincident, group) {
+            free += 1;
         }
     }
-    exposed as f32 / POINTS as f32
+    Cover {
+        exposed: exposed as f32 / POINTS as f32,
+        free: free as f32 / POINTS as f32,
+    }
 }
 
-/// One receiver point in each quarter of an element ([`Element::receiver_points`]; the
-/// quarters of [`quarter`]): for quads, on the 4 × 4 grid (i, j) = (0, 0), (2, 1), (1, 2),
-/// (3, 3); for triangles, the first point of each child's four.
-const ONE_PER_QUARTER: [usize; 4] = [0, 6, 9, 15];
+/// Whether a polygon other than `group`'s coincident twins lies within a few ray offsets of
+/// `x` (normal `n`), in front or behind ([`cover`]).
+fn under_flush(x: Vec3, n: Vec3, bvh: &Bvh, coincident: &[u32], group: u32) -> bool {
+    let off = bvh.ray_offset();
+    let mut from = x - n * (2.0 * off);
+    let mut reach = 8.0 * off;
+    // Past the piece's twins (a few at most), to what lies beyond them.
+    for _ in 0..8 {
+        match bvh.closest_hit(&Ray::new(from, n), reach) {
+            Some(h) if coincident[h.patch as usize] == group => {
+                let step = h.t + 0.25 * off;
+                from += n * step;
+                reach -= step;
+                if reach <= 0.0 {
+                    return false;
+                }
+            }
+            Some(_) => return true,
+            None => return false,
+        }
+    }
+    false
+}
 
 /// Where the ray from `x` along `d` meets the front of element `s`, if it does.
 fn hit_polygon(x: Vec3, d: Vec3, s: &Element) -> Option<Vec3> {
@@ -211,6 +255,11 @@ impl Parts {
     }
 }
 
+/// One receiver point in each quarter of an element ([`Element::receiver_points`]; the
+/// quarters of [`quarter`]): for quads, on the 4 × 4 grid (i, j) = (0, 0), (2, 1), (1, 2),
+/// (3, 3); for triangles, the first point of each child's four.
+const ONE_PER_QUARTER: [usize; 4] = [0, 6, 9, 15];
+
 /// The child of an element that holds its receiver point `p` ([`Element::receiver_points`]).
 fn quarter(tri: bool, p: usize) -> usize {
     if tri {
@@ -220,50 +269,6 @@ fn quarter(tri: bool, p: usize) -> usize {
         let (i, j) = ((p % 4) / 2, (p / 4) / 2);
         [[0, 3], [1, 2]][i][j]
     }
-}
-
-/// The fraction of element `e` (id `id`) that is open in front: a ray from just behind each
-/// of four jittered points (one in each quarter) through the surface must not meet another
-/// polygon within a few ray offsets, front or back. Such a polygon lies flush against this
-/// one (a panel on a wall): gathering from points lifted off the surface would see through
-/// it, where no light arrives. The piece's own coincident twins (`coincident`, as
-/// [`super::element::Element::twins`] groups them) do not cover it: they are the same
-/// surface, and the ray goes on past them.
-pub fn open_in_front(e: &Element, id: u32, bvh: &Bvh, coincident: &[u32], seed: u64) -> f32 {
-    let mut rng = stream(seed, id as u64, 0, 0x4f50_454e);
-    let jitter: [f32; 2 * POINTS] = std::array::from_fn(|_| uniform(&mut rng));
-    let off = bvh.ray_offset();
-    let piece = e.root;
-    let points = e.receiver_points(&jitter);
-    let group = coincident[piece as usize];
-    let mut seen = 0;
-    for x in ONE_PER_QUARTER.map(|p| points[p]) {
-        let mut from = x - e.normal * (2.0 * off);
-        let mut reach = 8.0 * off;
-        let mut covered = false;
-        // Past the piece's twins (a few at most), to what lies beyond them.
-        for _ in 0..8 {
-            match bvh.closest_hit(&Ray::new(from, e.normal), reach) {
-                Some(h) if coincident[h.patch as usize] == group => {
-                    let step = h.t + 0.25 * off;
-                    from += e.normal * step;
-                    reach -= step;
-                    if reach <= 0.0 {
-                        break;
-                    }
-                }
-                Some(_) => {
-                    covered = true;
-                    break;
-                }
-                None => break,
-            }
-        }
-        if !covered {
-            seen += 1;
-        }
-    }
-    seen as f32 / 4.0
 }
 
 impl Context<'_> {
