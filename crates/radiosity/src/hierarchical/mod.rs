@@ -773,7 +773,9 @@ impl State<'_> {
                 let (here, lit) = if x > 0.0 {
                     (gathered_mean * (free / x), gathered_mean / x)
                 } else {
-                    (Rgb::BLACK, Rgb::BLACK)
+                    // No point found exposed, yet a sliver may be (an element across a box's
+                    // edge): what its points gathered is already the area mean.
+                    (gathered_mean, gathered_mean)
                 };
                 self.h.incident[e] = here;
                 let b = if el.is_leaf() {
