@@ -171,16 +171,21 @@ pub fn cover(e: &Element, id: u32, bvh: &Bvh, coincident: &[u32], seed: u64) -> 
     }
 }
 
-/// Whether a polygon other than `group`'s coincident twins lies within a few ray offsets of
-/// `x` (normal `n`), in front or behind ([`cover`]).
+/// Whether a polygon facing the same way as `x`'s surface (normal `n`), other than `group`'s
+/// coincident twins, lies within a few ray offsets of `x`, in front or behind ([`cover`]).
+/// Seen along `n`, such a polygon shows its back. One that shows its front faces the other
+/// way: it is the far side of a wall of no thickness (two one-sided polygons back to back,
+/// as MGF's two-sided surfaces become), which hides nothing in front of `x`, and the ray goes
+/// on past it. (A solid's face lying face down on `x`, a cabinet's bottom on the floor, is
+/// found by the inside-a-solid test before this one.)
 fn under_flush(x: Vec3, n: Vec3, bvh: &Bvh, coincident: &[u32], group: u32) -> bool {
     let off = bvh.ray_offset();
     let mut from = x - n * (2.0 * off);
     let mut reach = 8.0 * off;
-    // Past the piece's twins (a few at most), to what lies beyond them.
+    // Past the piece's twins and back-to-back partners (a few at most), to what lies beyond.
     for _ in 0..8 {
         match bvh.closest_hit(&Ray::new(from, n), reach) {
-            Some(h) if coincident[h.patch as usize] == group => {
+            Some(h) if h.front || coincident[h.patch as usize] == group => {
                 let step = h.t + 0.25 * off;
                 from += n * step;
                 reach -= step;
