@@ -216,8 +216,9 @@ pub fn write_links_csv(path: &Path, h: &crate::hierarchical::Hierarchy) -> Resul
 }
 
 /// A hierarchical solution's elements as CSV, one row each (roots first):
-/// `element,parent,level,surface,leaf,area,cx,cy,cz,radiosity_r,radiosity_g,radiosity_b`
-/// (parent empty for a root; surface: the input polygon; leaf 1 or 0).
+/// `element,parent,level,surface,leaf,area,cx,cy,cz,radiosity_r,radiosity_g,radiosity_b,exposed`
+/// (parent empty for a root; surface: the input polygon; leaf 1 or 0; exposed: the fraction
+/// of the element not inside a closed solid, [`crate::hierarchical::kernel::Cover`]).
 pub fn write_elements_csv(
     path: &Path,
     h: &crate::hierarchical::Hierarchy,
@@ -226,7 +227,7 @@ pub fn write_elements_csv(
     write_atomic(path, |out| {
         writeln!(
             out,
-            "element,parent,level,surface,leaf,area,cx,cy,cz,radiosity_r,radiosity_g,radiosity_b"
+            "element,parent,level,surface,leaf,area,cx,cy,cz,radiosity_r,radiosity_g,radiosity_b,exposed"
         )?;
         for (i, e) in h.elements.items.iter().enumerate() {
             let parent = if e.parent == crate::hierarchical::element::NONE {
@@ -237,7 +238,7 @@ pub fn write_elements_csv(
             let b = h.radiosity[i];
             writeln!(
                 out,
-                "{i},{parent},{},{},{},{},{},{},{},{},{},{}",
+                "{i},{parent},{},{},{},{},{},{},{},{},{},{},{}",
                 e.level,
                 roots[e.root as usize],
                 e.is_leaf() as u8,
@@ -247,7 +248,8 @@ pub fn write_elements_csv(
                 e.centre.z,
                 b.r,
                 b.g,
-                b.b
+                b.b,
+                h.exposure[i]
             )?;
         }
         Ok(())

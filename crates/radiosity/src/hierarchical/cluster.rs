@@ -40,6 +40,9 @@ pub struct Clusters {
     pub position: Vec<u32>,
     /// `cumulative[k]`: the area of `order[..k]` (length `order.len() + 1`).
     pub cumulative: Vec<f64>,
+    /// `emitting[k]`: the area of the emitters among `order[..k]` ([`Clusters::with_emitters`];
+    /// all zero until then).
+    pub emitting: Vec<f64>,
     /// The top node (a tagged cluster, or the one element when there is one).
     pub top: u32,
 }
@@ -68,7 +71,60 @@ impl Clusters {
                 Some(*s)
             }))
             .collect();
+        c.emitting = vec![0.0; c.cumulative.len()];
         c
+    }
+
+    /// Mark which roots emit (`emits[root]`), so that a cluster's surfaces can be drawn
+    /// from its emitters and from the rest separately ([`Clusters::pick_in`]).
+    pub fn with_emitters(mut self, roots: &[Element], emits: &[bool]) -> Clusters {
+        self.emitting = std::iter::once(0.0)
+            .chain(self.order.iter().scan(0.0, |s, &e| {
+                if emits[e as usize] {
+                    *s += roots[e as usize].area as f64;
+                }
+                Some(*s)
+            }))
+            .collect();
+        self
+    }
+
+    /// The area of cluster `c`'s emitters (`emitters`) or of its other surfaces.
+    pub fn area_in(&self, c: u32, emitters: bool) -> f64 {
+        let n = &self.nodes[c as usize];
+        let (lo, hi) = (n.first as usize, (n.first + n.count) as usize);
+        let e = self.emitting[hi] - self.emitting[lo];
+        if emitters {
+            e
+        } else {
+            (self.cumulative[hi] - self.cumulative[lo] - e).max(0.0)
+        }
+    }
+
+    /// The root element of cluster `c` under the area fraction `u` in `[0, 1)` of its
+    /// emitters (`emitters`) or of its other surfaces: drawn in proportion to their area.
+    pub fn pick_in(&self, c: u32, emitters: bool, u: f64) -> u32 {
+        let n = &self.nodes[c as usize];
+        let (lo, hi) = (n.first as usize, (n.first + n.count) as usize);
+        let at = |k: usize| {
+            if emitters {
+                self.emitting[k]
+            } else {
+                self.cumulative[k] - self.emitting[k]
+            }
+        };
+        let target = at(lo) + u * (at(hi) - at(lo));
+        // The last k in [lo, hi) with at(k) <= target < at(k + 1), by bisection.
+        let (mut a, mut b) = (lo, hi);
+        while b - a > 1 {
+            let mid = (a + b) / 2;
+            if at(mid) <= target {
+                a = mid;
+            } else {
+                b = mid;
+            }
+        }
+        self.order[a]
     }
 
     fn split(&mut self, roots: &[Element], ids: &mut [u32], first: usize) -> u32 {
@@ -178,6 +234,37 @@ mod tests {
             let share = hits[i] as f64 / m as f64;
             assert!((share - r.area as f64 / total).abs() < 1e-4, "{i}: {share}");
             assert!(c.contains(t, i as u32));
+        }
+        // The two strata: roots 1, 4 and 5 emit; each stratum picks its own roots alone, in
+        // proportion to their area, in every cluster.
+        let emits = [false, true, false, false, true, true, false];
+        let c = c.with_emitters(&roots, &emits);
+        for (k, n) in c.nodes.iter().enumerate() {
+            for stratum in [true, false] {
+                let members: Vec<u32> = c.order[n.first as usize..(n.first + n.count) as usize]
+                    .iter()
+                    .copied()
+                    .filter(|&e| emits[e as usize] == stratum)
+                    .collect();
+                let area: f64 = members.iter().map(|&e| roots[e as usize].area as f64).sum();
+                assert!((c.area_in(k as u32, stratum) - area).abs() < 1e-9 * total);
+                if members.is_empty() {
+                    continue;
+                }
+                let mut hits = [0usize; 7];
+                for j in 0..m {
+                    hits[c.pick_in(k as u32, stratum, (j as f64 + 0.5) / m as f64) as usize] += 1;
+                }
+                for (i, r) in roots.iter().enumerate() {
+                    let share = hits[i] as f64 / m as f64;
+                    let want = if members.contains(&(i as u32)) {
+                        r.area as f64 / area
+                    } else {
+                        0.0
+                    };
+                    assert!((share - want).abs() < 1e-4, "{k} {stratum} {i}: {share}");
+                }
+            }
         }
     }
 }

@@ -6,8 +6,10 @@
 //!   its end (so the fraction is the kernel's, not the area's), drawn on the part of the
 //!   source in front of the point.
 //! - From a cluster: a Monte Carlo estimate of the same point-to-area factor over the cluster's
-//!   surfaces, points drawn by area, each weighted by both cosines (a surface facing away sends
-//!   nothing) and its visibility.
+//!   surfaces, points drawn by area (from its emitters and from its other surfaces
+//!   separately), each weighted by both cosines (a surface facing away sends nothing) and its
+//!   visibility; the pieces the samples saw, and their parts of the factor, are what the
+//!   link gathers from.
 //!
 //! The coefficient `k` of the link is the mean over the receiver's points, and what the
 //! refinement oracle needs is kept beside it (the largest and smallest point value, whether
@@ -64,7 +66,7 @@ pub fn point_polygon(x: Vec3, n: Vec3, poly: &[Vec3], ns: Vec3) -> f64 {
 }
 
 /// A link's coefficient and the oracle's view of it.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Estimate {
     /// The mean over the receiver's points: the fraction of the receiver's energy that would
     /// reach the source, `F_rs`.
@@ -89,6 +91,10 @@ pub struct Estimate {
     /// the link can gather from the source's parts rather than from their mean. Even shares
     /// from a cluster.
     pub sources: [f32; 4],
+    /// From a cluster, in a kept estimate: the root pieces that the samples seen from the
+    /// receiver fell on, each with its share of `k` (summing to 1), so that the link gathers
+    /// what the surfaces it sees send, not the mean of all the cluster's surfaces.
+    pub seen: Vec<(u32, f32)>,
 }
 
 /// What link estimation reads.
@@ -359,7 +365,8 @@ impl Context<'_> {
                 }
                 (f, bound)
             } else {
-                self.cluster_factor(x, re.normal, source & !CLUSTER, m, &mut rng, &mut vis)
+                let seen = if shares { Some(&mut out.seen) } else { None };
+                self.cluster_factor(x, re.normal, source & !CLUSTER, m, &mut rng, &mut vis, seen)
             };
             out.rays += vis[0] + vis[1];
             out.quarters[quarter(re.tri, p)] += f as f32 / (POINTS / 4) as f32;
@@ -376,6 +383,22 @@ impl Context<'_> {
         } else {
             [0.25; 4]
         };
+        if !out.seen.is_empty() {
+            // One entry a piece, shares summing to 1.
+            out.seen.sort_unstable_by_key(|&(p, _)| p);
+            let mut merged: Vec<(u32, f32)> = Vec::with_capacity(out.seen.len());
+            for &(p, w) in &out.seen {
+                match merged.last_mut() {
+                    Some(last) if last.0 == p => last.1 += w,
+                    _ => merged.push((p, w)),
+                }
+            }
+            let total: f32 = merged.iter().map(|x| x.1).sum();
+            for x in &mut merged {
+                x.1 /= total;
+            }
+            out.seen = merged;
+        }
         out
     }
 
@@ -448,6 +471,13 @@ impl Context<'_> {
         (f * seen / total, f)
     }
 
+    /// The point-to-area factor from `x` to the surfaces of cluster `c` that it sees, by
+    /// points drawn by area, `m` from its emitters and `m` from its other surfaces (the two
+    /// strata, each weighted by its area): a lamp is a small part of a cluster's area but
+    /// most of its light, and drawn with the rest it would be missed by most receivers and
+    /// met with a large weight by a few. `seen` (kept estimates): each sample seen, with its
+    /// part of the factor, for the link to gather what those surfaces send.
+    #[allow(clippy::too_many_arguments)]
     fn cluster_factor(
         &self,
         x: Vec3,
@@ -456,37 +486,47 @@ impl Context<'_> {
         m: u32,
         rng: &mut Rng64,
         vis: &mut [u32; 2],
+        mut seen: Option<&mut Vec<(u32, f32)>>,
     ) -> (f64, f64) {
-        let area = self.clusters.nodes[c as usize].area;
-        let mut sum = 0.0;
+        let mut k = 0.0;
         let mut bound = 0.0;
-        for _ in 0..m {
-            let piece = self.clusters.pick(c, uniform(rng) as f64);
-            let root = &self.elements[piece as usize];
-            let y = root.sample(uniform(rng), uniform(rng), uniform(rng));
-            if self.twin_of[piece as usize] != piece {
-                // A twin's light is sent by its representative, drawn as often.
+        for emitters in [true, false] {
+            let area = self.clusters.area_in(c, emitters);
+            if area <= 0.0 {
                 continue;
             }
-            let d = y - x;
-            let d2 = d.length_squared();
-            if d2 <= 0.0 {
-                continue;
-            }
-            let (cr, cs) = (n.dot(d), -root.normal.dot(d));
-            if cr <= 0.0 || cs <= 0.0 {
-                continue;
-            }
-            let w = (cr as f64 * cs as f64) / (PI * d2 as f64 * d2 as f64);
-            bound += w;
-            if self.visible(x, n, y, piece) {
-                sum += w;
-                vis[0] += 1;
-            } else {
-                vis[1] += 1;
+            let scale = area / m as f64;
+            for _ in 0..m {
+                let piece = self.clusters.pick_in(c, emitters, uniform(rng) as f64);
+                let root = &self.elements[piece as usize];
+                let y = root.sample(uniform(rng), uniform(rng), uniform(rng));
+                if self.twin_of[piece as usize] != piece {
+                    // A twin's light is sent by its representative, drawn as often.
+                    continue;
+                }
+                let d = y - x;
+                let d2 = d.length_squared();
+                if d2 <= 0.0 {
+                    continue;
+                }
+                let (cr, cs) = (n.dot(d), -root.normal.dot(d));
+                if cr <= 0.0 || cs <= 0.0 {
+                    continue;
+                }
+                let w = scale * (cr as f64 * cs as f64) / (PI * d2 as f64 * d2 as f64);
+                bound += w;
+                if self.visible(x, n, y, piece) {
+                    k += w;
+                    vis[0] += 1;
+                    if let Some(seen) = seen.as_deref_mut() {
+                        seen.push((piece, w as f32));
+                    }
+                } else {
+                    vis[1] += 1;
+                }
             }
         }
-        (area * sum / m as f64, area * bound / m as f64)
+        (k, bound)
     }
 }
 

@@ -50,10 +50,18 @@
 //!
 //! **Clusters** are sources only: a receiver is always an element, so a root gathers from
 //! the clusters of everything far from it (O(log N) links a root, as in Barnes–Hut), and no
-//! isotropic assumption is made about how a cluster receives. A cluster sends with the mean
-//! radiosity of its surfaces, and its link coefficient is a Monte Carlo estimate of the
-//! point-to-area factor over its actual surfaces with both cosines and visibility
-//! ([`kernel`]): the orientation of every surface counts, not an isotropic volume.
+//! isotropic assumption is made about how a cluster receives. A cluster link's coefficient is
+//! a Monte Carlo estimate of the point-to-area factor over the cluster's actual surfaces with
+//! both cosines and visibility ([`kernel`]), and the link gathers what the pieces its samples
+//! saw send, each in its share of the coefficient: the mean radiosity of the cluster's
+//! surfaces that face the receiver (area- and direction-weighted, as this module once took)
+//! counts the ones hidden from it too, which are mostly the dark ones (the lower shelves under
+//! a lit one, the floor under furniture), while a lamp in view counts by its area alone
+//! (`cluster_links_gather_what_they_see`; on RenderPark's hospital, rooms lit only through
+//! doorways came out 5–7 % dark, now within about 2 %). The samples are drawn from the
+//! cluster's emitters and from its other surfaces separately, so that a lamp, a small part of
+//! the area but most of the light, is neither missed by most receivers nor met with a large
+//! weight by a few.
 //!
 //! **Covered surface.** Part of an element may lie inside a closed solid (the floor under a
 //! box standing on it): it neither receives nor sends light. Each element's exposed fraction
@@ -88,7 +96,8 @@
 //! **Solution.** Jacobi iterations of gather (every link, in parallel, one value for each
 //! quarter of its receiver), push (each quarter's value to the child in that quarter, and on
 //! to its descendants) and pull (an element's radiosity is the area mean of its children's; what
-//! it sends, their mean over exposed area; a cluster's, its members' by direction), from
+//! it sends, their mean over exposed area; a cluster's, its members' area mean, for the
+//! oracle), from
 //! B = E, until the power the last iteration changed is at most `tolerance × Φ`. Then every link is judged again with
 //! the new radiosities and refined where needed, and the solve repeated, until a pass refines
 //! nothing (or `max_passes`).
@@ -255,29 +264,9 @@ pub struct Link {
     /// from their mean: a coarse link then still sees the bright or dark part of its source
     /// that faces it.
     pub sources: [f32; 4],
-    /// From a cluster: the direction from its centre to the receiver's, × 127. A cluster
-    /// sends what its surfaces facing that way send ([`Hierarchy::link_radiosity`]).
-    pub direction: [i8; 3],
-}
-
-/// The six axis directions of a cluster's directional radiosity.
-const AXES: [Vec3; 6] = [
-    Vec3::X,
-    Vec3::NEG_X,
-    Vec3::Y,
-    Vec3::NEG_Y,
-    Vec3::Z,
-    Vec3::NEG_Z,
-];
-
-/// What a cluster sends towards each axis direction: Σ A_j B_j max(0, n_j·a) and
-/// Σ A_j max(0, n_j·a) over its surfaces.
-pub type Directional = [(Rgb, f64); 6];
-
-/// What a direction `w` (unit) weighs each axis with: max(0, w·a)², which sums to 1.
-fn axis_weights(w: Vec3) -> [f32; 6] {
-    let c = |v: f32| v.max(0.0) * v.max(0.0);
-    [c(w.x), c(-w.x), c(w.y), c(-w.y), c(w.z), c(-w.z)]
+    /// From a cluster: the range of [`Hierarchy::cluster_sources`] that holds the root pieces
+    /// the link's samples saw from the receiver, and the share of `k` that each sends.
+    pub seen: [u32; 2],
 }
 
 /// What the hierarchical solver did.
@@ -333,8 +322,11 @@ pub struct Hierarchy {
     pub incident: Vec<Rgb>,
     /// Radiosity of each cluster (the area mean of its surfaces).
     pub cluster_radiosity: Vec<Rgb>,
-    /// What each cluster sends by direction.
-    pub cluster_directional: Vec<Directional>,
+    /// The root pieces that cluster links saw, with their shares ([`Link::seen`]).
+    pub cluster_sources: Vec<(u32, f32)>,
+    /// Each root's emission and that of the coincident twins it stands for: what it sends
+    /// beside its reflected light.
+    pub group_emission: Vec<Rgb>,
     /// What each element sends: the mean of its children's weighted by their exposed area; at
     /// a leaf, its emission plus the light its exposed part reflects (what arrives divided by
     /// the exposed fraction, since the leaf's covered points gather nothing).
@@ -360,9 +352,8 @@ impl Hierarchy {
     }
 
     /// The radiosity a link gathers: what its source element sends (from a split source,
-    /// its children's by the link's [`Link::sources`] shares), or what its source
-    /// cluster's surfaces send towards the receiver (projected-area weighted, from the six
-    /// axis bins; the area mean where no surface faces that way).
+    /// its children's by the link's [`Link::sources`] shares), or from a source cluster, what
+    /// the pieces its samples saw send, in their shares ([`Link::seen`]).
     pub fn link_radiosity(&self, l: &Link) -> Rgb {
         if l.source & CLUSTER == 0 {
             let s = l.source as usize;
@@ -379,25 +370,14 @@ impl Hierarchy {
             }
             return if w > 0.0 { b / w } else { self.sent[s] };
         }
-        let c = (l.source & !CLUSTER) as usize;
-        let w = axis_weights(
-            Vec3::new(
-                l.direction[0] as f32,
-                l.direction[1] as f32,
-                l.direction[2] as f32,
-            )
-            .normalize_or_zero(),
-        );
-        let (mut p, mut a) = (Rgb::BLACK, 0.0);
-        for (wk, (pk, ak)) in w.iter().zip(&self.cluster_directional[c]) {
-            p += *pk * *wk as f64;
-            a += ak * *wk as f64;
+        let seen = &self.cluster_sources[l.seen[0] as usize..l.seen[1] as usize];
+        if seen.is_empty() {
+            // Nothing seen: the link carries nothing (k = 0).
+            return self.cluster_radiosity[(l.source & !CLUSTER) as usize];
         }
-        if a > 0.0 {
-            p / a
-        } else {
-            self.cluster_radiosity[c]
-        }
+        seen.iter()
+            .map(|&(p, share)| self.sent[p as usize] * share as f64)
+            .sum()
     }
 }
 
@@ -420,9 +400,6 @@ struct State<'a> {
     emits: Vec<bool>,
     /// Each root's first coincident twin ([`Element::twins`]); itself when it has none.
     twin_of: Vec<u32>,
-    /// Each root's emission and that of the twins it stands for: what it sends beside its
-    /// reflected light.
-    group_emission: Vec<Rgb>,
     /// The roots that are twins of an earlier one: not refined, not receiving or sending on
     /// their own, given their representative's light.
     hidden: Vec<u32>,
@@ -519,7 +496,12 @@ impl State<'_> {
             if behind(corners, re.centre, re.normal, size) {
                 return Decision::Cull;
             }
-            if (cs - re.centre).length() <= rs + re.radius {
+            if (cs - re.centre).length()
+                <= std::env::var("CO")
+                    .map(|v| v.parse::<f32>().unwrap())
+                    .unwrap_or(1.0)
+                    * (rs + re.radius)
+            {
                 return if re.radius > rs && self.can_split(r) {
                     Decision::SplitReceiver
                 } else {
@@ -571,6 +553,7 @@ impl State<'_> {
         let (elements, links) = (self.h.elements.items.len(), self.h.links.len());
         let needed = elements as u64 * ELEMENT_BYTES
             + links as u64 * LINK_BYTES
+            + self.h.cluster_sources.len() as u64 * 8
             + self.h.clusters.nodes.len() as u64 * 64;
         if needed > self.params.memory_limit {
             return Err(HierarchicalError::TooLarge {
@@ -627,6 +610,9 @@ impl State<'_> {
                     Decision::Cull => {}
                     Decision::Accept(est, k_oracle, uncertainty) => {
                         self.h.info.rays += est.rays as u64;
+                        let from = self.h.cluster_sources.len() as u32;
+                        self.h.cluster_sources.extend_from_slice(&est.seen);
+                        let seen = [from, self.h.cluster_sources.len() as u32];
                         self.h.links.push(Link {
                             receiver: r,
                             source: s,
@@ -635,15 +621,7 @@ impl State<'_> {
                             uncertainty,
                             quarters: est.quarters,
                             sources: est.sources,
-                            direction: if s & CLUSTER != 0 {
-                                let c = &self.h.clusters.nodes[(s & !CLUSTER) as usize];
-                                let w = (self.h.elements.items[r as usize].centre - c.centre)
-                                    .normalize_or_zero()
-                                    * 127.0;
-                                [w.x as i8, w.y as i8, w.z as i8]
-                            } else {
-                                [0; 3]
-                            },
+                            seen,
                         });
                     }
                     Decision::SplitReceiver => {
@@ -707,6 +685,15 @@ impl State<'_> {
             }
         }
         self.h.info.refinements += split;
+        // The pieces seen by the links kept, without those of the links replaced.
+        let old = std::mem::take(&mut self.h.cluster_sources);
+        for l in &mut kept {
+            let from = self.h.cluster_sources.len() as u32;
+            self.h
+                .cluster_sources
+                .extend_from_slice(&old[l.seen[0] as usize..l.seen[1] as usize]);
+            l.seen = [from, self.h.cluster_sources.len() as u32];
+        }
         self.h.links = kept;
         self.refine(todo)?;
         Ok(split)
@@ -790,7 +777,7 @@ impl State<'_> {
                     let m = mean(b) as f32;
                     lo[e] = m;
                     hi[e] = m;
-                    self.h.sent[e] = self.group_emission[root] + self.reflectance[root] * lit;
+                    self.h.sent[e] = self.h.group_emission[root] + self.reflectance[root] * lit;
                     arrived[e] = here;
                     arrived_sent[e] = lit;
                     b
@@ -890,23 +877,7 @@ impl State<'_> {
         for c in 0..nc {
             let node = self.h.clusters.nodes[c];
             let mut s = Rgb::BLACK;
-            let mut dir: Directional = [(Rgb::BLACK, 0.0); 6];
             for child in node.children {
-                if child & CLUSTER != 0 {
-                    let k = (child & !CLUSTER) as usize;
-                    for (d, x) in dir.iter_mut().zip(self.h.cluster_directional[k]) {
-                        d.0 += x.0;
-                        d.1 += x.1;
-                    }
-                } else {
-                    let e = &self.h.elements.items[child as usize];
-                    let b = self.h.sent[child as usize];
-                    for (d, axis) in dir.iter_mut().zip(AXES) {
-                        let w = e.area as f64 * e.normal.dot(axis).max(0.0) as f64;
-                        d.0 += b * w;
-                        d.1 += w;
-                    }
-                }
                 let (b, l, h, a) = if child & CLUSTER != 0 {
                     let k = (child & !CLUSTER) as usize;
                     (
@@ -934,7 +905,6 @@ impl State<'_> {
                 Rgb::BLACK
             };
             self.cluster_spread[c] = chi[c] - clo[c];
-            self.h.cluster_directional[c] = dir;
         }
     }
 }
@@ -975,7 +945,12 @@ pub fn solve(
         let r = items[twin_of[t as usize] as usize];
         items[t as usize] = Element::new(r.corners, r.tri, t, element::NONE, 0);
     }
-    let clusters = Clusters::build(&items);
+    // Strata of cluster sampling: the roots whose group emits.
+    let emitting: Vec<bool> = twin_of
+        .iter()
+        .map(|&r| group_emission[r as usize].max_channel() > 0.0)
+        .collect();
+    let clusters = Clusters::build(&items).with_emitters(&items, &emitting);
     let covers: Vec<kernel::Cover> = items
         .par_iter()
         .enumerate()
@@ -1005,11 +980,12 @@ pub fn solve(
             unshot: vec![Rgb::BLACK; n],
             incident: vec![Rgb::BLACK; n],
             cluster_radiosity: vec![Rgb::BLACK; nc],
-            cluster_directional: vec![[(Rgb::BLACK, 0.0); 6]; nc],
+            cluster_sources: Vec::new(),
             sent: twin_of
                 .iter()
                 .map(|&r| group_emission[r as usize])
                 .collect(),
+            group_emission,
             twin_of: Vec::new(),
             exposure,
             elements: Elements { items, roots: n },
@@ -1025,7 +1001,6 @@ pub fn solve(
         cluster_spread: vec![0.0; nc],
         emits,
         twin_of,
-        group_emission,
         hidden,
         arrived: vec![Rgb::BLACK; n],
         arrived_sent: vec![Rgb::BLACK; n],
@@ -1090,8 +1065,10 @@ pub fn solve(
     h.info.elements = h.elements.items.len();
     h.info.leaves = h.elements.items.iter().filter(|e| e.is_leaf()).count();
     h.info.links = h.links.len();
-    h.info.bytes =
-        h.info.elements as u64 * ELEMENT_BYTES + h.info.links as u64 * LINK_BYTES + nc as u64 * 64;
+    h.info.bytes = h.info.elements as u64 * ELEMENT_BYTES
+        + h.info.links as u64 * LINK_BYTES
+        + nc as u64 * 64
+        + h.cluster_sources.len() as u64 * 8;
     Ok(h)
 }
 
@@ -1499,6 +1476,62 @@ mod tests {
             h.exposure[1..7].iter().all(|&x| x == 1.0),
             "{:?}",
             &h.exposure[..7]
+        );
+    }
+
+    /// A cluster link gathers what its receiver sees of the cluster, not the mean of all the
+    /// cluster's surfaces that face it. A black wall faces a unit lamp square (exitance 1)
+    /// one unit away, and behind it, hidden from every point of the wall, a dim half-size
+    /// lamp (0.2). The wall gathers from the cluster of the two through one link (a black
+    /// receiver's link is never refined), and what arrives must be the wall's factor to the
+    /// front lamp alone, Howell's C-11 (0.03297 at this distance): the mean over 16 seeds
+    /// within 1.6 %, 4σ of that mean (one seed's estimate from 16 points × 64 samples has
+    /// σ 1.6 %, measured over 19 seeds; their mean −0.6 %). Gathering the area mean of the
+    /// surfaces facing the wall would give 0.84 of it (the hidden lamp's dimness counted); in
+    /// the hospital, rooms lit through doorways came out 5–7 % dark from that.
+    #[test]
+    fn cluster_links_gather_what_they_see() {
+        let black = Material::diffuse("black", Rgb::splat(0.0));
+        let lamp = Material::emitter("lamp", Rgb::splat(0.0), Rgb::splat(1.0));
+        let dim = Material::emitter("dim", Rgb::splat(0.0), Rgb::splat(0.2));
+        let square = |x: f32, h: f32, facing: f32, m: usize| {
+            let mut q = [[x, -h, -h], [x, h, -h], [x, h, h], [x, -h, h]];
+            if facing < 0.0 {
+                q.reverse();
+            }
+            quad(q, m)
+        };
+        let scene = Scene {
+            name: "a lamp hiding a dim one".into(),
+            materials: vec![black, lamp, dim],
+            polygons: vec![
+                square(0.0, 0.5, 1.0, 0),
+                square(3.0, 0.5, -1.0, 1),
+                square(3.1, 0.25, -1.0, 2),
+            ],
+            ..Scene::default()
+        };
+        let exact = crate::formfactor::closed_form::parallel_rectangles(1.0, 1.0, 3.0);
+        let seeds = 16;
+        let mut sum = 0.0;
+        for seed in 1..=seeds {
+            let s = solve(
+                &scene,
+                Params {
+                    visibility_rays: 64,
+                    seed,
+                    ..Default::default()
+                },
+            );
+            let h = &s.hierarchy.as_ref().unwrap().hierarchy;
+            let wall: Vec<&Link> = h.links.iter().filter(|l| l.receiver == 0).collect();
+            assert!(wall.len() == 1 && wall[0].source & CLUSTER != 0, "{wall:?}");
+            sum += h.incident[0].g;
+        }
+        let arrived = sum / seeds as f64;
+        assert!(
+            (arrived / exact - 1.0).abs() < 0.016,
+            "{arrived} against {exact}"
         );
     }
 
