@@ -384,20 +384,19 @@ impl Context<'_> {
             [0.25; 4]
         };
         if !out.seen.is_empty() {
-            // One entry a piece, shares summing to 1.
+            // One entry a piece (merged in place), shares summing to 1.
             out.seen.sort_unstable_by_key(|&(p, _)| p);
-            let mut merged: Vec<(u32, f32)> = Vec::with_capacity(out.seen.len());
-            for &(p, w) in &out.seen {
-                match merged.last_mut() {
-                    Some(last) if last.0 == p => last.1 += w,
-                    _ => merged.push((p, w)),
+            out.seen.dedup_by(|next, kept| {
+                let same = next.0 == kept.0;
+                if same {
+                    kept.1 += next.1;
                 }
-            }
-            let total: f32 = merged.iter().map(|x| x.1).sum();
-            for x in &mut merged {
+                same
+            });
+            let total: f32 = out.seen.iter().map(|x| x.1).sum();
+            for x in &mut out.seen {
                 x.1 /= total;
             }
-            out.seen = merged;
         }
         out
     }
