@@ -298,16 +298,33 @@ impl Context<'_> {
         if dist <= 4.0 * off {
             return true;
         }
-        match self
-            .bvh
-            .closest_hit(&Ray::new(from, d / dist), dist * 1.001 + 4.0 * off)
-        {
+        let dir = d / dist;
+        // Anything else well before the target is in the way, whichever side it shows: the
+        // any-hit query, cheaper than the closest hit, answers for all but the last stretch,
+        // where the target, its twins, coincident emitters and polygons flush over it lie;
+        // there the closest hit decides. The target's own group is looked through on the way:
+        // a point sampled on the plane of a slightly warped quad may lie behind its triangles.
+        let group = self.twin_of[piece as usize];
+        let tolerance = 1e-4 * dist + 4.0 * off;
+        let near = dist - 2.0 * tolerance;
+        let start = if near > 0.0 {
+            let own = |p: u32| self.twin_of[p as usize] == group;
+            if self.bvh.occluded_except(&Ray::new(from, dir), near, own) {
+                return false;
+            }
+            near - off
+        } else {
+            0.0
+        };
+        match self.bvh.closest_hit(
+            &Ray::new(from + dir * start, dir),
+            dist * 1.001 + 4.0 * off - start,
+        ) {
             Some(h) => {
                 h.front
                     && (h.patch == piece
-                        || self.twin_of[h.patch as usize] == self.twin_of[piece as usize]
-                        || (self.emits[piece as usize]
-                            && (h.t - dist).abs() <= 1e-4 * dist + 4.0 * off))
+                        || self.twin_of[h.patch as usize] == group
+                        || (self.emits[piece as usize] && (h.t + start - dist).abs() <= tolerance))
             }
             // Rounding let the ray slip past the edge of its target: nothing was in the way.
             None => true,
