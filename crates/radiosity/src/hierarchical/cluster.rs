@@ -106,6 +106,10 @@ impl Clusters {
     pub fn pick_in(&self, c: u32, emitters: bool, u: f64) -> u32 {
         let n = &self.nodes[c as usize];
         let (lo, hi) = (n.first as usize, (n.first + n.count) as usize);
+        if !emitters && self.emitting[hi] == self.emitting[lo] {
+            // No emitter here: the plain area pick (one array to search, not two).
+            return self.pick(c, u);
+        }
         let at = |k: usize| {
             if emitters {
                 self.emitting[k]
