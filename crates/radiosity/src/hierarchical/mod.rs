@@ -496,12 +496,7 @@ impl State<'_> {
             if behind(corners, re.centre, re.normal, size) {
                 return Decision::Cull;
             }
-            if (cs - re.centre).length()
-                <= std::env::var("CO")
-                    .map(|v| v.parse::<f32>().unwrap())
-                    .unwrap_or(1.0)
-                    * (rs + re.radius)
-            {
+            if (cs - re.centre).length() <= rs + re.radius {
                 return if re.radius > rs && self.can_split(r) {
                     Decision::SplitReceiver
                 } else {
@@ -1481,7 +1476,7 @@ mod tests {
 
     /// A cluster link gathers what its receiver sees of the cluster, not the mean of all the
     /// cluster's surfaces that face it. A black wall faces a unit lamp square (exitance 1)
-    /// one unit away, and behind it, hidden from every point of the wall, a dim half-size
+    /// three units away, and behind it, hidden from every point of the wall, a dim half-size
     /// lamp (0.2). The wall gathers from the cluster of the two through one link (a black
     /// receiver's link is never refined), and what arrives must be the wall's factor to the
     /// front lamp alone, Howell's C-11 (0.03297 at this distance): the mean over 16 seeds
