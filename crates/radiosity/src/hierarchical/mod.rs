@@ -58,7 +58,7 @@
 //! counts the ones hidden from it too, which are mostly the dark ones (the lower shelves under
 //! a lit one, the floor under furniture), while a lamp in view counts by its area alone
 //! (`cluster_links_gather_what_they_see`; on RenderPark's hospital, rooms lit only through
-//! doorways came out 5–7 % dark, now within about 2 %). The samples are drawn from the
+//! doorways came out 5–7 % dark, now about −2 … +4 %). The samples are drawn from the
 //! cluster's emitters and from its other surfaces separately, so that a lamp, a small part of
 //! the area but most of the light, is neither missed by most receivers nor met with a large
 //! weight by a few.
