@@ -307,7 +307,8 @@ impl Context<'_> {
         let group = self.twin_of[piece as usize];
         let tolerance = 1e-4 * dist + 4.0 * off;
         let near = dist - 2.0 * tolerance;
-        let start = if near > 0.0 {
+        // (Only when that leaves the last stretch's start in front of `from`.)
+        let start = if near > off {
             let own = |p: u32| self.twin_of[p as usize] == group;
             if self.bvh.occluded_except(&Ray::new(from, dir), near, own) {
                 return false;
