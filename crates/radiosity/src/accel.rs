@@ -433,39 +433,7 @@ impl Bvh {
     /// their stored order, so it does less work than [`Bvh::closest_hit`] on the same ray.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        if self.tris.is_empty() {
-            return false;
-        }
-        let r = Ray4::new(ray);
-        let mut stack: [u32; 128] = [0; 128];
-        let mut sp = 0usize;
-        let mut cur = 0u32;
-        loop {
-            if cur & LEAF != 0 {
-                let (t, u, v, _) = r.intersect(&self.blocks[(cur & !LEAF) as usize]);
-                // Padding lanes are zero triangles: det = 0 makes them NaN, never a hit.
-                if lanes_hit(t, u, v, t_max) != 0 {
-                    return true;
-                }
-            } else {
-                let n = &self.nodes[cur as usize];
-                let (_, mut mask) = r.enter(n, t_max);
-                while mask != 0 {
-                    let lane = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let c = n.child[lane];
-                    if c != EMPTY_LANE {
-                        stack[sp] = c;
-                        sp += 1;
-                    }
-                }
-            }
-            if sp == 0 {
-                return false;
-            }
-            sp -= 1;
-            cur = stack[sp];
-        }
+        self.occluded_except(ray, t_max, |_| false)
     }
 
     /// Whether anything other than the patches `skip` names lies on `ray` with

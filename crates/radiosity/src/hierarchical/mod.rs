@@ -1101,6 +1101,28 @@ mod tests {
         }
     }
 
+    /// The exact system of a solution's leaves (analytic factors, no occlusion) solved by LU.
+    fn exact_leaf_solution(s: &pipeline::Solution) -> pipeline::SystemSolution {
+        let ff = crate::formfactor::Params::geometric(
+            crate::formfactor::FormFactorMethod::Analytic,
+            2,
+            1,
+        );
+        let est = crate::formfactor::Estimator::new(&s.mesh, &s.bvh, ff).unwrap();
+        let mut f = est
+            .matrix(crate::formfactor::Storage::Sparse, &crate::observe::Silent)
+            .into_sparse();
+        pipeline::solve_system(
+            &s.system,
+            &mut f,
+            crate::solve::Solver::Gauss,
+            &Default::default(),
+            false,
+            &crate::observe::Silent,
+        )
+        .unwrap()
+    }
+
     fn solve(scene: &Scene, params: Params) -> pipeline::Solution {
         let settings = Settings {
             hierarchical: Some(params),
@@ -1280,24 +1302,7 @@ mod tests {
         );
         let n = s.mesh.len();
         assert!((50..3000).contains(&n), "{n} leaves");
-        let ff = crate::formfactor::Params::geometric(
-            crate::formfactor::FormFactorMethod::Analytic,
-            2,
-            1,
-        );
-        let est = crate::formfactor::Estimator::new(&s.mesh, &s.bvh, ff).unwrap();
-        let mut f = est
-            .matrix(crate::formfactor::Storage::Sparse, &crate::observe::Silent)
-            .into_sparse();
-        let exact = pipeline::solve_system(
-            &s.system,
-            &mut f,
-            crate::solve::Solver::Gauss,
-            &Default::default(),
-            false,
-            &crate::observe::Silent,
-        )
-        .unwrap();
+        let exact = exact_leaf_solution(&s);
         let (mut diff, mut total, mut worst) = (0.0, 0.0, 0.0f64);
         for k in 0..n {
             let (h, x) = (s.radiosity[k].g, exact.radiosity[k].g);
@@ -1369,24 +1374,7 @@ mod tests {
         let n = s.mesh.len();
         // 996 leaves measured: enough that the lamp's light is resolved, few enough for LU.
         assert!((500..2000).contains(&n), "{n} leaves");
-        let ff = crate::formfactor::Params::geometric(
-            crate::formfactor::FormFactorMethod::Analytic,
-            2,
-            1,
-        );
-        let est = crate::formfactor::Estimator::new(&s.mesh, &s.bvh, ff).unwrap();
-        let mut f = est
-            .matrix(crate::formfactor::Storage::Sparse, &crate::observe::Silent)
-            .into_sparse();
-        let exact = pipeline::solve_system(
-            &s.system,
-            &mut f,
-            crate::solve::Solver::Gauss,
-            &Default::default(),
-            false,
-            &crate::observe::Silent,
-        )
-        .unwrap();
+        let exact = exact_leaf_solution(&s);
         let mut per = [(0.0, 0.0); 8];
         for k in 0..n {
             let surface = s.mesh.patches[k].surface as usize;
