@@ -727,7 +727,7 @@ pub struct SolveCmdArgs {
     #[arg(long, value_name = "links.csv", help_heading = OUTPUT)]
     pub links_out: Option<PathBuf>,
     /// `hierarchical`: write every element as CSV (id, parent, level, surface, leaf, area,
-    /// centre, radiosity).
+    /// centre, radiosity, exposed: the fraction not inside a closed solid).
     #[arg(long, value_name = "elements.csv", help_heading = OUTPUT)]
     pub elements_out: Option<PathBuf>,
 }
