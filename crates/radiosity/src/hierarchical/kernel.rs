@@ -115,6 +115,10 @@ pub struct Context<'a> {
     /// [`super::element::Element::twins`]): a ray that meets a twin of its target has met
     /// the target, and only the first of a group sends (the light of all).
     pub twin_of: &'a [u32],
+    /// What each element sends now (channel mean; [`super::Hierarchy::sent`]) times its
+    /// area: the weights that visibility samples on a source are drawn by
+    /// ([`Context::power_point`]). Empty: by area alone.
+    pub power: &'a [f32],
 }
 
 /// How much of an element light can reach ([`cover`]).
@@ -369,7 +373,8 @@ impl Context<'_> {
             let mut vis = [0u32; 2];
             let (f, bound) = if source & CLUSTER == 0 {
                 let s = &self.elements[source as usize];
-                let (f, bound) = self.element_factor(x, re.normal, s, m, &mut rng, &mut vis);
+                let (f, bound) =
+                    self.element_factor(x, re.normal, source, s, m, &mut rng, &mut vis);
                 if let (Some(parts), true) = (&parts, f > 0.0 && ONE_PER_QUARTER.contains(&p)) {
                     // The point's factor shared among the source's children by their exact
                     // unoccluded factors (visibility taken as the point's, over all of them).
@@ -419,10 +424,62 @@ impl Context<'_> {
         out
     }
 
+    /// A point on element `start` drawn by the power its leaves send, and the importance
+    /// weight that keeps estimates unbiased: what the leaf drawn sends relative to what
+    /// `start` sends, over the density the point was drawn with relative to the uniform one
+    /// (1 but where `start` sends the mean over its exposed area, which differs from the
+    /// mean over its whole area where part of it is covered): going down the quadtree
+    /// from `start`, each child is taken in proportion to its power (to its area where its
+    /// siblings send nothing), and the point is uniform over the leaf reached. One sample per
+    /// receiver point (the default) then sees the source in proportion to what it sends.
+    /// An element that sends nothing yet is drawn by area.
+    fn power_point(&self, start: u32, rng: &mut Rng64) -> (Vec3, f64) {
+        let mut e = start;
+        let mut el = &self.elements[e as usize];
+        if self.power.is_empty() || el.is_leaf() || self.power[e as usize] <= 0.0 {
+            return (el.sample(uniform(rng), uniform(rng), uniform(rng)), 1.0);
+        }
+        let mut ratio = 1.0f64;
+        while !el.is_leaf() {
+            let first = el.children as usize;
+            let (mut area, mut power) = (0.0f64, 0.0f64);
+            for c in first..first + 4 {
+                area += self.elements[c].area as f64;
+                power += self.power[c] as f64;
+            }
+            let share = |c: usize| {
+                if power > 0.0 {
+                    self.power[c] as f64 / power
+                } else {
+                    self.elements[c].area as f64 / area
+                }
+            };
+            let u = uniform(rng) as f64;
+            let (mut acc, mut pick) = (0.0, first + 3);
+            for c in first..first + 4 {
+                acc += share(c);
+                if u < acc {
+                    pick = c;
+                    break;
+                }
+            }
+            ratio *= share(pick) * area / self.elements[pick].area as f64;
+            e = pick as u32;
+            el = &self.elements[e as usize];
+        }
+        let y = el.sample(uniform(rng), uniform(rng), uniform(rng));
+        let top = &self.elements[start as usize];
+        let relative = (self.power[e as usize] as f64 / el.area.max(f32::MIN_POSITIVE) as f64)
+            / (self.power[start as usize] as f64 / top.area as f64);
+        (y, relative / ratio)
+    }
+
+    #[allow(clippy::too_many_arguments)]
     fn element_factor(
         &self,
         x: Vec3,
         n: Vec3,
+        s_id: u32,
         s: &Element,
         m: u32,
         rng: &mut Rng64,
@@ -437,7 +494,12 @@ impl Context<'_> {
         // kernel's, not the area's (they differ where the near part of a source is hidden and
         // the far part is not). A source that fills much of x's view (F ≥ 0.1) is sampled by
         // cosine-distributed directions that meet it, whose density is the kernel itself;
-        // a smaller one by points uniform over its area, each ray weighted by the kernel.
+        // a smaller one by points drawn over its area by the power its leaves send
+        // ([`Context::power_point`]), each ray weighted by the kernel times that power: the
+        // fraction is then the one of the light the source sends towards x, which differs
+        // from the area's where a bright spot on the source is what an occluder hides (the
+        // spot a bare bulb throws on the wall behind it, which the bulb itself shadows from
+        // the rest of the room).
         let (mut seen, mut total, mut valid) = (0.0f64, 0.0f64, 0u32);
         if f >= 0.1 {
             let (t, b) = crate::geom::orthonormal_basis(n);
@@ -464,10 +526,10 @@ impl Context<'_> {
                 if valid == m {
                     break;
                 }
-                let y = s.sample(uniform(rng), uniform(rng), uniform(rng));
+                let (y, b) = self.power_point(s_id, rng);
                 let d = y - x;
                 let d2 = d.length_squared() as f64;
-                let w = n.dot(d) as f64 * -(s.normal.dot(d) as f64) / (d2 * d2);
+                let w = b * n.dot(d) as f64 * -(s.normal.dot(d) as f64) / (d2 * d2);
                 if w.is_nan() || w <= 0.0 {
                     continue;
                 }
@@ -516,11 +578,13 @@ impl Context<'_> {
             for _ in 0..m {
                 let piece = self.clusters.pick_in(c, emitters, uniform(rng) as f64);
                 let root = &self.elements[piece as usize];
-                let y = root.sample(uniform(rng), uniform(rng), uniform(rng));
                 if self.twin_of[piece as usize] != piece {
                     // A twin's light is sent by its representative, drawn as often.
                     continue;
                 }
+                // Over the piece by the power its parts send (the link gathers the piece's
+                // mean, and the weight is the drawn part's power over that mean).
+                let (y, b) = self.power_point(piece, rng);
                 let d = y - x;
                 let d2 = d.length_squared();
                 if d2 <= 0.0 {
@@ -530,7 +594,7 @@ impl Context<'_> {
                 if cr <= 0.0 || cs <= 0.0 {
                     continue;
                 }
-                let w = scale * (cr as f64 * cs as f64) / (PI * d2 as f64 * d2 as f64);
+                let w = b * scale * (cr as f64 * cs as f64) / (PI * d2 as f64 * d2 as f64);
                 bound += w;
                 if self.visible(x, n, y, piece) {
                     k += w;

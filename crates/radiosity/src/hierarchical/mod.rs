@@ -544,6 +544,19 @@ impl State<'_> {
         Decision::Accept(kept, est.k, uncertainty)
     }
 
+    /// What each element sends (channel mean) times its area: the weights that visibility
+    /// samples on a source are drawn by ([`Context::power`]). Over the whole area, exposed or
+    /// not: a sample in a covered part is seen by nobody, and so the fraction seen still
+    /// counts the part of the source that sends nothing, as the link's factor (over the whole
+    /// source) needs.
+    fn power(&self) -> Vec<f32> {
+        let items = &self.h.elements.items;
+        (0..items.len())
+            .into_par_iter()
+            .map(|e| (mean(self.h.sent[e]) * items[e].area as f64) as f32)
+            .collect()
+    }
+
     fn check_memory(&self) -> Result<(), HierarchicalError> {
         let (elements, links) = (self.h.elements.items.len(), self.h.links.len());
         let needed = elements as u64 * ELEMENT_BYTES
@@ -585,6 +598,7 @@ impl State<'_> {
     /// Estimate and judge every candidate, splitting until every one is a link or culled.
     fn refine(&mut self, mut todo: Vec<(u32, u32)>) -> Result<(), HierarchicalError> {
         while !todo.is_empty() {
+            let power = self.power();
             let decisions: Vec<Decision> = {
                 let ctx = Context {
                     elements: &self.h.elements.items,
@@ -594,6 +608,7 @@ impl State<'_> {
                     seed: self.params.seed,
                     emits: &self.emits,
                     twin_of: &self.twin_of,
+                    power: &power,
                 };
                 todo.par_iter()
                     .map(|&(r, s)| self.decide(&ctx, r, s))
@@ -1259,6 +1274,7 @@ mod tests {
                         seed,
                         emits: &[false; 6],
                         twin_of: &[0, 1, 2, 3, 4, 5],
+                        power: &[],
                     };
                     ctx.estimate(i, j, 0, false).k as f64
                 })
@@ -1515,6 +1531,105 @@ mod tests {
         assert!(
             (arrived / exact - 1.0).abs() < 0.016,
             "{arrived} against {exact}"
+        );
+    }
+
+    /// Light leaving a bright spot that an occluder hides is hidden with it. In
+    /// `examples/bare-bulb.obj` a bare bulb (an octahedron, 1.3–8.2 cm from the wall x = 0)
+    /// throws half its light onto a spot a few centimetres wide right behind itself, and from
+    /// the opposite wall (x = 3) the bulb covers that spot's brightest part. What the links from
+    /// the first wall's elements carry to the second must match an independent Monte Carlo
+    /// integral of the same leaf radiosities, ∫∫ B(y) cos θ cos θ' / (π r²) V, with visibility
+    /// decided by the octahedron's own inequality |p − c|₁ ≤ r instead of rays (1M pairs,
+    /// σ ≈ 0.1 %), within 1.2 %. Measured: −0.2 %. Links that drew visibility samples
+    /// uniformly over their source's area saw the spot unshadowed: +6.7 % (and every wall of
+    /// the room came out +1.4 … +2.9 % against path-traced surface means).
+    #[test]
+    fn light_behind_an_occluder_stays_hidden() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/bare-bulb.obj");
+        let scene = crate::scene::load(path).unwrap();
+        let s = solve(
+            &scene,
+            Params {
+                link_error: 3e-4,
+                ..Default::default()
+            },
+        );
+        let h = &s.hierarchy.as_ref().unwrap().hierarchy;
+        let items = &h.elements.items;
+        let root = |x: f32, nx: f32| {
+            (0..h.elements.roots)
+                .find(|&r| {
+                    (items[r].centre.x - x).abs() < 1e-4 && (items[r].normal.x - nx).abs() < 1e-4
+                })
+                .unwrap() as u32
+        };
+        let (lit, far) = (root(0.0, 1.0), root(3.0, -1.0));
+        let carried: f64 = h
+            .links
+            .iter()
+            .filter(|l| {
+                l.source & CLUSTER == 0
+                    && items[l.receiver as usize].root == far
+                    && items[l.source as usize].root == lit
+            })
+            .map(|l| h.link_radiosity(l).g * l.k as f64 * items[l.receiver as usize].area as f64)
+            .sum();
+        // The independent integral: y by the power of the first wall's leaves, x uniform
+        // over the second wall, the bulb an L1 ball.
+        let mut leaves = Vec::new();
+        h.elements.leaves_below(lit, &mut leaves);
+        let power: Vec<f64> = leaves
+            .iter()
+            .map(|&e| h.radiosity[e as usize].g * items[e as usize].area as f64)
+            .collect();
+        let total: f64 = power.iter().sum();
+        let mut cdf = Vec::with_capacity(power.len());
+        let mut acc = 0.0;
+        for p in &power {
+            acc += p / total;
+            cdf.push(acc);
+        }
+        let (centre, radius) = (Vec3::new(0.0475, 1.5, 1.7), 0.0345f32);
+        let blocked = |a: Vec3, b: Vec3| {
+            // |p(t) − c|₁ is convex and piecewise linear in t: its least value on the segment
+            // is at an end or where a coordinate crosses the centre's.
+            let d = b - a;
+            let mut ts = vec![0.0f32, 1.0];
+            for i in 0..3 {
+                if d[i] != 0.0 {
+                    let t = (centre[i] - a[i]) / d[i];
+                    if t > 0.0 && t < 1.0 {
+                        ts.push(t);
+                    }
+                }
+            }
+            ts.iter().any(|&t| {
+                let p = a + d * t - centre;
+                p.x.abs() + p.y.abs() + p.z.abs() <= radius
+            })
+        };
+        let mut rng = crate::sampling::stream(5, 6, 7, 8);
+        let u = |rng: &mut crate::sampling::Rng64| crate::sampling::uniform(rng);
+        let n = 1_000_000;
+        let mut sum = 0.0f64;
+        for _ in 0..n {
+            let pick = cdf
+                .partition_point(|&c| c <= u(&mut rng) as f64)
+                .min(leaves.len() - 1);
+            let y = items[leaves[pick] as usize].sample(u(&mut rng), u(&mut rng), u(&mut rng));
+            let x = Vec3::new(3.0, 3.0 * u(&mut rng), 2.5 * u(&mut rng));
+            let d = x - y;
+            let r2 = d.length_squared() as f64;
+            if blocked(y, x) {
+                continue;
+            }
+            sum += (d.x as f64) * (d.x as f64) / (std::f64::consts::PI * r2 * r2);
+        }
+        let integral = total * 7.5 * sum / n as f64;
+        assert!(
+            (carried / integral - 1.0).abs() < 0.012,
+            "links {carried}, integral {integral}"
         );
     }
 
