@@ -9,7 +9,7 @@
 //! that spot, so the light of the place is the *sum* of the twins' radiosities; hierarchical
 //! radiosity lights every twin as the surface, so it is any one of them (their largest).
 
-use crate::args::BenchArgs;
+use crate::args::{BenchArgs, ReferenceTracer};
 use anyhow::{bail, Context, Result};
 use radiosity::hierarchical::Params as HierarchicalParams;
 use radiosity::mesh::MeshParams;
@@ -56,16 +56,23 @@ fn reference(
         return Ok(out);
     }
     let t = Instant::now();
-    let means = pipeline::path_surface_means(scene, a.reference_paths, 7)?;
+    let means = match a.reference_tracer {
+        ReferenceTracer::Light => pipeline::light_surface_means(scene, a.reference_paths, 7)?,
+        ReferenceTracer::Path => pipeline::path_surface_means(scene, a.reference_paths, 7)?,
+    };
     let mut csv = String::from("surface,b_r,b_g,b_b,se_r,se_g,se_b\n");
     for (k, (b, se)) in means.iter().enumerate() {
         csv += &format!("{k},{},{},{},{},{},{}\n", b.r, b.g, b.b, se.r, se.g, se.b);
     }
     radiosity::export::write_text(path, &csv)?;
     println!(
-        "reference   {} ({} paths, {:.1} s)",
+        "reference   {} ({} {}, {:.1} s)",
         path.display(),
         a.reference_paths,
+        match a.reference_tracer {
+            ReferenceTracer::Light => "particles, light tracer",
+            ReferenceTracer::Path => "paths, path tracer",
+        },
         t.elapsed().as_secs_f64()
     );
     Ok(means)

@@ -249,6 +249,16 @@ pub enum BackendArg {
     Embree,
 }
 
+/// How `bench --hierarchical` makes its reference surface means (`--reference-tracer`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ReferenceTracer {
+    /// Particles shot from the emitters, each crediting the surfaces it reaches: rays go where
+    /// the light goes (best where lamps throw small bright spots).
+    Light,
+    /// Paths from points spread over each surface by area, with next-event estimation.
+    Path,
+}
+
 /// How a view-factor matrix is written (`form-factors --format`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MatrixFormatArg {
@@ -826,9 +836,14 @@ pub struct BenchArgs {
     /// `--hierarchical`: refinement passes of the hierarchical solves (default: the solver's).
     #[arg(long, value_name = "N", help_heading = SOLVER)]
     pub passes: Option<u32>,
-    /// `--hierarchical`: paths of the reference in all (shared by area).
+    /// `--hierarchical`: paths (`--reference-tracer path`, shared by area) or particles
+    /// (`light`) of the reference in all.
     #[arg(long, value_name = "N", default_value_t = 20_000_000, help_heading = SCENE)]
     pub reference_paths: u64,
+    /// `--hierarchical`: how the reference is made when the --reference file is absent: a
+    /// light tracer or a path tracer (both independent of every radiosity method).
+    #[arg(long = "reference-tracer", value_enum, value_name = "T", default_value = "light", help_heading = SCENE)]
+    pub reference_tracer: ReferenceTracer,
     /// `--hierarchical`: Monte Carlo rays a form-factor row of the uniform solves.
     #[arg(long = "uniform-rays", value_name = "N", default_value_t = 1024, help_heading = FORM_FACTORS)]
     pub uniform_rays: u32,

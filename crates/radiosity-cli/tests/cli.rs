@@ -2638,6 +2638,63 @@ fn assert_furnace_picture(path: &Path, what: &str) {
     }
 }
 
+/// `bench --hierarchical SCENE`: the reference surface means are made (by the light tracer
+/// unless `--reference-tracer path`) and written as `surface,b_r,b_g,b_b,se_r,se_g,se_b`, one
+/// row a polygon; the table gives each method's errors against them and the reference's own
+/// noise floor; a second run reads the file instead of tracing again.
+#[test]
+fn bench_hierarchical_makes_and_reads_its_reference() {
+    let dir = scratch("bench-hierarchical");
+    for tracer in ["light", "path"] {
+        let file = format!("{tracer}.csv");
+        let args = [
+            "bench",
+            "--hierarchical",
+            "cornell",
+            "--link-errors",
+            "1e-3",
+            "--reference",
+            &file,
+            "--reference-paths",
+            "1000000",
+            "--reference-tracer",
+            tracer,
+        ];
+        let out = run(&args, &dir);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(
+            text.contains(if tracer == "light" {
+                "light tracer"
+            } else {
+                "path tracer"
+            }),
+            "{text}"
+        );
+        let csv = std::fs::read_to_string(dir.join(&file)).unwrap();
+        let mut lines = csv.lines();
+        assert_eq!(lines.next(), Some("surface,b_r,b_g,b_b,se_r,se_g,se_b"));
+        assert_eq!(lines.count(), 19, "{csv}");
+        let row = text
+            .lines()
+            .find(|l| l.starts_with("hierarchical 1e-3"))
+            .expect("a hierarchical row");
+        let v: Vec<f64> = row
+            .split_whitespace()
+            .skip(2)
+            .map(|t| t.parse().unwrap())
+            .collect();
+        // elements, links, wall s, mean %, worst %, L1 %, floor %.
+        assert!(v[5] < 3.0 && v[6] < 0.5, "{row}");
+        let again = run(&args, &dir);
+        assert!(String::from_utf8_lossy(&again.stdout).contains("(read)"));
+    }
+}
+
 /// `bench --rays SCENE`: the form-factor ray workload on a scene, with its figures.
 #[test]
 fn bench_rays_on_a_scene() {

@@ -583,6 +583,35 @@ pub fn path_surface_means(
     ))
 }
 
+/// Light-traced mean radiosity of every surface (input polygon) of `scene`, with its standard
+/// error ([`crate::render::particle::surface_means`]): `particles` particles shot from the
+/// emitters. The second independent reference beside [`path_surface_means`]; it spends its
+/// rays where the light goes, which suits scenes whose lamps throw small bright spots.
+pub fn light_surface_means(
+    scene: &Scene,
+    particles: u64,
+    seed: u64,
+) -> Result<Vec<(Rgb, Rgb)>, Error> {
+    scene.validate()?;
+    let mesh = Mesh::build(scene, MeshParams::Faces)?;
+    let bvh = Bvh::build(&mesh);
+    let system = patch_system(scene, &mesh);
+    let surfaces = crate::render::light::Surfaces {
+        mesh: &mesh,
+        bvh: &bvh,
+        reflectance: &system.reflectance,
+        emission: &system.emission,
+    };
+    let lights = crate::render::light::Lights::new(&mesh, &system.emission);
+    Ok(crate::render::particle::surface_means(
+        &surfaces,
+        &lights,
+        scene.polygons.len(),
+        particles,
+        seed,
+    ))
+}
+
 /// A system error about a patch, as an error at the place of the polygon it was cut from.
 pub(crate) fn located(e: crate::system::SystemError, scene: &Scene, mesh: &Mesh) -> Error {
     use crate::system::SystemError as E;

@@ -117,7 +117,7 @@ pub struct Context<'a> {
     pub twin_of: &'a [u32],
     /// What each element sends now (channel mean; [`super::Hierarchy::sent`]) times its
     /// area: the weights that visibility samples on a source are drawn by
-    /// ([`Context::power_point`]). Empty: by area alone.
+    /// (`Context::power_point`). Empty: by area alone.
     pub power: &'a [f32],
 }
 

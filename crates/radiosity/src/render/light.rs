@@ -76,6 +76,24 @@ impl Lights {
         self.patches.is_empty()
     }
 
+    /// The emitting patch that the uniform `u` in [0, 1) draws, with its probability; `None`
+    /// when nothing emits.
+    pub fn pick(&self, u: f64) -> Option<(u32, f64)> {
+        if self.patches.is_empty() {
+            return None;
+        }
+        let k = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(self.patches.len() - 1);
+        Some((self.patches[k], self.pdf[k]))
+    }
+
+    /// Every emitting patch with its probability.
+    pub fn emitters(&self) -> impl Iterator<Item = (u32, f64)> + '_ {
+        self.patches.iter().copied().zip(self.pdf.iter().copied())
+    }
+
     /// One-sample estimate of the irradiance the emitters give point `x` (normal `n`, on patch
     /// `own`, which is skipped: a planar patch does not light itself).
     pub fn irradiance(&self, s: &Surfaces<'_>, x: Vec3, n: Vec3, own: u32, rng: &mut Rng64) -> Rgb {

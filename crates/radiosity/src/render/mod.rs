@@ -20,6 +20,7 @@ pub mod camera;
 pub mod compare;
 pub mod gather;
 pub mod light;
+pub mod particle;
 pub mod path;
 
 /// Image size and sampling.
