@@ -23,6 +23,43 @@ use crate::sampling::{stream, uniform, Rng64};
 use glam::DVec3;
 use std::f64::consts::PI;
 
+/// The angle `atan2(y, x)` for `y ≥ 0` (in [0, π]), to within 10⁻⁹ relative: the angle an
+/// edge subtends in Lambert's contour formula, where `libm`'s `atan2` was a tenth of the
+/// hierarchical solver's time. Reduced to [0, 1] by symmetry, then to |t| ≤ tan(π/12) by
+/// `atan u = π/6 + atan((u√3 − 1)/(u + √3))`, where the Taylor series to t¹³ errs by at most
+/// t¹⁵/15 < 2·10⁻¹⁰.
+#[inline]
+fn angle(y: f64, x: f64) -> f64 {
+    use std::f64::consts::{FRAC_PI_2, FRAC_PI_6};
+    const SQRT3: f64 = 1.732_050_807_568_877_2;
+    const TAN_PI_12: f64 = 0.267_949_192_431_122_7;
+    let (ax, ay) = (x.abs(), y.abs());
+    let (lo, hi) = if ay <= ax { (ay, ax) } else { (ax, ay) };
+    if hi <= 0.0 {
+        return 0.0;
+    }
+    let u = lo / hi;
+    let (t, base) = if u > TAN_PI_12 {
+        ((u * SQRT3 - 1.0) / (u + SQRT3), FRAC_PI_6)
+    } else {
+        (u, 0.0)
+    };
+    let t2 = t * t;
+    let series = t
+        * (1.0
+            + t2 * (-1.0 / 3.0
+                + t2 * (1.0 / 5.0
+                    + t2 * (-1.0 / 7.0 + t2 * (1.0 / 9.0 + t2 * (-1.0 / 11.0 + t2 / 13.0))))));
+    let mut a = base + series;
+    if ay > ax {
+        a = FRAC_PI_2 - a;
+    }
+    if x < 0.0 {
+        a = std::f64::consts::PI - a;
+    }
+    a
+}
+
 /// The unoccluded form factor from a differential area at `x` (unit normal `n`) to the convex
 /// polygon `poly` (counter-clockwise about its unit normal `ns`). One-sided both ways: zero when
 /// `x` is behind the polygon, and only the polygon's part in front of `x`'s plane counts.
@@ -59,7 +96,7 @@ pub fn point_polygon(x: Vec3, n: Vec3, poly: &[Vec3], ns: Vec3) -> f64 {
         if len <= 0.0 {
             continue;
         }
-        let gamma = len.atan2(p.dot(q));
+        let gamma = angle(len, p.dot(q));
         sum += gamma * n.dot(c) / len;
     }
     (sum.abs() / (2.0 * PI)).min(1.0)
@@ -615,6 +652,28 @@ impl Context<'_> {
 mod tests {
     use super::*;
     use crate::formfactor::closed_form;
+
+    /// The edge angle agrees with `atan2` over the half-plane y ≥ 0, to 10⁻⁹ relative.
+    #[test]
+    fn edge_angle_matches_atan2() {
+        let mut worst = 0.0f64;
+        for i in 0..=20_000 {
+            let phi = std::f64::consts::PI * i as f64 / 20_000.0;
+            for r in [1e-6, 0.3, 1.0, 7e4] {
+                let (y, x) = (r * phi.sin().max(0.0), r * phi.cos());
+                let exact = y.atan2(x);
+                let got = angle(y, x);
+                worst = worst.max((got - exact).abs() / exact.max(1e-300));
+                assert!(
+                    (got - exact).abs() <= 1e-9 * exact + 1e-15,
+                    "{phi}: {got} vs {exact}"
+                );
+            }
+        }
+        assert!(worst < 1e-9, "{worst}");
+        assert_eq!(angle(0.0, 0.0), 0.0);
+        assert_eq!(angle(0.0, 2.0), 0.0);
+    }
 
     #[test]
     fn point_to_polygon_matches_closed_forms() {

@@ -250,7 +250,8 @@ pub struct Link {
     /// The form factor from receiver to source.
     pub k: f32,
     /// The oracle's own estimate of it, independent of `k` (so that which links are kept
-    /// does not depend on the values they carry).
+    /// does not depend on the values they carry); negative for a link kept on the bound
+    /// `−k_oracle` from the bounding spheres alone, before any estimate was needed.
     pub k_oracle: f32,
     /// The oracle's kernel uncertainty `K` (see the module docs).
     pub uncertainty: f32,
@@ -381,6 +382,9 @@ impl Hierarchy {
     }
 }
 
+/// An oracle's view of a link: its factor, kernel uncertainty and the rays cast for them.
+type Judged = (f32, f32, u32);
+
 enum Decision {
     Cull,
     Accept(Estimate, f32, f32),
@@ -477,7 +481,7 @@ impl State<'_> {
         fn behind(mut points: impl Iterator<Item = Vec3>, o: Vec3, n: Vec3, size: f32) -> bool {
             points.all(|p| (p - o).dot(n) <= 1e-5 * size)
         }
-        let (_, _, rs, cs, area_s) = self.source(s);
+        let (_, _, rs, cs, _) = self.source(s);
         let size = re.radius + rs;
         if s & CLUSTER != 0 {
             let c = s & !CLUSTER;
@@ -513,6 +517,47 @@ impl State<'_> {
                 return Decision::Cull;
             }
         }
+        // A bound on the kernel from the bounding spheres alone (no samples): where even it
+        // keeps the link's error under the tolerance, the link is kept without the oracle's
+        // estimate, and judged by the bound until the radiosities make it too loose
+        // ([`State::rerefine`]). Most links of small receivers never need more; before the
+        // first solve, every link from a surface that does not emit is kept so (its error is
+        // 0 whatever its factor).
+        let bound = self.bound(r, s);
+        if self.error(r, s, bound, bound) <= self.eps {
+            return Decision::Accept(ctx.estimate(r, s, 1, true), -bound, bound);
+        }
+        let (k_oracle, uncertainty, rays) = self.oracle(ctx, r, s);
+        if self.error(r, s, k_oracle, uncertainty) > self.eps {
+            if let Some(d) = self.split(r, s) {
+                return d;
+            }
+        }
+        // Kept: its coefficient from an estimate independent of the one that decided.
+        let mut kept = ctx.estimate(r, s, 1, true);
+        kept.rays += rays;
+        Decision::Accept(kept, k_oracle, uncertainty)
+    }
+
+    /// An upper bound on the point-to-area factor from any point of receiver `r` to source
+    /// `s`: `A_s / (π g²)` (at most 1) for the gap `g` between their bounding spheres, 1 where
+    /// they meet.
+    fn bound(&self, r: u32, s: u32) -> f32 {
+        let re = &self.h.elements.items[r as usize];
+        let (_, _, rs, cs, area_s) = self.source(s);
+        let gap = (cs - re.centre).length() - re.radius - rs;
+        if gap > 0.0 {
+            (area_s / (std::f64::consts::PI * gap as f64 * gap as f64)).min(1.0) as f32
+        } else {
+            1.0
+        }
+    }
+
+    /// The oracle's view of the link from `r` to `s`, from its own estimate (stream 0): the
+    /// factor, the kernel uncertainty, and the rays cast.
+    fn oracle(&self, ctx: &Context, r: u32, s: u32) -> (f32, f32, u32) {
+        let re = &self.h.elements.items[r as usize];
+        let (_, _, rs, cs, _) = self.source(s);
         let est = ctx.estimate(r, s, 0, false);
         let d = (cs - re.centre).length();
         let uncertainty = if d > 2.0 * (re.radius + rs) {
@@ -525,23 +570,9 @@ impl State<'_> {
                 est.hi - est.lo
             }
         } else {
-            let gap = d - re.radius - rs;
-            let bound = if gap > 0.0 {
-                (area_s / (std::f64::consts::PI * gap as f64 * gap as f64)).min(1.0) as f32
-            } else {
-                1.0
-            };
-            est.hi.max(bound)
+            est.hi.max(self.bound(r, s))
         };
-        if self.error(r, s, est.k, uncertainty) > self.eps {
-            if let Some(d) = self.split(r, s) {
-                return d;
-            }
-        }
-        // Kept: its coefficient from an estimate independent of the one that decided.
-        let mut kept = ctx.estimate(r, s, 1, true);
-        kept.rays += est.rays;
-        Decision::Accept(kept, est.k, uncertainty)
+        (est.k, uncertainty, est.rays)
     }
 
     /// What each element sends (channel mean) times its area: the weights that visibility
@@ -659,17 +690,45 @@ impl State<'_> {
 
     /// Judge every link with the current radiosities; replace those that fail by candidates.
     fn rerefine(&mut self) -> Result<u64, HierarchicalError> {
-        let links = std::mem::take(&mut self.h.links);
-        let verdicts: Vec<Option<Decision>> = links
+        let mut links = std::mem::take(&mut self.h.links);
+        let power = self.power();
+        let ctx = Context {
+            elements: &self.h.elements.items,
+            clusters: &self.h.clusters,
+            bvh: self.bvh,
+            rays: self.params.visibility_rays,
+            seed: self.params.seed,
+            emits: &self.emits,
+            twin_of: &self.twin_of,
+            power: &power,
+        };
+        // A link judged by its bound (k_oracle < 0) that the bound no longer clears is
+        // judged again by the oracle's own estimate, as a new link would be.
+        let verdicts: Vec<(Option<Decision>, Option<Judged>)> = links
             .par_iter()
             .map(|l| {
-                if self.error(l.receiver, l.source, l.k_oracle, l.uncertainty) > self.eps {
-                    self.split(l.receiver, l.source)
-                } else {
-                    None
+                let (r, s) = (l.receiver, l.source);
+                if self.error(r, s, l.k_oracle.abs(), l.uncertainty) <= self.eps {
+                    return (None, None);
                 }
+                if l.k_oracle < 0.0 {
+                    let (k, u, rays) = self.oracle(&ctx, r, s);
+                    if self.error(r, s, k, u) <= self.eps {
+                        return (None, Some((k, u, rays)));
+                    }
+                    return (self.split(r, s), Some((k, u, rays)));
+                }
+                (self.split(r, s), None)
             })
             .collect();
+        for (l, (_, judged)) in links.iter_mut().zip(&verdicts) {
+            if let Some((k, u, rays)) = *judged {
+                l.k_oracle = k;
+                l.uncertainty = u;
+                self.h.info.rays += rays as u64;
+            }
+        }
+        let verdicts: Vec<Option<Decision>> = verdicts.into_iter().map(|v| v.0).collect();
         let mut todo = Vec::new();
         let mut kept = Vec::with_capacity(links.len());
         let mut split = 0;
