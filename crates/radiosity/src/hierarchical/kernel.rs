@@ -198,12 +198,9 @@ pub fn cover(e: &Element, id: u32, bvh: &Bvh, coincident: &[u32], seed: u64) -> 
             uniform(&mut rng),
             uniform(&mut rng),
         );
-        let inside = [e.normal, d].iter().all(|&dir| {
-            matches!(
-                bvh.closest_hit(&Ray::new(x + e.normal * off, dir), f32::INFINITY),
-                Some(h) if !h.front
-            )
-        });
+        let inside = [e.normal, d]
+            .iter()
+            .all(|&dir| first_hit_is_a_back(x + e.normal * off, dir, bvh, coincident, group));
         if inside {
             continue;
         }
@@ -216,6 +213,22 @@ pub fn cover(e: &Element, id: u32, bvh: &Bvh, coincident: &[u32], seed: u64) -> 
         exposed: exposed as f32 / POINTS as f32,
         free: free as f32 / POINTS as f32,
     }
+}
+
+/// Whether the first surface the ray from `from` along `d` meets, other than the piece's own
+/// (its coincident group `group`), shows its back ([`cover`]). The piece's own triangles are
+/// looked through: the points of a warped quad lie on its bilinear surface, up to millimetres
+/// behind the triangles that the hierarchy holds, whose backs they would otherwise see.
+fn first_hit_is_a_back(mut from: Vec3, d: Vec3, bvh: &Bvh, coincident: &[u32], group: u32) -> bool {
+    let off = bvh.ray_offset();
+    for _ in 0..8 {
+        match bvh.closest_hit(&Ray::new(from, d), f32::INFINITY) {
+            Some(h) if coincident[h.patch as usize] == group => from += d * (h.t + off),
+            Some(h) => return !h.front,
+            None => return false,
+        }
+    }
+    false
 }
 
 /// Whether a polygon facing the same way as `x`'s surface (normal `n`), other than `group`'s
@@ -331,7 +344,7 @@ impl Context<'_> {
     /// one the hierarchy reports first is seen. Coincident *emitters* are all seen (a hit at
     /// the target's distance counts), as the shooting methods and the path tracer's next-event
     /// estimation count every emitter's power.
-    fn visible(&self, x: Vec3, nx: Vec3, y: Vec3, piece: u32) -> bool {
+    fn visible(&self, x: Vec3, nx: Vec3, own: u32, y: Vec3, piece: u32) -> bool {
         let off = self.bvh.ray_offset();
         let from = x + nx * off;
         let d = y - from;
@@ -343,34 +356,48 @@ impl Context<'_> {
         // Anything else well before the target is in the way, whichever side it shows: the
         // any-hit query, cheaper than the closest hit, answers for all but the last stretch,
         // where the target, its twins, coincident emitters and polygons flush over it lie;
-        // there the closest hit decides. The target's own group is looked through on the way:
-        // a point sampled on the plane of a slightly warped quad may lie behind its triangles.
+        // there the closest hit decides. The target's own group and the receiver's (`own`)
+        // are looked through on the way: a point sampled on the bilinear surface of a warped
+        // quad may lie millimetres behind its triangles, a receiver point as well as a target.
         let group = self.twin_of[piece as usize];
         let tolerance = 1e-4 * dist + 4.0 * off;
         let near = dist - 2.0 * tolerance;
         // (Only when that leaves the last stretch's start in front of `from`.)
-        let start = if near > off {
-            let own = |p: u32| self.twin_of[p as usize] == group;
-            if self.bvh.occluded_except(&Ray::new(from, dir), near, own) {
+        let mut start = if near > off {
+            let skip = |p: u32| {
+                let g = self.twin_of[p as usize];
+                g == group || g == own
+            };
+            if self.bvh.occluded_except(&Ray::new(from, dir), near, skip) {
                 return false;
             }
             near - off
         } else {
             0.0
         };
-        match self.bvh.closest_hit(
-            &Ray::new(from + dir * start, dir),
-            dist * 1.001 + 4.0 * off - start,
-        ) {
-            Some(h) => {
-                h.front
-                    && (h.patch == piece
-                        || self.twin_of[h.patch as usize] == group
-                        || (self.emits[piece as usize] && (h.t + start - dist).abs() <= tolerance))
+        // The receiver's own surface met on the last stretch is stepped past (a few times at
+        // most: its two triangles, a twin's).
+        for _ in 0..4 {
+            match self.bvh.closest_hit(
+                &Ray::new(from + dir * start, dir),
+                dist * 1.001 + 4.0 * off - start,
+            ) {
+                Some(h) if self.twin_of[h.patch as usize] == own && own != group => {
+                    start += h.t + 0.25 * off;
+                }
+                Some(h) => {
+                    return h.front
+                        && (h.patch == piece
+                            || self.twin_of[h.patch as usize] == group
+                            || (self.emits[piece as usize]
+                                && (h.t + start - dist).abs() <= tolerance));
+                }
+                // Rounding let the ray slip past the edge of its target: nothing was in the
+                // way.
+                None => return true,
             }
-            // Rounding let the ray slip past the edge of its target: nothing was in the way.
-            None => true,
         }
+        true
     }
 
     /// The coefficient of the link from receiver element `r` to `source` (an element id, or a
@@ -406,12 +433,13 @@ impl Context<'_> {
             }
         }
         let jitter: [f32; 2 * POINTS] = std::array::from_fn(|_| uniform(&mut rng));
+        let own = self.twin_of[re.root as usize];
         for (p, x) in re.receiver_points(&jitter).into_iter().enumerate() {
             let mut vis = [0u32; 2];
             let (f, bound) = if source & CLUSTER == 0 {
                 let s = &self.elements[source as usize];
                 let (f, bound) =
-                    self.element_factor(x, re.normal, source, s, m, &mut rng, &mut vis);
+                    self.element_factor(x, re.normal, own, source, s, m, &mut rng, &mut vis);
                 if let (Some(parts), true) = (&parts, f > 0.0 && ONE_PER_QUARTER.contains(&p)) {
                     // The point's factor shared among the source's children by their exact
                     // unoccluded factors (visibility taken as the point's, over all of them).
@@ -426,7 +454,16 @@ impl Context<'_> {
                 (f, bound)
             } else {
                 let seen = if shares { Some(&mut out.seen) } else { None };
-                self.cluster_factor(x, re.normal, source & !CLUSTER, m, &mut rng, &mut vis, seen)
+                self.cluster_factor(
+                    x,
+                    re.normal,
+                    own,
+                    source & !CLUSTER,
+                    m,
+                    &mut rng,
+                    &mut vis,
+                    seen,
+                )
             };
             out.rays += vis[0] + vis[1];
             out.quarters[quarter(re.tri, p)] += f as f32 / (POINTS / 4) as f32;
@@ -516,6 +553,7 @@ impl Context<'_> {
         &self,
         x: Vec3,
         n: Vec3,
+        own: u32,
         s_id: u32,
         s: &Element,
         m: u32,
@@ -551,7 +589,7 @@ impl Context<'_> {
                 };
                 valid += 1;
                 total += 1.0;
-                if self.visible(x, n, y, s.root) {
+                if self.visible(x, n, own, y, s.root) {
                     seen += 1.0;
                     vis[0] += 1;
                 } else {
@@ -572,7 +610,7 @@ impl Context<'_> {
                 }
                 valid += 1;
                 total += w;
-                if self.visible(x, n, y, s.root) {
+                if self.visible(x, n, own, y, s.root) {
                     seen += w;
                     vis[0] += 1;
                 } else {
@@ -598,6 +636,7 @@ impl Context<'_> {
         &self,
         x: Vec3,
         n: Vec3,
+        own: u32,
         c: u32,
         m: u32,
         rng: &mut Rng64,
@@ -633,7 +672,7 @@ impl Context<'_> {
                 }
                 let w = b * scale * (cr as f64 * cs as f64) / (PI * d2 as f64 * d2 as f64);
                 bound += w;
-                if self.visible(x, n, y, piece) {
+                if self.visible(x, n, own, y, piece) {
                     k += w;
                     vis[0] += 1;
                     if let Some(seen) = seen.as_deref_mut() {

@@ -1692,6 +1692,47 @@ mod tests {
         );
     }
 
+    /// A warped quad (one corner 2 cm out of the plane of the others, as many of the
+    /// hospital's chair parts are) is lit like a flat one. Its receiver points lie on the
+    /// bilinear surface, up to millimetres behind the two triangles that the ray hierarchy
+    /// holds; seen from there, its own triangles' backs hid the room (chair parts came out
+    /// 70–86 % dark against the light tracer) and made its points count as inside a solid.
+    /// A lamp square faces the unit quad from 1 above: the quad's mean must be ρ E F with F
+    /// Howell's C-11 for the flat square, within 2 % (the warp changes F by well under 1 %).
+    #[test]
+    fn a_warped_quad_sees_past_its_own_triangles() {
+        let lamp = Material::emitter("lamp", Rgb::splat(0.0), Rgb::splat(1.0));
+        let grey = Material::diffuse("grey", Rgb::splat(0.5));
+        let scene = Scene {
+            name: "warped".into(),
+            materials: vec![lamp, grey],
+            polygons: vec![
+                quad([[0., 1., 0.], [1., 1., 0.], [1., 1., 1.], [0., 1., 1.]], 0),
+                quad(
+                    [[0., 0., 0.], [0., 0., 1.], [1., 0.02, 1.], [1., 0., 0.]],
+                    1,
+                ),
+            ],
+            ..Scene::default()
+        };
+        let s = solve(&scene, Params::default());
+        let (mut sum, mut area) = (0.0, 0.0);
+        for (p, b) in s.mesh.patches.iter().zip(&s.radiosity) {
+            if p.surface == 1 {
+                sum += b.g * p.area as f64;
+                area += p.area as f64;
+            }
+        }
+        let exact = 0.5 * crate::formfactor::closed_form::parallel_rectangles(1.0, 1.0, 1.0);
+        let mean = sum / area;
+        assert!((mean / exact - 1.0).abs() < 0.02, "{mean} against {exact}");
+        let h = &s.hierarchy.as_ref().unwrap().hierarchy;
+        assert_eq!(
+            h.exposure[1], 1.0,
+            "the warped quad counted as inside a solid"
+        );
+    }
+
     /// Two closed rooms side by side, joined by a doorway in a partition of no thickness (two
     /// one-sided polygons back to back, as MGF's two-sided surfaces become), with a lamp in
     /// the first room's ceiling. Each side of the partition lies flush against the other but
