@@ -221,33 +221,47 @@ pub fn run(a: &BenchArgs, name: &str) -> Result<()> {
         );
     };
     let tolerance = a.tolerance.min(1e-4);
+    let seeds = &a.solve_seeds;
+    let tag = |seed: u64| {
+        if seeds.len() > 1 {
+            format!(" s{seed}")
+        } else {
+            String::new()
+        }
+    };
     for &e in a.link_errors.as_deref().unwrap_or(&[1e-4, 3e-5, 1e-5]) {
-        let settings = Settings {
-            hierarchical: Some(HierarchicalParams {
-                link_error: e,
-                tolerance,
-                max_passes: a.passes.unwrap_or(HierarchicalParams::default().max_passes),
+        for &seed in seeds {
+            let settings = Settings {
+                hierarchical: Some(HierarchicalParams {
+                    link_error: e,
+                    tolerance,
+                    max_passes: a.passes.unwrap_or(HierarchicalParams::default().max_passes),
+                    seed,
+                    ..Default::default()
+                }),
                 ..Default::default()
-            }),
-            ..Default::default()
-        };
-        let t = Instant::now();
-        let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent)?;
-        let wall = t.elapsed().as_secs_f64();
-        let links = s.hierarchy.as_ref().map_or(0, |h| h.hierarchy.links.len());
-        row(format!("hierarchical {e:e}"), &s, links, wall);
+            };
+            let t = Instant::now();
+            let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent)?;
+            let wall = t.elapsed().as_secs_f64();
+            let links = s.hierarchy.as_ref().map_or(0, |h| h.hierarchy.links.len());
+            row(format!("hierarchical {e:e}{}", tag(seed)), &s, links, wall);
+        }
     }
     for &n in a.sizes.as_deref().unwrap_or(&[]) {
-        let mut settings = Settings {
-            mesh: MeshParams::Patches(n),
-            ..Default::default()
-        };
-        settings.form_factors.rays = a.uniform_rays;
-        settings.params.tolerance = tolerance;
-        let t = Instant::now();
-        let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent)?;
-        let wall = t.elapsed().as_secs_f64();
-        row(format!("uniform progressive {n}"), &s, 0, wall);
+        for &seed in seeds {
+            let mut settings = Settings {
+                mesh: MeshParams::Patches(n),
+                ..Default::default()
+            };
+            settings.form_factors.rays = a.uniform_rays;
+            settings.form_factors.seed = seed;
+            settings.params.tolerance = tolerance;
+            let t = Instant::now();
+            let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent)?;
+            let wall = t.elapsed().as_secs_f64();
+            row(format!("uniform progressive {n}{}", tag(seed)), &s, 0, wall);
+        }
     }
     Ok(())
 }

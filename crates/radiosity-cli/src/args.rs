@@ -836,6 +836,11 @@ pub struct BenchArgs {
     /// `--hierarchical`: refinement passes of the hierarchical solves (default: the solver's).
     #[arg(long, value_name = "N", help_heading = SOLVER)]
     pub passes: Option<u32>,
+    /// `--hierarchical`: seeds of the solves' random streams (visibility samples, Monte Carlo
+    /// rows); each method runs once a seed, a row each, to show how much the errors owe to
+    /// the draw.
+    #[arg(long = "solve-seeds", value_name = "S,S,…", value_delimiter = ',', num_args = 1.., default_value = "1", help_heading = SOLVER)]
+    pub solve_seeds: Vec<u64>,
     /// `--hierarchical`: paths (`--reference-tracer path`, shared by area) or particles
     /// (`light`) of the reference in all.
     #[arg(long, value_name = "N", default_value_t = 20_000_000, help_heading = SCENE)]

@@ -2693,6 +2693,37 @@ fn bench_hierarchical_makes_and_reads_its_reference() {
         let again = run(&args, &dir);
         assert!(String::from_utf8_lossy(&again.stdout).contains("(read)"));
     }
+    // `--solve-seeds`: a row a seed, each its own draw.
+    let out = run(
+        &[
+            "bench",
+            "--hierarchical",
+            "cornell",
+            "--link-errors",
+            "1e-3",
+            "--reference",
+            "light.csv",
+            "--solve-seeds",
+            "1,2",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let rows: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("hierarchical 1e-3 s"))
+        .collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    assert_ne!(
+        rows[0].split_whitespace().nth(3),
+        rows[1].split_whitespace().nth(3),
+        "{text}"
+    );
 }
 
 /// `bench --rays SCENE`: the form-factor ray workload on a scene, with its figures.
