@@ -558,29 +558,18 @@ pub fn path_surface_means(
     samples: u64,
     seed: u64,
 ) -> Result<Vec<(Rgb, Rgb)>, Error> {
-    scene.validate()?;
-    let mesh = Mesh::build(scene, MeshParams::Faces)?;
-    let bvh = Bvh::build(&mesh);
-    let system = patch_system(scene, &mesh);
-    let mut area = vec![0.0f64; scene.polygons.len()];
-    for p in &mesh.patches {
-        area[p.surface as usize] += p.area as f64;
-    }
-    let total: f64 = area.iter().sum();
-    let counts: Vec<u64> = area
-        .iter()
-        .map(|a| ((samples as f64 * a / total).round() as u64).max(64))
-        .collect();
-    let surfaces = crate::render::light::Surfaces {
-        mesh: &mesh,
-        bvh: &bvh,
-        reflectance: &system.reflectance,
-        emission: &system.emission,
-    };
-    let lights = crate::render::light::Lights::new(&mesh, &system.emission);
-    Ok(crate::render::path::surface_means(
-        &surfaces, &lights, &counts, seed,
-    ))
+    traced_means(scene, |surfaces, lights| {
+        let mut area = vec![0.0f64; scene.polygons.len()];
+        for p in &surfaces.mesh.patches {
+            area[p.surface as usize] += p.area as f64;
+        }
+        let total: f64 = area.iter().sum();
+        let counts: Vec<u64> = area
+            .iter()
+            .map(|a| ((samples as f64 * a / total).round() as u64).max(64))
+            .collect();
+        crate::render::path::surface_means(surfaces, lights, &counts, seed)
+    })
 }
 
 /// Light-traced mean radiosity of every surface (input polygon) of `scene`, with its standard
@@ -591,6 +580,26 @@ pub fn light_surface_means(
     scene: &Scene,
     particles: u64,
     seed: u64,
+) -> Result<Vec<(Rgb, Rgb)>, Error> {
+    traced_means(scene, |surfaces, lights| {
+        crate::render::particle::surface_means(
+            surfaces,
+            lights,
+            scene.polygons.len(),
+            particles,
+            seed,
+        )
+    })
+}
+
+/// `scene` validated, meshed one patch a face with its hierarchy and materials, handed to a
+/// tracer of surface means.
+fn traced_means(
+    scene: &Scene,
+    trace: impl FnOnce(
+        &crate::render::light::Surfaces<'_>,
+        &crate::render::light::Lights,
+    ) -> Vec<(Rgb, Rgb)>,
 ) -> Result<Vec<(Rgb, Rgb)>, Error> {
     scene.validate()?;
     let mesh = Mesh::build(scene, MeshParams::Faces)?;
@@ -603,13 +612,7 @@ pub fn light_surface_means(
         emission: &system.emission,
     };
     let lights = crate::render::light::Lights::new(&mesh, &system.emission);
-    Ok(crate::render::particle::surface_means(
-        &surfaces,
-        &lights,
-        scene.polygons.len(),
-        particles,
-        seed,
-    ))
+    Ok(trace(&surfaces, &lights))
 }
 
 /// A system error about a patch, as an error at the place of the polygon it was cut from.

@@ -575,6 +575,20 @@ impl State<'_> {
         (est.k, uncertainty, est.rays)
     }
 
+    /// What link estimation reads, visibility samples drawn by `power` ([`State::power`]).
+    fn context<'a>(&'a self, power: &'a [f32]) -> Context<'a> {
+        Context {
+            elements: &self.h.elements.items,
+            clusters: &self.h.clusters,
+            bvh: self.bvh,
+            rays: self.params.visibility_rays,
+            seed: self.params.seed,
+            emits: &self.emits,
+            twin_of: &self.twin_of,
+            power,
+        }
+    }
+
     /// What each element sends (channel mean) times its area: the weights that visibility
     /// samples on a source are drawn by ([`Context::power`]). Over the whole area, exposed or
     /// not: a sample in a covered part is seen by nobody, and so the fraction seen still
@@ -631,16 +645,7 @@ impl State<'_> {
         while !todo.is_empty() {
             let power = self.power();
             let decisions: Vec<Decision> = {
-                let ctx = Context {
-                    elements: &self.h.elements.items,
-                    clusters: &self.h.clusters,
-                    bvh: self.bvh,
-                    rays: self.params.visibility_rays,
-                    seed: self.params.seed,
-                    emits: &self.emits,
-                    twin_of: &self.twin_of,
-                    power: &power,
-                };
+                let ctx = self.context(&power);
                 todo.par_iter()
                     .map(|&(r, s)| self.decide(&ctx, r, s))
                     .collect()
@@ -692,16 +697,7 @@ impl State<'_> {
     fn rerefine(&mut self) -> Result<u64, HierarchicalError> {
         let mut links = std::mem::take(&mut self.h.links);
         let power = self.power();
-        let ctx = Context {
-            elements: &self.h.elements.items,
-            clusters: &self.h.clusters,
-            bvh: self.bvh,
-            rays: self.params.visibility_rays,
-            seed: self.params.seed,
-            emits: &self.emits,
-            twin_of: &self.twin_of,
-            power: &power,
-        };
+        let ctx = self.context(&power);
         // A link judged by its bound (k_oracle < 0) that the bound no longer clears is
         // judged again by the oracle's own estimate, as a new link would be.
         let verdicts: Vec<(Option<Decision>, Option<Judged>)> = links

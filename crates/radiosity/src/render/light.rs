@@ -113,14 +113,9 @@ impl Lights {
         u: f64,
         rng: &mut Rng64,
     ) -> Rgb {
-        if self.patches.is_empty() {
+        let Some((j, pdf)) = self.pick(u) else {
             return Rgb::BLACK;
-        }
-        let k = self
-            .cdf
-            .partition_point(|&c| c <= u)
-            .min(self.patches.len() - 1);
-        let j = self.patches[k];
+        };
         let (u1, u2, u3) = (uniform(rng), uniform(rng), uniform(rng));
         if j == own {
             return Rgb::BLACK;
@@ -146,7 +141,7 @@ impl Lights {
             return Rgb::BLACK;
         }
         let g = cos_x as f64 * cos_y as f64 / d2 as f64;
-        s.emission[j as usize] * (std::f64::consts::FRAC_1_PI * g * patch.area as f64 / self.pdf[k])
+        s.emission[j as usize] * (std::f64::consts::FRAC_1_PI * g * patch.area as f64 / pdf)
     }
 }
 
