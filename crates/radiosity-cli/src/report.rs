@@ -122,10 +122,12 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
                 hi.min_area
             );
             println!(
-                "links       {} ({:.1} a leaf) over {} clusters; {} refinements in {} passes; {} visibility rays; {:.1} MiB",
+                "links       {} ({:.1} an element, {:.1} a leaf) over {} clusters; {} dropped as invisible; {} refinements in {} passes; {} visibility rays; {:.1} MiB",
                 hi.links,
+                hi.links as f64 / hi.elements.max(1) as f64,
                 hi.links as f64 / s.mesh.len().max(1) as f64,
                 hi.clusters,
+                hi.invisible,
                 hi.refinements,
                 hi.passes,
                 hi.rays,
