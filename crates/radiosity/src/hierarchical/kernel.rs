@@ -510,11 +510,14 @@ impl Context<'_> {
     fn power_point(&self, start: u32, rng: &mut Rng64) -> (Vec3, f64) {
         let mut e = start;
         let mut el = &self.elements[e as usize];
-        if self.power.is_empty() || el.is_leaf() || self.power[e as usize] <= 0.0 {
+        // Children made after `power` was taken are not looked at: refinement decides a
+        // round's candidates in slices, and the slices must not see each other's splits.
+        let drawn_leaf = |el: &Element| el.is_leaf() || el.children as usize >= self.power.len();
+        if self.power.is_empty() || drawn_leaf(el) || self.power[e as usize] <= 0.0 {
             return (el.sample(uniform(rng), uniform(rng), uniform(rng)), 1.0);
         }
         let mut ratio = 1.0f64;
-        while !el.is_leaf() {
+        while !drawn_leaf(el) {
             let first = el.children as usize;
             let (mut area, mut power) = (0.0f64, 0.0f64);
             for c in first..first + 4 {

@@ -395,8 +395,13 @@ impl Hierarchy {
     }
 }
 
-/// An oracle's view of a link: its factor, kernel uncertainty and the rays cast for them.
-type Judged = (f32, f32, u32);
+/// What re-refinement does with a link.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Verdict {
+    Keep,
+    SplitReceiver,
+    SplitSource,
+}
 
 enum Decision {
     Cull,
@@ -658,61 +663,75 @@ impl State<'_> {
 
     /// Estimate and judge every candidate, splitting until every one is a link or culled.
     fn refine(&mut self, mut todo: Vec<(u32, u32)>) -> Result<(), HierarchicalError> {
+        // Candidates are decided a slice at a time, so that the decisions (an estimate each)
+        // take a few megabytes, reused, not a fresh gigabyte a round; the elements a slice
+        // creates are past the end of `power` and so unseen by later slices of the round
+        // ([`Context::power_point`]): the decisions do not depend on the slicing.
+        const SLICE: usize = 1 << 16;
         while !todo.is_empty() {
             let power = self.power();
-            let decisions: Vec<Decision> = {
-                let ctx = self.context(&power);
-                todo.par_iter()
-                    .map(|&(r, s)| self.decide(&ctx, r, s))
-                    .collect()
-            };
             let mut next = Vec::new();
-            for (&(r, s), d) in todo.iter().zip(decisions) {
-                match d {
-                    Decision::Cull => {}
-                    Decision::Accept(est, ..) if est.k == 0.0 && self.settled => {
-                        // Judged with solved radiosities and found to carry nothing: no
-                        // link (as RenderPark keeps no interaction of zero visibility).
-                        self.h.info.rays += est.rays as u64;
-                        self.h.info.invisible += 1;
-                    }
-                    Decision::Accept(est, k_oracle, uncertainty) => {
-                        self.h.info.rays += est.rays as u64;
-                        let from = self.h.cluster_sources.len() as u32;
-                        self.h.cluster_sources.extend_from_slice(&est.seen);
-                        let seen = [from, self.h.cluster_sources.len() as u32];
-                        self.h.links.push(Link {
-                            receiver: r,
-                            source: s,
-                            k: est.k,
-                            k_oracle,
-                            uncertainty,
-                            quarters: est.quarters,
-                            sources: est.sources,
-                            seen,
-                        });
-                    }
-                    Decision::SplitReceiver => {
-                        self.h.info.refinements += 1;
-                        let first = self.new_elements(r);
-                        next.extend((first..first + 4).map(|c| (c, s)));
-                    }
-                    Decision::SplitSource if s & CLUSTER != 0 => {
-                        self.h.info.refinements += 1;
-                        let node = &self.h.clusters.nodes[(s & !CLUSTER) as usize];
-                        next.extend(node.children.map(|c| (r, c)));
-                    }
-                    Decision::SplitSource => {
-                        self.h.info.refinements += 1;
-                        let first = self.new_elements(s);
-                        next.extend((first..first + 4).map(|c| (r, c)));
-                    }
-                }
+            for slice in todo.chunks(SLICE) {
+                let decisions: Vec<Decision> = {
+                    let ctx = self.context(&power);
+                    slice
+                        .par_iter()
+                        .map(|&(r, s)| self.decide(&ctx, r, s))
+                        .collect()
+                };
+                self.take(slice, decisions, &mut next);
             }
             self.check_memory()?;
             todo = next;
         }
         Ok(())
+    }
+
+    /// Carry out the decisions on `slice`'s candidates: store the links kept, split what
+    /// must be split and queue its candidates in `next`.
+    fn take(&mut self, slice: &[(u32, u32)], decisions: Vec<Decision>, next: &mut Vec<(u32, u32)>) {
+        for (&(r, s), d) in slice.iter().zip(decisions) {
+            match d {
+                Decision::Cull => {}
+                Decision::Accept(est, ..) if est.k == 0.0 && self.settled => {
+                    // Judged with solved radiosities and found to carry nothing: no
+                    // link (as RenderPark keeps no interaction of zero visibility).
+                    self.h.info.rays += est.rays as u64;
+                    self.h.info.invisible += 1;
+                }
+                Decision::Accept(est, k_oracle, uncertainty) => {
+                    self.h.info.rays += est.rays as u64;
+                    let from = self.h.cluster_sources.len() as u32;
+                    self.h.cluster_sources.extend_from_slice(&est.seen);
+                    let seen = [from, self.h.cluster_sources.len() as u32];
+                    self.h.links.push(Link {
+                        receiver: r,
+                        source: s,
+                        k: est.k,
+                        k_oracle,
+                        uncertainty,
+                        quarters: est.quarters,
+                        sources: est.sources,
+                        seen,
+                    });
+                }
+                Decision::SplitReceiver => {
+                    self.h.info.refinements += 1;
+                    let first = self.new_elements(r);
+                    next.extend((first..first + 4).map(|c| (c, s)));
+                }
+                Decision::SplitSource if s & CLUSTER != 0 => {
+                    self.h.info.refinements += 1;
+                    let node = &self.h.clusters.nodes[(s & !CLUSTER) as usize];
+                    next.extend(node.children.map(|c| (r, c)));
+                }
+                Decision::SplitSource => {
+                    self.h.info.refinements += 1;
+                    let first = self.new_elements(s);
+                    next.extend((first..first + 4).map(|c| (r, c)));
+                }
+            }
+        }
     }
 
     /// Judge every link with the current radiosities; replace those that fail by candidates.
@@ -721,52 +740,53 @@ impl State<'_> {
         let power = self.power();
         let ctx = self.context(&power);
         // A link judged by its bound (k_oracle < 0) that the bound no longer clears is
-        // judged again by the oracle's own estimate, as a new link would be.
-        let verdicts: Vec<(Option<Decision>, Option<Judged>)> = links
-            .par_iter()
+        // judged again by the oracle's own estimate, as a new link would be (and takes the
+        // oracle's view in place). A verdict and the rays cast, a few bytes a link: the
+        // links are millions.
+        let verdicts: Vec<(Verdict, u32)> = links
+            .par_iter_mut()
             .map(|l| {
                 let (r, s) = (l.receiver, l.source);
                 if self.error(r, s, l.k_oracle.abs(), l.uncertainty) <= self.eps {
-                    return (None, None);
+                    return (Verdict::Keep, 0);
                 }
+                let mut rays = 0;
                 if l.k_oracle < 0.0 {
-                    let (k, u, rays) = self.oracle(&ctx, r, s);
+                    let (k, u, cast) = self.oracle(&ctx, r, s);
+                    (l.k_oracle, l.uncertainty, rays) = (k, u, cast);
                     if self.error(r, s, k, u) <= self.eps {
-                        return (None, Some((k, u, rays)));
+                        return (Verdict::Keep, rays);
                     }
-                    return (self.split(r, s), Some((k, u, rays)));
                 }
-                (self.split(r, s), None)
+                let v = match self.split(r, s) {
+                    Some(Decision::SplitReceiver) => Verdict::SplitReceiver,
+                    Some(Decision::SplitSource) => Verdict::SplitSource,
+                    _ => Verdict::Keep,
+                };
+                (v, rays)
             })
             .collect();
-        for (l, (_, judged)) in links.iter_mut().zip(&verdicts) {
-            if let Some((k, u, rays)) = *judged {
-                l.k_oracle = k;
-                l.uncertainty = u;
-                self.h.info.rays += rays as u64;
-            }
-        }
-        let verdicts: Vec<Option<Decision>> = verdicts.into_iter().map(|v| v.0).collect();
         let mut todo = Vec::new();
         let mut kept = Vec::with_capacity(links.len());
         let mut split = 0;
-        for (l, v) in links.into_iter().zip(verdicts) {
+        for (l, (v, rays)) in links.into_iter().zip(verdicts) {
+            self.h.info.rays += rays as u64;
             let (r, s) = (l.receiver, l.source);
-            if matches!(v, Some(Decision::SplitReceiver | Decision::SplitSource)) {
+            if v != Verdict::Keep {
                 split += 1;
             }
             match v {
-                None if l.k == 0.0 => self.h.info.invisible += 1,
-                None | Some(Decision::Cull) | Some(Decision::Accept(..)) => kept.push(l),
-                Some(Decision::SplitReceiver) => {
+                Verdict::Keep if l.k == 0.0 => self.h.info.invisible += 1,
+                Verdict::Keep => kept.push(l),
+                Verdict::SplitReceiver => {
                     let first = self.new_elements(r);
                     todo.extend((first..first + 4).map(|c| (c, s)));
                 }
-                Some(Decision::SplitSource) if s & CLUSTER != 0 => {
+                Verdict::SplitSource if s & CLUSTER != 0 => {
                     let node = &self.h.clusters.nodes[(s & !CLUSTER) as usize];
                     todo.extend(node.children.map(|c| (r, c)));
                 }
-                Some(Decision::SplitSource) => {
+                Verdict::SplitSource => {
                     let first = self.new_elements(s);
                     todo.extend((first..first + 4).map(|c| (r, c)));
                 }
