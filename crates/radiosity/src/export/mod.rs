@@ -12,6 +12,7 @@ pub use crate::io::{write_atomic, OutputError};
 use crate::mesh::Mesh;
 use crate::render::{to_srgb8, Image};
 use crate::scene::Scene;
+use rayon::prelude::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -114,32 +115,52 @@ pub fn write_patches_csv(
     mesh: &Mesh,
     radiosity: &[Rgb],
 ) -> Result<(), ExportError> {
+    // Rows are formatted in parallel, a block of them into one string each, then written in
+    // order: at a million patches the shortest round-trip formatting of 18 numbers a row is
+    // a second of one core, the part of a solve that would not scale with threads.
+    const BLOCK: usize = 4096;
+    let blocks: Vec<String> = mesh
+        .patches
+        .par_chunks(BLOCK)
+        .zip(radiosity.par_chunks(BLOCK))
+        .enumerate()
+        .map(|(i, (patches, radiosity))| {
+            use std::fmt::Write as _;
+            let mut s = String::with_capacity(patches.len() * 160);
+            for (j, (p, b)) in patches.iter().zip(radiosity).enumerate() {
+                let m = &scene.materials[p.material as usize];
+                let (c, n, r, e) = (p.centre, p.normal, m.reflectance, m.emission);
+                // Writing into a String cannot fail.
+                let _ = writeln!(
+                    s,
+                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    i * BLOCK + j,
+                    p.surface,
+                    p.area,
+                    c.x,
+                    c.y,
+                    c.z,
+                    n.x,
+                    n.y,
+                    n.z,
+                    r.r,
+                    r.g,
+                    r.b,
+                    e.r,
+                    e.g,
+                    e.b,
+                    b.r,
+                    b.g,
+                    b.b
+                );
+            }
+            s
+        })
+        .collect();
     write_atomic(path, |out| {
         writeln!(out, "{PATCHES_CSV_HEADER}")?;
-        for (k, (p, b)) in mesh.patches.iter().zip(radiosity).enumerate() {
-            let m = &scene.materials[p.material as usize];
-            let (c, n, r, e) = (p.centre, p.normal, m.reflectance, m.emission);
-            writeln!(
-                out,
-                "{k},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                p.surface,
-                p.area,
-                c.x,
-                c.y,
-                c.z,
-                n.x,
-                n.y,
-                n.z,
-                r.r,
-                r.g,
-                r.b,
-                e.r,
-                e.g,
-                e.b,
-                b.r,
-                b.g,
-                b.b
-            )?;
+        for b in &blocks {
+            out.write_all(b.as_bytes())?;
         }
         Ok(())
     })
