@@ -441,8 +441,16 @@ impl Bvh {
     /// ray's own target, which a point sampled on a slightly warped quad may lie behind).
     #[inline]
     pub fn occluded_except(&self, ray: &Ray, t_max: f32, skip: impl Fn(u32) -> bool) -> bool {
+        self.any_hit_except(ray, t_max, skip).is_some()
+    }
+
+    /// The distance of some intersection (the first the traversal meets, not the closest) of
+    /// `ray` with `0 < t < t_max` other than the patches `skip` names, if there is one: the
+    /// any-hit query of [`Bvh::occluded_except`] telling also where it stopped.
+    #[inline]
+    pub fn any_hit_except(&self, ray: &Ray, t_max: f32, skip: impl Fn(u32) -> bool) -> Option<f32> {
         if self.tris.is_empty() {
-            return false;
+            return None;
         }
         let r = Ray4::new(ray);
         let mut stack: [u32; 128] = [0; 128];
@@ -457,7 +465,7 @@ impl Bvh {
                     let l = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
                     if !skip(b.id[l] >> 1) {
-                        return true;
+                        return Some(t.to_array()[l]);
                     }
                 }
             } else {
@@ -474,7 +482,7 @@ impl Bvh {
                 }
             }
             if sp == 0 {
-                return false;
+                return None;
             }
             sp -= 1;
             cur = stack[sp];
@@ -966,6 +974,17 @@ mod occlusion_tests {
             // leaves whatever lies beyond it (the closest hit of the rest, by brute force).
             if bvh.occluded_except(&ray, t_max, |_| false) != bvh.occluded(&ray, t_max) {
                 disagree += 1;
+            }
+            // Where the any-hit query stops is a real intersection in range: at or beyond the
+            // closest one (by brute force), and itself a hit of the ray.
+            if let Some(t) = bvh.any_hit_except(&ray, t_max, |_| false) {
+                let at = super::tests::brute(&mesh, &Ray::new(o + d * (t - 1e-3 * size), d));
+                if t >= t_max
+                    || t < closest - 1e-5 * size
+                    || at.is_none_or(|(s, _)| s > 2e-3 * size)
+                {
+                    disagree += 1;
+                }
             }
             if let Some(first) = bvh.closest_hit(&ray, f32::INFINITY) {
                 let mut rest = mesh.clone();

@@ -363,11 +363,23 @@ impl Context<'_> {
         let tolerance = 1e-4 * dist + 4.0 * off;
         let near = dist - 2.0 * tolerance;
         // (Only when that leaves the last stretch's start in front of `from`.)
+        let end = dist * 1.001 + 4.0 * off;
         let mut start = if near > off {
             let skip = |p: u32| {
                 let g = self.twin_of[p as usize];
                 g == group || g == own
             };
+            // One any-hit query over the whole ray first: most rays meet nothing but the
+            // two groups (then the target is what they see: its piece faces `x`, as every
+            // caller has checked) or an occluder well before the target. Only a hit on the
+            // last stretch (a polygon flush over the target, a coincident emitter, the wall
+            // at a corner) needs the closest hit; an occluder may then still lie before it,
+            // which the traversal, not ordered by distance, need not have met first.
+            match self.bvh.any_hit_except(&Ray::new(from, dir), end, skip) {
+                None => return true,
+                Some(t) if t < near => return false,
+                Some(_) => {}
+            }
             if self.bvh.occluded_except(&Ray::new(from, dir), near, skip) {
                 return false;
             }
@@ -378,10 +390,10 @@ impl Context<'_> {
         // The receiver's own surface met on the last stretch is stepped past (a few times at
         // most: its two triangles, a twin's).
         for _ in 0..4 {
-            match self.bvh.closest_hit(
-                &Ray::new(from + dir * start, dir),
-                dist * 1.001 + 4.0 * off - start,
-            ) {
+            match self
+                .bvh
+                .closest_hit(&Ray::new(from + dir * start, dir), end - start)
+            {
                 Some(h) if self.twin_of[h.patch as usize] == own && own != group => {
                     start += h.t + 0.25 * off;
                 }
