@@ -445,6 +445,18 @@ impl Context<'_> {
             }
         }
         let jitter: [f32; 2 * POINTS] = std::array::from_fn(|_| uniform(&mut rng));
+        // From a cluster, the receiver points share out the cluster's surfaces: point `p`
+        // draws its pieces from stratum `strata[p]` of the area (a random permutation), so
+        // that the sixteen points' samples spread over the whole cluster rather than fall
+        // where independent draws happen to cluster. Each draw is still uniform by area, so
+        // the estimate stays unbiased; only its variance falls.
+        let mut strata: [u8; POINTS] = std::array::from_fn(|i| i as u8);
+        if source & CLUSTER != 0 {
+            for i in (1..POINTS).rev() {
+                let j = ((uniform(&mut rng) * (i + 1) as f32) as usize).min(i);
+                strata.swap(i, j);
+            }
+        }
         let own = self.twin_of[re.root as usize];
         for (p, x) in re.receiver_points(&jitter).into_iter().enumerate() {
             let mut vis = [0u32; 2];
@@ -471,7 +483,7 @@ impl Context<'_> {
                     re.normal,
                     own,
                     source & !CLUSTER,
-                    m,
+                    (m, strata[p] as u32),
                     &mut rng,
                     &mut vis,
                     seen,
@@ -644,8 +656,10 @@ impl Context<'_> {
     /// points drawn by area, `m` from its emitters and `m` from its other surfaces (the two
     /// strata, each weighted by its area): a lamp is a small part of a cluster's area but
     /// most of its light, and drawn with the rest it would be missed by most receivers and
-    /// met with a large weight by a few. `seen` (kept estimates): each sample seen, with its
-    /// part of the factor, for the link to gather what those surfaces send.
+    /// met with a large weight by a few. Within each, the draws come from `stratum` of
+    /// `POINTS` equal parts of the area (the estimate's receiver points take one part each).
+    /// `seen` (kept estimates): each sample seen, with its part of the factor, for the link
+    /// to gather what those surfaces send.
     #[allow(clippy::too_many_arguments)]
     fn cluster_factor(
         &self,
@@ -653,7 +667,7 @@ impl Context<'_> {
         n: Vec3,
         own: u32,
         c: u32,
-        m: u32,
+        (m, stratum): (u32, u32),
         rng: &mut Rng64,
         vis: &mut [u32; 2],
         mut seen: Option<&mut Vec<(u32, f32)>>,
@@ -666,8 +680,13 @@ impl Context<'_> {
                 continue;
             }
             let scale = area / m as f64;
-            for _ in 0..m {
-                let piece = self.clusters.pick_in(c, emitters, uniform(rng) as f64);
+            for j in 0..m {
+                // Stratum `stratum` of POINTS, sample j of its m sub-strata.
+                let u =
+                    ((stratum * m + j) as f64 + uniform(rng) as f64) / (POINTS as u32 * m) as f64;
+                let piece = self
+                    .clusters
+                    .pick_in(c, emitters, u.min(1.0 - f64::EPSILON));
                 let root = &self.elements[piece as usize];
                 if self.twin_of[piece as usize] != piece {
                     // A twin's light is sent by its representative, drawn as often.

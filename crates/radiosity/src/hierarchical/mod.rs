@@ -1427,6 +1427,93 @@ mod tests {
         }
     }
 
+    /// A cluster link's factor is unbiased with its receiver points sharing out the
+    /// cluster's area in strata. A unit square on the floor, and three unit squares a unit
+    /// above it facing down (one over it, two beside that one): the mean over 4,000
+    /// independent estimates (8 samples a receiver point) from the floor to the largest
+    /// cluster without it agrees within four standard errors (measured: 0.17223 against
+    /// 0.17210, one standard error 0.16 %) with the exact factor, Lambert's closed form at
+    /// 200 × 200 points of the floor.
+    #[test]
+    fn cluster_factors_are_unbiased() {
+        let grey = Material::diffuse("grey", Rgb::splat(0.5));
+        let square = |x: f32, y: f32, z: f32, up: bool| {
+            let mut v = [
+                [x, y, z],
+                [x + 1., y, z],
+                [x + 1., y + 1., z],
+                [x, y + 1., z],
+            ];
+            if !up {
+                v.reverse();
+            }
+            quad(v, 0)
+        };
+        let scene = Scene {
+            name: "squares".into(),
+            materials: vec![grey],
+            polygons: vec![
+                square(0., 0., 0., true),
+                square(0., 0., 1., false),
+                square(1., 0., 1., false),
+                square(0., 1., 1., false),
+            ],
+            ..Scene::default()
+        };
+        let roots = crate::mesh::Mesh::build(&scene, crate::mesh::MeshParams::Faces).unwrap();
+        let bvh = Bvh::build(&roots);
+        let items = Element::roots(&roots);
+        assert!(items[0].normal.z > 0.9 && items[1].normal.z < -0.9);
+        let clusters = Clusters::build(&items);
+        let members = |c: usize| {
+            let n = &clusters.nodes[c];
+            &clusters.order[n.first as usize..(n.first + n.count) as usize]
+        };
+        let c = (0..clusters.nodes.len())
+            .filter(|&c| !members(c).contains(&0))
+            .max_by_key(|&c| members(c).len())
+            .unwrap();
+        assert!(members(c).len() >= 2);
+        let grid = 200;
+        let mut exact = 0.0;
+        for i in 0..grid {
+            for j in 0..grid {
+                let x = Vec3::new(
+                    (i as f32 + 0.5) / grid as f32,
+                    (j as f32 + 0.5) / grid as f32,
+                    0.0,
+                );
+                for &m in members(c) {
+                    let e = &items[m as usize];
+                    exact += kernel::point_polygon(x, Vec3::Z, e.polygon(), e.normal);
+                }
+            }
+        }
+        exact /= (grid * grid) as f64;
+        let ks: Vec<f64> = (1..=4000)
+            .map(|seed| {
+                let ctx = Context {
+                    elements: &items,
+                    clusters: &clusters,
+                    bvh: &bvh,
+                    rays: 8,
+                    seed,
+                    emits: &[false; 4],
+                    twin_of: &[0, 1, 2, 3],
+                    power: &[],
+                };
+                ctx.estimate(0, c as u32 | CLUSTER, 0, false).k as f64
+            })
+            .collect();
+        let n = ks.len() as f64;
+        let mean = ks.iter().sum::<f64>() / n;
+        let se = (ks.iter().map(|k| (k - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        assert!(
+            (mean - exact).abs() < 4.0 * se,
+            "{mean} vs {exact} (standard error {se})"
+        );
+    }
+
     /// At the leaf level of a small hierarchy, the exact system (analytic factors between the
     /// leaves of a convex cube, where nothing occludes, solved by LU) agrees with the
     /// hierarchical solution: the area-weighted mean difference is the links' approximation
