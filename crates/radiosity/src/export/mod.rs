@@ -117,50 +117,56 @@ pub fn write_patches_csv(
 ) -> Result<(), ExportError> {
     // Rows are formatted in parallel, a block of them into one string each, then written in
     // order: at a million patches the shortest round-trip formatting of 18 numbers a row is
-    // a second of one core, the part of a solve that would not scale with threads.
+    // a second of one core, the part of a solve that would not scale with threads. A group
+    // of blocks at a time, so that the text held is bounded (some 40 MB), not the whole file.
     const BLOCK: usize = 4096;
-    let blocks: Vec<String> = mesh
-        .patches
-        .par_chunks(BLOCK)
-        .zip(radiosity.par_chunks(BLOCK))
-        .enumerate()
-        .map(|(i, (patches, radiosity))| {
-            use std::fmt::Write as _;
-            let mut s = String::with_capacity(patches.len() * 160);
-            for (j, (p, b)) in patches.iter().zip(radiosity).enumerate() {
-                let m = &scene.materials[p.material as usize];
-                let (c, n, r, e) = (p.centre, p.normal, m.reflectance, m.emission);
-                // Writing into a String cannot fail.
-                let _ = writeln!(
-                    s,
-                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                    i * BLOCK + j,
-                    p.surface,
-                    p.area,
-                    c.x,
-                    c.y,
-                    c.z,
-                    n.x,
-                    n.y,
-                    n.z,
-                    r.r,
-                    r.g,
-                    r.b,
-                    e.r,
-                    e.g,
-                    e.b,
-                    b.r,
-                    b.g,
-                    b.b
-                );
-            }
-            s
-        })
-        .collect();
+    const GROUP: usize = 64 * BLOCK;
+    let format = |first: usize, patches: &[crate::mesh::Patch], radiosity: &[Rgb]| {
+        use std::fmt::Write as _;
+        let mut s = String::with_capacity(patches.len() * 160);
+        for (j, (p, b)) in patches.iter().zip(radiosity).enumerate() {
+            let m = &scene.materials[p.material as usize];
+            let (c, n, r, e) = (p.centre, p.normal, m.reflectance, m.emission);
+            // Writing into a String cannot fail.
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                first + j,
+                p.surface,
+                p.area,
+                c.x,
+                c.y,
+                c.z,
+                n.x,
+                n.y,
+                n.z,
+                r.r,
+                r.g,
+                r.b,
+                e.r,
+                e.g,
+                e.b,
+                b.r,
+                b.g,
+                b.b
+            );
+        }
+        s
+    };
+    let rows = mesh.patches.len().min(radiosity.len());
     write_atomic(path, |out| {
         writeln!(out, "{PATCHES_CSV_HEADER}")?;
-        for b in &blocks {
-            out.write_all(b.as_bytes())?;
+        for start in (0..rows).step_by(GROUP) {
+            let end = (start + GROUP).min(rows);
+            let blocks: Vec<String> = mesh.patches[start..end]
+                .par_chunks(BLOCK)
+                .zip(radiosity[start..end].par_chunks(BLOCK))
+                .enumerate()
+                .map(|(i, (patches, radiosity))| format(start + i * BLOCK, patches, radiosity))
+                .collect();
+            for b in &blocks {
+                out.write_all(b.as_bytes())?;
+            }
         }
         Ok(())
     })
