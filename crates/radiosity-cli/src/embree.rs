@@ -111,7 +111,10 @@ impl Embree {
         // them and are checked for null, buffers are written within the sizes requested, and
         // the scene is committed before it is traced.
         unsafe {
-            let device = rtcNewDevice(std::ptr::null());
+            let cfg = std::env::var("EMBREE_CFG")
+                .ok()
+                .map(|c| std::ffi::CString::new(c).unwrap());
+            let device = rtcNewDevice(cfg.as_ref().map_or(std::ptr::null(), |c| c.as_ptr()));
             if device.is_null() {
                 bail!("Embree: rtcNewDevice failed");
             }

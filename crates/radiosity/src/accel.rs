@@ -37,22 +37,136 @@ struct Node {
     count: u32,
 }
 
-/// A 4-wide node: the boxes of up to four children, one SIMD lane each.
+/// Children per node of the wide tree.
+const WIDTH: usize = 8;
+
+/// A wide node: the boxes of up to [`WIDTH`] children in structure-of-arrays form, one SIMD
+/// lane each. An empty lane's box is +∞ in every coordinate, which no ray enters.
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
-struct Node4 {
-    min_x: Vec4,
-    min_y: Vec4,
-    min_z: Vec4,
-    max_x: Vec4,
-    max_y: Vec4,
-    max_z: Vec4,
-    /// Child references: a node index, or [`LEAF`] | first triangle << 3 | count.
-    child: [u32; 4],
+#[repr(C, align(64))]
+struct WideNode {
+    /// Lower corners: x, y and z of every child.
+    lo: [[f32; WIDTH]; 3],
+    /// Upper corners.
+    hi: [[f32; WIDTH]; 3],
+    /// Child references: a node index, or [`LEAF`] | block index; [`EMPTY_LANE`] for none.
+    child: [u32; WIDTH],
+}
+
+impl WideNode {
+    const EMPTY: WideNode = WideNode {
+        lo: [[f32::INFINITY; WIDTH]; 3],
+        hi: [[f32::INFINITY; WIDTH]; 3],
+        child: [EMPTY_LANE; WIDTH],
+    };
 }
 
 /// Marks a child reference as a leaf.
 const LEAF: u32 = 1 << 31;
+
+/// The sorting network for eight keys: 19 compare-exchanges, the fewest possible (Knuth,
+/// TAOCP vol. 3, §5.3.4).
+const SORT8: [(usize, usize); 19] = [
+    (0, 2),
+    (1, 3),
+    (4, 6),
+    (5, 7),
+    (0, 4),
+    (1, 5),
+    (2, 6),
+    (3, 7),
+    (0, 1),
+    (2, 3),
+    (4, 5),
+    (6, 7),
+    (2, 4),
+    (3, 5),
+    (1, 4),
+    (3, 6),
+    (1, 2),
+    (3, 4),
+    (5, 6),
+];
+
+/// Entries of a traversal stack's fixed part (see [`Stack`]).
+const STACK: usize = 56;
+
+/// Deepest level of the binary tree, which bounds the builder's recursion.
+const MAX_DEPTH: usize = 64;
+
+/// From this level of the binary tree down, splits halve the triangles by count: fewer than
+/// 2³¹ triangles then reach leaves of [`MAX_LEAF`] within [`MAX_DEPTH`] levels.
+const HALVING_DEPTH: usize = MAX_DEPTH - 31;
+
+/// A traversal stack: a fixed array on the machine stack, small enough that setting it up
+/// costs little per ray, whose bottom half moves to the heap when a deep tree would overflow
+/// it; so nothing is allocated in the common case and no tree is too deep.
+struct Stack<T: Copy + Default> {
+    top: [T; STACK],
+    sp: usize,
+    spill: Vec<T>,
+}
+
+impl<T: Copy + Default> Stack<T> {
+    #[inline(always)]
+    fn new() -> Self {
+        Stack {
+            top: [T::default(); STACK],
+            sp: 0,
+            spill: Vec::new(),
+        }
+    }
+
+    /// Make room for [`WIDTH`] pushes.
+    #[inline(always)]
+    fn reserve(&mut self) {
+        if self.sp + WIDTH > STACK {
+            self.spill_half();
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn spill_half(&mut self) {
+        self.spill.extend_from_slice(&self.top[..STACK / 2]);
+        self.top.copy_within(STACK / 2..self.sp, 0);
+        self.sp -= STACK / 2;
+    }
+
+    #[inline(always)]
+    fn push(&mut self, v: T) {
+        self.top[self.sp] = v;
+        self.sp += 1;
+    }
+
+    /// Write `v` on top, but count it pushed only if `keep`: a push without a branch.
+    #[inline(always)]
+    fn push_if(&mut self, v: T, keep: bool) {
+        self.top[self.sp] = v;
+        self.sp += keep as usize;
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<T> {
+        if self.sp == 0 && !self.refill() {
+            return None;
+        }
+        self.sp -= 1;
+        Some(self.top[self.sp])
+    }
+
+    /// Bring back the top of what was spilled; false if nothing was.
+    #[cold]
+    #[inline(never)]
+    fn refill(&mut self) -> bool {
+        let k = self.spill.len().min(STACK / 2);
+        let from = self.spill.len() - k;
+        self.top[..k].copy_from_slice(&self.spill[from..]);
+        self.spill.truncate(from);
+        self.sp = k;
+        k > 0
+    }
+}
 
 #[derive(Clone, Copy, Debug)]
 struct Tri {
@@ -91,12 +205,34 @@ pub struct Hit {
     pub front: bool,
 }
 
-/// A ray broadcast to four SIMD lanes, with its safe inverse direction: what both queries
-/// test boxes and triangle blocks with.
+/// A ray prepared for the queries: broadcast to four SIMD lanes for the triangle blocks, and
+/// its origin and safe inverse direction for the node boxes.
 struct Ray4 {
     o: [Vec4; 3],
     d: [Vec4; 3],
-    inv: [Vec4; 3],
+    origin: [f32; 3],
+    inv: [f32; 3],
+}
+
+/// `max` and `min` as one instruction each (`maxps`/`minps`), without `f32::max`'s NaN
+/// handling: no NaN arises in the box test (see [`Ray4::new`]).
+#[inline(always)]
+fn fmax(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// See [`fmax`].
+#[inline(always)]
+fn fmin(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
 }
 
 impl Ray4 {
@@ -116,7 +252,8 @@ impl Ray4 {
         Self {
             o: s(o),
             d: s(d),
-            inv: s(Vec3::new(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z))),
+            origin: o.to_array(),
+            inv: [safe_inv(d.x), safe_inv(d.y), safe_inv(d.z)],
         }
     }
 
@@ -142,29 +279,38 @@ impl Ray4 {
         (t, u, v, det)
     }
 
-    /// Entry distances into a node's four child boxes, and the mask of the children the ray
-    /// meets with `0 ≤ t ≤ t_max`.
+    /// Entry distances into a node's child boxes, and the mask of the children the ray
+    /// meets with `0 ≤ t ≤ t_max` (`t_max` finite: an empty lane's box lies at infinity).
     #[inline(always)]
-    fn enter(&self, n: &Node4, t_max: f32) -> (Vec4, u32) {
-        let [ox, oy, oz] = self.o;
+    fn enter(&self, n: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
+        let [ox, oy, oz] = self.origin;
         let [ix, iy, iz] = self.inv;
-        let tx0 = (n.min_x - ox) * ix;
-        let tx1 = (n.max_x - ox) * ix;
-        let ty0 = (n.min_y - oy) * iy;
-        let ty1 = (n.max_y - oy) * iy;
-        let tz0 = (n.min_z - oz) * iz;
-        let tz1 = (n.max_z - oz) * iz;
-        let tmin = tx0
-            .min(tx1)
-            .max(ty0.min(ty1))
-            .max(tz0.min(tz1))
-            .max(Vec4::ZERO);
-        let tmax = tx0
-            .max(tx1)
-            .min(ty0.max(ty1))
-            .min(tz0.max(tz1))
-            .min(Vec4::splat(t_max));
-        (tmin, tmin.cmple(tmax).bitmask())
+        let mut near = [0.0f32; WIDTH];
+        let mut far = [0.0f32; WIDTH];
+        for l in 0..WIDTH {
+            let tx0 = (n.lo[0][l] - ox) * ix;
+            let tx1 = (n.hi[0][l] - ox) * ix;
+            let ty0 = (n.lo[1][l] - oy) * iy;
+            let ty1 = (n.hi[1][l] - oy) * iy;
+            let tz0 = (n.lo[2][l] - oz) * iz;
+            let tz1 = (n.hi[2][l] - oz) * iz;
+            near[l] = fmax(
+                fmax(fmax(fmin(tx0, tx1), fmin(ty0, ty1)), fmin(tz0, tz1)),
+                0.0,
+            );
+            far[l] = fmin(
+                fmin(fmin(fmax(tx0, tx1), fmax(ty0, ty1)), fmax(tz0, tz1)),
+                t_max,
+            );
+        }
+        // The comparison four lanes at a time: `cmpps` and `movmskps`.
+        let mut mask = 0u32;
+        for h in 0..WIDTH / 4 {
+            let lane4 =
+                |a: &[f32; WIDTH]| Vec4::new(a[4 * h], a[4 * h + 1], a[4 * h + 2], a[4 * h + 3]);
+            mask |= lane4(&near).cmple(lane4(&far)).bitmask() << (4 * h);
+        }
+        (near, mask)
     }
 }
 
@@ -183,7 +329,7 @@ fn lanes_hit(t: Vec4, u: Vec4, v: Vec4, t_below: f32) -> u32 {
 /// The hierarchy over all patches of a mesh.
 #[derive(Clone, Debug)]
 pub struct Bvh {
-    nodes: Vec<Node4>,
+    nodes: Vec<WideNode>,
     /// One block per leaf.
     blocks: Vec<TriBlock>,
     /// Triangles in leaf order (kept for validation and statistics).
@@ -250,7 +396,7 @@ impl Bvh {
         // every choice depends only on that slice, so the tree and the order of `prims` are
         // the same for any number of threads), then laid out depth first, left first, each
         // node's two children side by side.
-        let tree = build_tree(&mut prims, 0);
+        let tree = build_tree(&mut prims, 0, 0);
         let mut nodes = Vec::with_capacity((2 * n / MAX_LEAF.max(1)).max(1) * 2);
         nodes.push(Node {
             min: [0.0; 3],
@@ -270,15 +416,7 @@ impl Bvh {
         if n > 0 {
             collapse(&nodes, 0, &tris, &mut wide, &mut blocks);
         } else {
-            wide.push(Node4 {
-                min_x: Vec4::ZERO,
-                min_y: Vec4::ZERO,
-                min_z: Vec4::ZERO,
-                max_x: Vec4::ZERO,
-                max_y: Vec4::ZERO,
-                max_z: Vec4::ZERO,
-                child: [EMPTY_LANE; 4],
-            });
+            wide.push(WideNode::EMPTY);
         }
         let mut bvh = Bvh {
             nodes: wide,
@@ -325,7 +463,7 @@ impl Bvh {
             nodes: self.nodes.len(),
             triangles: self.tris.len(),
             depth,
-            bytes: self.nodes.len() * std::mem::size_of::<Node4>()
+            bytes: self.nodes.len() * std::mem::size_of::<WideNode>()
                 + self.blocks.len() * std::mem::size_of::<TriBlock>(),
         }
     }
@@ -337,12 +475,12 @@ impl Bvh {
             return None;
         }
         let r = Ray4::new(ray);
-        let mut best_t = t_max;
+        // Finite, so that no ray enters an empty lane's box (see `collapse`).
+        let mut best_t = t_max.min(f32::MAX);
         let tie_abs = self.tie;
         let mut best = u32::MAX; // triangle id of the closest hit
         let (mut bu, mut bv, mut bdet) = (0.0f32, 0.0f32, 0.0f32);
-        let mut stack: [(u32, f32); 128] = [(0, 0.0); 128];
-        let mut sp = 0usize;
+        let mut stack = Stack::<(u32, f32)>::new();
         let mut cur = 0u32;
         'outer: loop {
             if cur & LEAF != 0 {
@@ -374,41 +512,52 @@ impl Bvh {
                 }
             } else {
                 let n = &self.nodes[cur as usize];
-                let (tmin, mut mask) = r.enter(n, best_t);
-                if mask != 0 {
-                    let dist = tmin.to_array();
-                    // The hit children, sorted by entry distance (at most four: insertion sort).
-                    let mut hits: [(u32, f32); 4] = [(0, 0.0); 4];
-                    let mut k = 0;
-                    while mask != 0 {
-                        let lane = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        let c = n.child[lane];
-                        if c == EMPTY_LANE {
-                            continue;
-                        }
-                        let mut j = k;
-                        while j > 0 && hits[j - 1].1 > dist[lane] {
-                            hits[j] = hits[j - 1];
-                            j -= 1;
-                        }
-                        hits[j] = (c, dist[lane]);
-                        k += 1;
+                let (dist, mask) = r.enter(n, best_t);
+                let count = mask.count_ones() as usize;
+                if count == 1 {
+                    cur = n.child[mask.trailing_zeros() as usize % WIDTH];
+                    continue 'outer;
+                }
+                stack.reserve();
+                if count == 2 {
+                    let a = mask.trailing_zeros() as usize % WIDTH;
+                    let b = (mask & (mask - 1)).trailing_zeros() as usize % WIDTH;
+                    let (near, far) = if dist[a] <= dist[b] { (a, b) } else { (b, a) };
+                    stack.push((n.child[far], dist[far]));
+                    cur = n.child[near];
+                    continue 'outer;
+                }
+                if count > 2 {
+                    // The children met, sorted by entry distance without branches: each
+                    // lane's key is its distance's bits (non-negative floats order as their
+                    // bits) with the lane in the three low bits, u32::MAX for a lane missed;
+                    // a sorting network of 19 compare-exchanges (Knuth, TAOCP 5.3.4) orders
+                    // the eight keys.
+                    let mut k = [0u32; WIDTH];
+                    for l in 0..WIDTH {
+                        k[l] = if mask >> l & 1 != 0 {
+                            (dist[l].to_bits() & !7) | l as u32
+                        } else {
+                            u32::MAX
+                        };
                     }
-                    if k > 0 {
-                        for h in hits[1..k].iter().rev() {
-                            stack[sp] = *h;
-                            sp += 1;
-                        }
-                        cur = hits[0].0;
-                        continue 'outer;
+                    for (a, b) in SORT8 {
+                        let (x, y) = (k[a], k[b]);
+                        k[a] = x.min(y);
+                        k[b] = x.max(y);
                     }
+                    // Push the farther ones (farthest deepest), each write kept only when
+                    // its lane was met; go on with the nearest.
+                    for i in (1..WIDTH).rev() {
+                        let entry = (n.child[(k[i] & 7) as usize], f32::from_bits(k[i] & !7));
+                        stack.push_if(entry, count > i);
+                    }
+                    cur = n.child[(k[0] & 7) as usize];
+                    continue 'outer;
                 }
             }
             // Pop the next node still worth visiting.
-            while sp > 0 {
-                sp -= 1;
-                let (c, dist) = stack[sp];
+            while let Some((c, dist)) = stack.pop() {
                 if dist <= best_t * (1.0 + TIE) + tie_abs {
                     cur = c;
                     continue 'outer;
@@ -453,8 +602,9 @@ impl Bvh {
             return None;
         }
         let r = Ray4::new(ray);
-        let mut stack: [u32; 128] = [0; 128];
-        let mut sp = 0usize;
+        // Finite, so that no ray enters an empty lane's box.
+        let t_max = t_max.min(f32::MAX);
+        let mut stack = Stack::<u32>::new();
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
@@ -470,22 +620,15 @@ impl Bvh {
                 }
             } else {
                 let n = &self.nodes[cur as usize];
+                // (An empty lane's box is never entered.)
                 let (_, mut mask) = r.enter(n, t_max);
+                stack.reserve();
                 while mask != 0 {
-                    let lane = mask.trailing_zeros() as usize;
+                    stack.push(n.child[mask.trailing_zeros() as usize % WIDTH]);
                     mask &= mask - 1;
-                    let c = n.child[lane];
-                    if c != EMPTY_LANE {
-                        stack[sp] = c;
-                        sp += 1;
-                    }
                 }
             }
-            if sp == 0 {
-                return None;
-            }
-            sp -= 1;
-            cur = stack[sp];
+            cur = stack.pop()?;
         }
     }
 
@@ -493,9 +636,9 @@ impl Bvh {
     /// leaf's box, every triangle in exactly one leaf). Tests call it.
     pub fn validate(&self) -> Result<(), String> {
         let mut seen = vec![false; self.tris.len()];
-        let lane_box = |n: &Node4, l: usize| Aabb {
-            min: Vec3::new(n.min_x[l], n.min_y[l], n.min_z[l]),
-            max: Vec3::new(n.max_x[l], n.max_y[l], n.max_z[l]),
+        let lane_box = |n: &WideNode, l: usize| Aabb {
+            min: Vec3::new(n.lo[0][l], n.lo[1][l], n.lo[2][l]),
+            max: Vec3::new(n.hi[0][l], n.hi[1][l], n.hi[2][l]),
         };
         let tol = |a: f32| 1e-4 * a.abs().max(1.0);
         let inside = |p: Vec3, b: &Aabb| {
@@ -511,7 +654,7 @@ impl Bvh {
         )];
         while let Some((i, parent)) = stack.pop() {
             let n = &self.nodes[i];
-            for l in 0..4 {
+            for l in 0..WIDTH {
                 let c = n.child[l];
                 if c == EMPTY_LANE {
                     continue;
@@ -557,13 +700,13 @@ impl Bvh {
     }
 }
 
-/// Collapse the binary tree under `b` into 4-wide nodes appended to `out`; returns the index of
+/// Collapse the binary tree under `b` into wide nodes appended to `out`; returns the index of
 /// the node made for `b` (which must be interior, or the root).
 fn collapse(
     bin: &[Node],
     b: usize,
     tris: &[Tri],
-    out: &mut Vec<Node4>,
+    out: &mut Vec<WideNode>,
     blocks: &mut Vec<TriBlock>,
 ) -> u32 {
     let area = |n: &Node| {
@@ -578,8 +721,8 @@ fn collapse(
     } else {
         vec![bin[b].first as usize, bin[b].first as usize + 1]
     };
-    // Open the interior child with the largest area until there are four.
-    while kids.len() < 4 {
+    // Open the interior child with the largest area until there are WIDTH.
+    while kids.len() < WIDTH {
         let Some((pos, _)) = kids
             .iter()
             .enumerate()
@@ -593,15 +736,7 @@ fn collapse(
         kids.push(bin[k].first as usize + 1);
     }
     let me = out.len();
-    out.push(Node4 {
-        min_x: Vec4::splat(f32::INFINITY),
-        min_y: Vec4::splat(f32::INFINITY),
-        min_z: Vec4::splat(f32::INFINITY),
-        max_x: Vec4::splat(f32::NEG_INFINITY),
-        max_y: Vec4::splat(f32::NEG_INFINITY),
-        max_z: Vec4::splat(f32::NEG_INFINITY),
-        child: [EMPTY_LANE; 4],
-    });
+    out.push(WideNode::EMPTY);
     for (lane, &k) in kids.iter().enumerate() {
         let n = bin[k];
         let r = if n.count > 0 {
@@ -629,12 +764,10 @@ fn collapse(
             collapse(bin, k, tris, out, blocks)
         };
         let node = &mut out[me];
-        node.min_x[lane] = n.min[0];
-        node.min_y[lane] = n.min[1];
-        node.min_z[lane] = n.min[2];
-        node.max_x[lane] = n.max[0];
-        node.max_y[lane] = n.max[1];
-        node.max_z[lane] = n.max[2];
+        for a in 0..3 {
+            node.lo[a][lane] = n.min[a];
+            node.hi[a][lane] = n.max[a];
+        }
         node.child[lane] = r;
     }
     me as u32
@@ -670,16 +803,31 @@ fn bounds_of(prims: &[Prim], f: impl Fn(&Prim) -> Aabb + Sync) -> Aabb {
 
 /// Build the binary tree over `prims` (which start at `first` in the whole array), reordering
 /// them so that every node's triangles are contiguous.
-fn build_tree(prims: &mut [Prim], first: usize) -> Built {
+fn build_tree(prims: &mut [Prim], first: usize, depth: usize) -> Built {
     let count = prims.len();
     let bounds = bounds_of(prims, |p| p.bounds);
-    match if count <= 1 { None } else { sah_split(prims) } {
+    let split = if count <= MAX_LEAF {
+        None
+    } else if depth >= HALVING_DEPTH {
+        // Deep enough that only halving by count keeps the tree within MAX_DEPTH levels
+        // (which the traversal stacks are sized for); a pathological input gets here.
+        Some(count / 2)
+    } else {
+        sah_split(prims)
+    };
+    match split {
         Some(mid) => {
             let (l, r) = prims.split_at_mut(mid);
             let (a, b) = if count >= PARALLEL_MIN {
-                rayon::join(|| build_tree(l, first), || build_tree(r, first + mid))
+                rayon::join(
+                    || build_tree(l, first, depth + 1),
+                    || build_tree(r, first + mid, depth + 1),
+                )
             } else {
-                (build_tree(l, first), build_tree(r, first + mid))
+                (
+                    build_tree(l, first, depth + 1),
+                    build_tree(r, first + mid, depth + 1),
+                )
             };
             Built::Inner {
                 bounds,
@@ -826,6 +974,31 @@ mod tests {
 
     /// Subtrees are built in parallel, and the hierarchy is the same, node for node, on any
     /// number of threads (the mesh is large enough for the top levels to split their work).
+    #[test]
+    fn stack_spills_and_refills_in_order() {
+        // Pushes in node-sized batches far beyond the fixed part, interleaved with pops: the
+        // stack gives back exactly what a Vec would.
+        let mut stack = Stack::<u32>::new();
+        let mut model = Vec::new();
+        let mut next = 0u32;
+        for round in 0..200 {
+            stack.reserve();
+            for _ in 0..WIDTH {
+                stack.push(next);
+                model.push(next);
+                next += 1;
+            }
+            if round % 3 == 0 {
+                assert_eq!(stack.pop(), model.pop());
+            }
+        }
+        assert!(!stack.spill.is_empty());
+        while let Some(v) = model.pop() {
+            assert_eq!(stack.pop(), Some(v));
+        }
+        assert_eq!(stack.pop(), None);
+    }
+
     #[test]
     fn build_is_the_same_on_any_number_of_threads() {
         let mesh = Mesh::build(&builtin::cornell(), MeshParams::Patches(20_000)).unwrap();
