@@ -482,6 +482,16 @@ impl Bvh {
     /// The closest hit of `ray` with `0 < t < t_max`, front or back side.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+        if dispatch::avx2() {
+            return dispatch::closest_hit(self, ray, t_max);
+        }
+        self.closest_hit_in(ray, t_max)
+    }
+
+    /// [`Bvh::closest_hit`], compiled for whatever instruction set its caller is.
+    #[inline(always)]
+    fn closest_hit_in(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         if self.tris.is_empty() {
             return None;
         }
@@ -612,6 +622,16 @@ impl Bvh {
     /// any-hit query of [`Bvh::occluded_except`] telling also where it stopped.
     #[inline]
     pub fn any_hit_except(&self, ray: &Ray, t_max: f32, skip: impl Fn(u32) -> bool) -> Option<f32> {
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+        if dispatch::avx2() {
+            return dispatch::any_hit_except(self, ray, t_max, skip);
+        }
+        self.any_hit_except_in(ray, t_max, skip)
+    }
+
+    /// [`Bvh::any_hit_except`], compiled for whatever instruction set its caller is.
+    #[inline(always)]
+    fn any_hit_except_in(&self, ray: &Ray, t_max: f32, skip: impl Fn(u32) -> bool) -> Option<f32> {
         if self.tris.is_empty() {
             return None;
         }
@@ -709,6 +729,68 @@ impl Bvh {
             return Err(format!("triangle {k} in no leaf"));
         }
         Ok(())
+    }
+}
+
+/// Run-time choice of instruction set, for builds that do not assume AVX2 (no
+/// `-C target-cpu=native`): the queries are compiled a second time with AVX2, FMA, BMI and
+/// POPCNT enabled (8-wide box tests in one instruction, `tzcnt`, `popcnt`), and that copy runs
+/// wherever the CPU has them. A build for a CPU with AVX2 uses its one copy directly.
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+#[allow(unsafe_code)]
+mod dispatch {
+    use super::{Bvh, Hit};
+    use crate::geom::Ray;
+    use std::sync::OnceLock;
+
+    /// Whether this CPU has every feature the AVX2 copy is compiled with (asked once).
+    #[inline(always)]
+    pub(super) fn avx2() -> bool {
+        static HAS: OnceLock<bool> = OnceLock::new();
+        *HAS.get_or_init(|| {
+            is_x86_feature_detected!("avx2")
+                && is_x86_feature_detected!("fma")
+                && is_x86_feature_detected!("bmi1")
+                && is_x86_feature_detected!("bmi2")
+                && is_x86_feature_detected!("lzcnt")
+                && is_x86_feature_detected!("popcnt")
+        })
+    }
+
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    fn closest_hit_avx2(bvh: &Bvh, ray: &Ray, t_max: f32) -> Option<Hit> {
+        bvh.closest_hit_in(ray, t_max)
+    }
+
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    fn any_hit_except_avx2(
+        bvh: &Bvh,
+        ray: &Ray,
+        t_max: f32,
+        skip: impl Fn(u32) -> bool,
+    ) -> Option<f32> {
+        bvh.any_hit_except_in(ray, t_max, skip)
+    }
+
+    /// The AVX2 copy of [`Bvh::closest_hit`]; call only where [`avx2`] is true.
+    #[inline]
+    pub(super) fn closest_hit(bvh: &Bvh, ray: &Ray, t_max: f32) -> Option<Hit> {
+        debug_assert!(avx2());
+        // SAFETY: the caller checked with `avx2()` that the CPU has every feature enabled.
+        unsafe { closest_hit_avx2(bvh, ray, t_max) }
+    }
+
+    /// The AVX2 copy of [`Bvh::any_hit_except`]; call only where [`avx2`] is true.
+    #[inline]
+    pub(super) fn any_hit_except(
+        bvh: &Bvh,
+        ray: &Ray,
+        t_max: f32,
+        skip: impl Fn(u32) -> bool,
+    ) -> Option<f32> {
+        debug_assert!(avx2());
+        // SAFETY: as above.
+        unsafe { any_hit_except_avx2(bvh, ray, t_max, skip) }
     }
 }
 
