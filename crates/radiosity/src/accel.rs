@@ -22,8 +22,11 @@ pub const MAX_LEAF: usize = 4;
 const BINS: usize = 32;
 const EMPTY_LANE: u32 = u32::MAX;
 /// Least barycentric slack that keeps shared edges watertight under rounding (see
-/// [`TriBlock::slack`] for the slack each triangle gets).
+/// [`TriBlock::slack0`] for the slack each triangle gets).
 const EDGE_EPS: f32 = 1e-6;
+/// Machine epsilons of the distance that a triangle's edges are widened by (see
+/// [`TriBlock::slack0`]).
+const SLACK_ULPS: f32 = 4.0;
 /// Relative distance within which two hits count as one (a ray through a shared edge).
 const TIE: f32 = 1e-6;
 
@@ -186,12 +189,17 @@ struct TriBlock {
     v0: [Vec4; 3],
     e1: [Vec4; 3],
     e2: [Vec4; 3],
-    /// Barycentric slack of each triangle: the `f32` rounding of Möller–Trumbore is of the
-    /// order of the machine epsilon times the coordinates' magnitude, in world units, which is
-    /// that divided by the triangle's smallest height in barycentric units. Without it, a ray
-    /// through the edge two small triangles share, far from the origin, can slip between
-    /// them (a crack: 3 in 2 × 10⁶ form-factor rays in the 40,000-patch Cornell box).
-    slack: Vec4,
+    /// Barycentric slack of each triangle at distance `t` along the ray: `slack0 + slack1·t`.
+    /// Möller–Trumbore's `f32` rounding is a few machine epsilons of `|o − v0|` (at most `t`
+    /// plus the triangle's longest edge) in world units, which is that over the triangle's
+    /// smallest height in barycentric units. Without it, a ray through the edge two small
+    /// triangles share, far from its origin, can slip between them (a crack: 3 in 2 × 10⁶
+    /// form-factor rays in the 40,000-patch Cornell box); a slack that ignores the distance
+    /// (a few epsilons of the largest coordinate) fattens triangles near the ray's origin
+    /// beyond what rounding needs, and rays leaving a corner then graze the next wall.
+    slack0: Vec4,
+    /// See `slack0`.
+    slack1: Vec4,
     id: [u32; 4],
 }
 
@@ -327,9 +335,10 @@ impl Ray4 {
 /// with `0 < t < t_below`.
 #[inline(always)]
 fn lanes_hit(b: &TriBlock, t: Vec4, u: Vec4, v: Vec4, t_below: f32) -> u32 {
-    (u.cmpge(-b.slack)
-        & v.cmpge(-b.slack)
-        & (u + v).cmple(Vec4::ONE + b.slack)
+    let slack = b.slack0 + b.slack1 * t;
+    (u.cmpge(-slack)
+        & v.cmpge(-slack)
+        & (u + v).cmple(Vec4::ONE + slack)
         & t.cmpgt(Vec4::ZERO)
         & t.cmplt(Vec4::splat(t_below)))
     .bitmask()
@@ -424,8 +433,7 @@ impl Bvh {
         let mut blocks = Vec::with_capacity(nodes.len() / 2 + 1);
         if n > 0 {
             let plan = plan_collapse(&nodes);
-            let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element();
-            collapse(&nodes, &plan, 0, &tris, &mut wide, &mut blocks, magnitude);
+            collapse(&nodes, &plan, 0, &tris, &mut wide, &mut blocks);
         } else {
             wide.push(WideNode::EMPTY);
         }
@@ -876,7 +884,6 @@ fn collapse(
     tris: &[Tri],
     out: &mut Vec<WideNode>,
     blocks: &mut Vec<TriBlock>,
-    magnitude: f32,
 ) -> u32 {
     let mut kids = Vec::with_capacity(WIDTH);
     if bin[b].count > 0 {
@@ -898,7 +905,8 @@ fn collapse(
                 v0: [Vec4::ZERO; 3],
                 e1: [Vec4::ZERO; 3],
                 e2: [Vec4::ZERO; 3],
-                slack: Vec4::ZERO,
+                slack0: Vec4::ZERO,
+                slack1: Vec4::ZERO,
                 id: [EMPTY_LANE; 4],
             };
             for (lane, t) in tris[n.first as usize..(n.first + n.count) as usize]
@@ -911,21 +919,23 @@ fn collapse(
                     blk.e2[a][lane] = t.e2[a];
                 }
                 blk.id[lane] = t.id;
-                // Rounding of a few ulps of the largest coordinate, in world units, over the
-                // triangle's smallest height (twice its area over its longest edge).
+                // Rounding of a few ulps of the distance from the ray's origin to the
+                // triangle's first vertex, in world units, over the triangle's smallest height
+                // (twice its area over its longest edge).
                 let longest = t.e1.length().max(t.e2.length()).max((t.e2 - t.e1).length());
                 let height = t.e1.cross(t.e2).length() / longest;
-                let slack = 2.0 * f32::EPSILON * magnitude / height;
-                blk.slack[lane] = if slack.is_finite() {
-                    slack.max(EDGE_EPS)
+                let per_length = SLACK_ULPS * f32::EPSILON / height;
+                if per_length.is_finite() {
+                    blk.slack0[lane] = (per_length * longest).max(EDGE_EPS);
+                    blk.slack1[lane] = per_length;
                 } else {
-                    EDGE_EPS
-                };
+                    blk.slack0[lane] = EDGE_EPS;
+                }
             }
             blocks.push(blk);
             LEAF | (blocks.len() - 1) as u32
         } else {
-            collapse(bin, plan, k, tris, out, blocks, magnitude)
+            collapse(bin, plan, k, tris, out, blocks)
         };
         let node = &mut out[me];
         for a in 0..3 {
