@@ -1,12 +1,28 @@
 //! Ray casting over the patches: a bounding-volume hierarchy of the patches' triangles.
 //!
-//! Build: a binary tree by the binned surface-area heuristic (16 bins per axis, Wald 2007 "On
-//! fast Construction of SAH-based Bounding Volume Hierarchies"), leaves of at most [`MAX_LEAF`]
-//! triangles, then collapsed into a 4-wide tree whose nodes hold their four children's boxes in
-//! structure-of-arrays form, so one SIMD pass tests all four (the layout of Embree's BVH4 and of
-//! Wald et al. 2008, "Getting Rid of Packets"). Traversal: iterative, children visited nearest
-//! first, children whose entry distance is beyond the current closest hit skipped.
-//! Triangle test: Möller–Trumbore with edges precomputed, which also tells which side was hit.
+//! Build: a binary tree by the binned surface-area heuristic (32 bins per axis, Wald 2007 "On
+//! fast Construction of SAH-based Bounding Volume Hierarchies"; the cost counts blocks of
+//! [`MAX_LEAF`] triangles, which one SIMD test takes), leaves of at most [`MAX_LEAF`]
+//! triangles, then collapsed into an 8-wide tree by the SAH-optimal dynamic programme of
+//! Ylitie, Karras & Laine 2017 ("Efficient Incoherent Ray Traversal on GPUs Through Compressed
+//! Wide BVHs", §3.1). A node holds its eight children's boxes in structure-of-arrays form, so
+//! one AVX pass tests all eight (the layout of Embree's BVH8). Traversal: iterative; the
+//! children met are ordered nearest first by a branch-free sorting network (with fast paths
+//! for one and two), pushed without branches, and skipped when they begin beyond the closest
+//! hit; the stack is a small fixed array that spills to the heap only for a pathologically
+//! deep tree. Triangle test: Möller–Trumbore on blocks of four, edges precomputed, which also
+//! tells which side was hit; each triangle's edges are widened by a few epsilons of the
+//! distance along the ray over its smallest height, which closes `f32` cracks between
+//! neighbours without fattening triangles near the ray's origin.
+//!
+//! Ties (two faces at the same distance, within a relative 10⁻⁶ or the ray offset): the front side
+//! wins, and between faces of the same side the lower patch number, so coincident copies of a
+//! surface resolve the same way whichever side a ray comes from and whatever order the
+//! traversal meets them in.
+//!
+//! Portable builds (without `-C target-cpu=native`, which `.cargo/config.toml` sets) compile
+//! the queries a second time for AVX2, FMA and BMI and choose that copy at run time where the
+//! CPU has them (module `dispatch`, the crate's one use of `unsafe`).
 //!
 //! Self-intersection: callers start rays a small distance off the surface (see
 //! [`Bvh::ray_offset`]) along its normal; since patches are planar and rays leave into the
