@@ -692,6 +692,16 @@ impl Bvh {
     /// leaf's box, every triangle in exactly one leaf). Tests call it.
     pub fn validate(&self) -> Result<(), String> {
         let mut seen = vec![false; self.tris.len()];
+        // Triangle ids (patch << 1 | sub) are unique: where each is in `tris`.
+        let index: std::collections::HashMap<u32, usize> = self
+            .tris
+            .iter()
+            .enumerate()
+            .map(|(k, t)| (t.id, k))
+            .collect();
+        if index.len() != self.tris.len() {
+            return Err("two triangles share an id".into());
+        }
         let lane_box = |n: &WideNode, l: usize| Aabb {
             min: Vec3::new(n.lo[0][l], n.lo[1][l], n.lo[2][l]),
             max: Vec3::new(n.hi[0][l], n.hi[1][l], n.hi[2][l]),
@@ -730,10 +740,7 @@ impl Bvh {
                     }
                     let get = |a: &[Vec4; 3]| Vec3::new(a[0][lane], a[1][lane], a[2][lane]);
                     let (v0, e1, e2) = (get(&blk.v0), get(&blk.e1), get(&blk.e2));
-                    let Some(k) = self
-                        .tris
-                        .iter()
-                        .position(|t| t.id == blk.id[lane] && t.v0 == v0)
+                    let Some(&k) = index.get(&blk.id[lane]).filter(|&&k| self.tris[k].v0 == v0)
                     else {
                         return Err(format!(
                             "leaf lane holds an unknown triangle {}",

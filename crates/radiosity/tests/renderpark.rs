@@ -99,3 +99,35 @@ fn counts_and_power_match_the_files_by_hand() {
     );
     assert!((p.g / (200_000.0 / 179.0) - 1.0).abs() < 0.01, "{p}");
 }
+
+/// The ray hierarchy of every RenderPark scene (both sidednesses, a patch a face) and of every
+/// built-in scene (5,000 patches) keeps its invariants: every triangle in exactly one leaf,
+/// inside its leaf's box, every box inside its parent's.
+#[test]
+fn every_scene_gets_a_valid_ray_hierarchy() {
+    let dir = folder();
+    for (name, ..) in SCENES {
+        for one_sided in [true, false] {
+            let mesh = Mesh::build(&load(&dir, name, one_sided), MeshParams::Faces)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let bvh = radiosity::accel::Bvh::build(&mesh);
+            assert_eq!(
+                bvh.info().triangles,
+                mesh.patches
+                    .iter()
+                    .map(|p| p.triangles().count())
+                    .sum::<usize>()
+            );
+            bvh.validate()
+                .unwrap_or_else(|e| panic!("{name} (one-sided {one_sided}): {e}"));
+        }
+    }
+    for name in radiosity::scene::builtin::NAMES {
+        let scene = radiosity::scene::builtin::by_name(name).unwrap();
+        let mesh = Mesh::build(&scene, MeshParams::Patches(5000))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        radiosity::accel::Bvh::build(&mesh)
+            .validate()
+            .unwrap_or_else(|e| panic!("built-in {name}: {e}"));
+    }
+}
