@@ -107,16 +107,31 @@ impl Embree {
                 patch_of.push(k as u32);
             }
         }
+        // Embree's device configuration (`rtcNewDevice`), for comparing its variants:
+        // `tri_accel=bvh4.triangle4`, `isa=avx2`, `tri_builder=sah`, `verbose=1`, …
+        let config = match std::env::var_os("RADIOSITY_EMBREE_CONFIG") {
+            None => None,
+            Some(c) => Some(
+                c.to_str()
+                    .and_then(|c| std::ffi::CString::new(c).ok())
+                    .ok_or_else(|| {
+                        anyhow::anyhow!("RADIOSITY_EMBREE_CONFIG: not UTF-8, or holds a NUL byte")
+                    })?,
+            ),
+        };
         // SAFETY: every call follows Embree's API: handles come from the calls that create
         // them and are checked for null, buffers are written within the sizes requested, and
         // the scene is committed before it is traced.
         unsafe {
-            let cfg = std::env::var("EMBREE_CFG")
-                .ok()
-                .map(|c| std::ffi::CString::new(c).unwrap());
-            let device = rtcNewDevice(cfg.as_ref().map_or(std::ptr::null(), |c| c.as_ptr()));
+            let device = rtcNewDevice(config.as_ref().map_or(std::ptr::null(), |c| c.as_ptr()));
             if device.is_null() {
-                bail!("Embree: rtcNewDevice failed");
+                bail!(
+                    "Embree: rtcNewDevice failed{}",
+                    config.as_ref().map_or(String::new(), |c| format!(
+                        " (RADIOSITY_EMBREE_CONFIG={:?})",
+                        c.to_string_lossy()
+                    ))
+                );
             }
             let scene = rtcNewScene(device);
             rtcSetSceneBuildQuality(scene, BUILD_QUALITY_HIGH);
