@@ -327,13 +327,16 @@ impl Ray4 {
             let ty1 = (n.hi[1][l] - oy) * iy;
             let tz0 = (n.lo[2][l] - oz) * iz;
             let tz1 = (n.hi[2][l] - oz) * iz;
+            // The clamps take the box's value second, which `fmax`/`fmin` return when it is
+            // NaN (a ray with a NaN coordinate): then nothing is entered, not even an empty
+            // lane.
             near[l] = fmax(
-                fmax(fmax(fmin(tx0, tx1), fmin(ty0, ty1)), fmin(tz0, tz1)),
                 0.0,
+                fmax(fmax(fmin(tx0, tx1), fmin(ty0, ty1)), fmin(tz0, tz1)),
             );
             far[l] = fmin(
-                fmin(fmin(fmax(tx0, tx1), fmax(ty0, ty1)), fmax(tz0, tz1)),
                 t_max,
+                fmin(fmin(fmax(tx0, tx1), fmax(ty0, ty1)), fmax(tz0, tz1)),
             );
         }
         // The comparison four lanes at a time: `cmpps` and `movmskps`.
@@ -1411,6 +1414,27 @@ mod tests {
             checked += 1;
         }
         assert!(checked > 100);
+    }
+
+    /// A ray with a NaN in its origin or direction meets nothing, and no query panics.
+    #[test]
+    fn nan_rays_meet_nothing() {
+        let mesh = Mesh::build(&builtin::cornell(), MeshParams::Patches(800)).unwrap();
+        let bvh = Bvh::build(&mesh);
+        let o = Vec3::new(278.0, 274.0, 280.0);
+        for ray in [
+            Ray::new(Vec3::new(f32::NAN, 274.0, 280.0), Vec3::Y),
+            Ray::new(o, Vec3::new(0.0, f32::NAN, 1.0)),
+            Ray::new(Vec3::splat(f32::NAN), Vec3::splat(f32::NAN)),
+        ] {
+            assert_eq!(bvh.closest_hit(&ray, f32::INFINITY), None);
+            assert!(!bvh.occluded(&ray, f32::INFINITY));
+            assert_eq!(bvh.any_hit_except(&ray, 1e3, |_| false), None);
+        }
+        // And a finite ray still hits.
+        assert!(bvh
+            .closest_hit(&Ray::new(o, Vec3::Y), f32::INFINITY)
+            .is_some());
     }
 
     #[test]
