@@ -903,8 +903,9 @@ fn plan_collapse(bin: &[Node]) -> Vec<[u8; WIDTH]> {
             continue;
         }
         let (l, r) = (bin[n].first as usize, bin[n].first as usize + 1);
-        // split[i − 1]: the best cost of `i` slots shared between the two subtrees.
-        let mut split = [(f32::INFINITY, 0u8); WIDTH];
+        // split[i − 1]: the best cost of `i` slots shared between the two subtrees (one
+        // slot to the left where every cost overflows to ∞, so the plan stays valid).
+        let mut split = [(f32::INFINITY, 1u8); WIDTH];
         for i in 2..=WIDTH {
             for k in 1..i {
                 let c = cost[l][k - 1] + cost[r][i - k - 1];
@@ -1435,6 +1436,24 @@ mod tests {
         assert!(bvh
             .closest_hit(&Ray::new(o, Vec3::Y), f32::INFINITY)
             .is_some());
+    }
+
+    /// Coordinates so large that every box's surface area overflows to ∞ still give a valid
+    /// hierarchy (the collapse's costs are all ∞ and it must still share out the slots).
+    #[test]
+    fn huge_coordinates_build_a_valid_tree() {
+        let mesh = Mesh::build(&builtin::cornell(), MeshParams::Patches(300)).unwrap();
+        let mut huge = mesh.clone();
+        for v in &mut huge.vertices {
+            *v *= 1e34;
+        }
+        let bvh = Bvh::build(&huge);
+        bvh.validate().unwrap();
+        // (Möller–Trumbore's products overflow at this scale: rays need not hit, but must
+        // not panic either.)
+        let o = Vec3::new(278.0, 274.0, 280.0) * 1e34;
+        let _ = bvh.closest_hit(&Ray::new(o, Vec3::Y), f32::INFINITY);
+        let _ = bvh.occluded(&Ray::new(o, Vec3::Y), f32::INFINITY);
     }
 
     #[test]
