@@ -363,6 +363,28 @@ fn lanes_hit(b: &TriBlock, t: Vec4, u: Vec4, v: Vec4, t_below: f32) -> u32 {
     .bitmask()
 }
 
+/// The children met (`mask`), sorted by entry distance without branches: each lane's key is
+/// its distance's bits (non-negative floats order as their bits) with the lane in the three
+/// low bits, `u32::MAX` for a lane missed; a sorting network of 19 compare-exchanges (Knuth,
+/// TAOCP 5.3.4) orders the eight keys, nearest first, missed lanes last.
+#[inline(always)]
+fn sorted_keys(dist: &[f32; WIDTH], mask: u32) -> [u32; WIDTH] {
+    let mut k = [0u32; WIDTH];
+    for l in 0..WIDTH {
+        k[l] = if mask >> l & 1 != 0 {
+            (dist[l].to_bits() & !7) | l as u32
+        } else {
+            u32::MAX
+        };
+    }
+    for (a, b) in SORT8 {
+        let (x, y) = (k[a], k[b]);
+        k[a] = x.min(y);
+        k[b] = x.max(y);
+    }
+    k
+}
+
 /// The hierarchy over all patches of a mesh.
 #[derive(Clone, Debug)]
 pub struct Bvh {
@@ -579,24 +601,7 @@ impl Bvh {
                     continue 'outer;
                 }
                 if count > 2 {
-                    // The children met, sorted by entry distance without branches: each
-                    // lane's key is its distance's bits (non-negative floats order as their
-                    // bits) with the lane in the three low bits, u32::MAX for a lane missed;
-                    // a sorting network of 19 compare-exchanges (Knuth, TAOCP 5.3.4) orders
-                    // the eight keys.
-                    let mut k = [0u32; WIDTH];
-                    for l in 0..WIDTH {
-                        k[l] = if mask >> l & 1 != 0 {
-                            (dist[l].to_bits() & !7) | l as u32
-                        } else {
-                            u32::MAX
-                        };
-                    }
-                    for (a, b) in SORT8 {
-                        let (x, y) = (k[a], k[b]);
-                        k[a] = x.min(y);
-                        k[b] = x.max(y);
-                    }
+                    let k = sorted_keys(&dist, mask);
                     // Push the farther ones (farthest deepest), each write kept only when
                     // its lane was met; go on with the nearest.
                     for i in (1..WIDTH).rev() {
@@ -715,19 +720,7 @@ impl Bvh {
                     cur = n.child[far];
                     continue;
                 } else if count > 2 {
-                    let mut k = [0u32; WIDTH];
-                    for l in 0..WIDTH {
-                        k[l] = if mask >> l & 1 != 0 {
-                            (dist[l].to_bits() & !7) | l as u32
-                        } else {
-                            u32::MAX
-                        };
-                    }
-                    for (a, b) in SORT8 {
-                        let (x, y) = (k[a], k[b]);
-                        k[a] = x.min(y);
-                        k[b] = x.max(y);
-                    }
+                    let k = sorted_keys(&dist, mask);
                     // Farthest first: in a closed scene the far children hold the surface
                     // the ray ends on.
                     for i in 0..count - 1 {
