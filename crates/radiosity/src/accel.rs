@@ -92,6 +92,14 @@ impl WideNode {
     };
 }
 
+/// Whether the build assumes AVX2 and FMA, so that the queries test boxes with
+/// [`avx::enter`] without asking the CPU.
+const NATIVE_AVX: bool = cfg!(all(
+    target_arch = "x86_64",
+    target_feature = "avx2",
+    target_feature = "fma"
+));
+
 /// Marks a child reference as a leaf.
 const LEAF: u32 = 1 << 31;
 
@@ -270,18 +278,10 @@ struct Ray4 {
     /// Per axis, `origin · inv` plus a few of its ulps: subtracted from `plane · inv` (one
     /// fused multiply-add, in [`avx::enter`]) it gives the distance to a near plane rounded
     /// down.
-    #[cfg(all(
-        target_arch = "x86_64",
-        target_feature = "avx2",
-        target_feature = "fma"
-    ))]
+    #[cfg(target_arch = "x86_64")]
     o_near: [f32; 3],
     /// `origin · inv` minus a few of its ulps, for the far planes (rounded up).
-    #[cfg(all(
-        target_arch = "x86_64",
-        target_feature = "avx2",
-        target_feature = "fma"
-    ))]
+    #[cfg(target_arch = "x86_64")]
     o_far: [f32; 3],
     /// Per axis, the plane of a child's box the ray enters by (the lower one where the
     /// direction is positive) and the one it leaves by: indices into [`WideNode::planes`].
@@ -333,11 +333,7 @@ impl Ray4 {
         // scene's origin, unlike the error of `(plane − o)·inv`) is taken up by moving near
         // planes four ulps closer and far ones four ulps farther: the test stays
         // conservative.
-        #[cfg(all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "fma"
-        ))]
+        #[cfg(target_arch = "x86_64")]
         let (o_near, o_far) = {
             let o_inv = [0, 1, 2].map(|a| o[a] * inv[a]);
             let pad = o_inv.map(|x| x.abs() * (4.0 * f32::EPSILON));
@@ -351,17 +347,9 @@ impl Ray4 {
             d: s(d),
             origin: o.to_array(),
             inv,
-            #[cfg(all(
-                target_arch = "x86_64",
-                target_feature = "avx2",
-                target_feature = "fma"
-            ))]
+            #[cfg(target_arch = "x86_64")]
             o_near,
-            #[cfg(all(
-                target_arch = "x86_64",
-                target_feature = "avx2",
-                target_feature = "fma"
-            ))]
+            #[cfg(target_arch = "x86_64")]
             o_far,
             near,
             far: near.map(|k| (k + 3) % 6),
@@ -392,20 +380,18 @@ impl Ray4 {
 
     /// Entry distances into a node's child boxes, and the mask of the children the ray
     /// meets with `0 ≤ t ≤ t_max`.
+    /// `AVX`: in AVX2 and FMA intrinsics ([`avx::enter`]); only where the CPU has them.
     #[inline(always)]
-    fn enter(&self, n: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
-        #[cfg(all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "fma"
-        ))]
-        return avx::enter(self, n, fmin(t_max, f32::MAX));
-        #[allow(unreachable_code)]
+    fn enter<const AVX: bool>(&self, n: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            return avx::enter(self, n, fmin(t_max, f32::MAX));
+        }
         self.enter_lanes(n, t_max)
     }
 
-    /// [`Ray4::enter`] lane by lane, for the compiler to vectorise (builds without FMA, and
-    /// the run-time AVX2 copy of a portable build): the two-step `(plane − o)·inv`.
+    /// [`Ray4::enter`] lane by lane, for the compiler to vectorise (CPUs without AVX2 and
+    /// FMA): the two-step `(plane − o)·inv`.
     #[inline(always)]
     fn enter_lanes(&self, n: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
         // Finite, so that no ray enters an empty lane's box, which lies at infinity.
@@ -631,7 +617,7 @@ impl Bvh {
         if dispatch::avx2() {
             return dispatch::closest_hit(self, ray, t_max);
         }
-        self.closest_hit_in(ray, t_max)
+        self.closest_hit_in::<NATIVE_AVX>(ray, t_max)
     }
 
     /// Start bringing child `c` (a node or a leaf's block) into the cache: the traversal
@@ -657,7 +643,7 @@ impl Bvh {
 
     /// [`Bvh::closest_hit`], compiled for whatever instruction set its caller is.
     #[inline(always)]
-    fn closest_hit_in(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+    fn closest_hit_in<const AVX: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         if self.tris.is_empty() {
             return None;
         }
@@ -702,7 +688,7 @@ impl Bvh {
                 let n = &self.nodes[cur as usize];
                 // Boxes up to the tie distance beyond the best are entered: a tie it holds
                 // (a front face meeting the back face hit so far at an edge) must be seen.
-                let (dist, mask) = r.enter(n, best_t * (1.0 + TIE) + tie_abs);
+                let (dist, mask) = r.enter::<AVX>(n, best_t * (1.0 + TIE) + tie_abs);
                 let count = mask.count_ones() as usize;
                 self.prefetch_met(n, mask);
                 if count == 1 {
@@ -770,7 +756,8 @@ impl Bvh {
         if dispatch::avx2() {
             return dispatch::any_hit_except::<true>(self, ray, t_max, skip).is_some();
         }
-        self.any_hit_except_in::<true>(ray, t_max, skip).is_some()
+        self.any_hit_except_in::<NATIVE_AVX, true>(ray, t_max, skip)
+            .is_some()
     }
 
     /// The distance of some intersection (the first the traversal meets, not the closest) of
@@ -785,13 +772,13 @@ impl Bvh {
         if dispatch::avx2() {
             return dispatch::any_hit_except::<false>(self, ray, t_max, skip);
         }
-        self.any_hit_except_in::<false>(ray, t_max, skip)
+        self.any_hit_except_in::<NATIVE_AVX, false>(ray, t_max, skip)
     }
 
     /// [`Bvh::any_hit_except`], compiled for whatever instruction set its caller is.
     #[inline(always)]
     /// `FAR_FIRST`: children met are visited farthest first, else in their stored order.
-    fn any_hit_except_in<const FAR_FIRST: bool>(
+    fn any_hit_except_in<const AVX: bool, const FAR_FIRST: bool>(
         &self,
         ray: &Ray,
         t_max: f32,
@@ -818,7 +805,7 @@ impl Bvh {
             } else {
                 let n = &self.nodes[cur as usize];
                 // (An empty lane's box is never entered.)
-                let (dist, mut mask) = r.enter(n, t_max);
+                let (dist, mut mask) = r.enter::<AVX>(n, t_max);
                 let count = mask.count_ones() as usize;
                 self.prefetch_met(n, mask);
                 if count == 1 {
@@ -928,15 +915,12 @@ impl Bvh {
     }
 }
 
-/// [`Ray4::enter`] in AVX2 and FMA intrinsics, for builds that assume them (the default,
-/// `-C target-cpu=native` on such a CPU): the compiler's own vectorisation of
+/// [`Ray4::enter`] in AVX2 and FMA intrinsics, used by builds that assume them (the default,
+/// `-C target-cpu=native` on such a CPU) and by the run-time AVX2 copy of a portable build
+/// ([`NATIVE_AVX`], module `dispatch`): the compiler's own vectorisation of
 /// [`Ray4::enter_lanes`] splits the far distances into two halves and keeps the ray's
 /// constants on the stack.
-#[cfg(all(
-    target_arch = "x86_64",
-    target_feature = "avx2",
-    target_feature = "fma"
-))]
+#[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod avx {
     use super::{Ray4, WideNode, WIDTH};
@@ -949,9 +933,10 @@ mod avx {
     /// `fmax`/`fmin` do, so a NaN ray still enters nothing.
     #[inline(always)]
     pub(super) fn enter(r: &Ray4, n: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
-        // SAFETY: this module is compiled only where the build's target features include
-        // AVX2 and FMA, so every CPU that runs the build has them; the loads and the store
-        // touch whole `[f32; 8]` arrays through references to them.
+        // SAFETY: `Ray4::enter::<true>`, the only caller, is instantiated only where the CPU
+        // has AVX2 and FMA: in builds whose target features include both (`NATIVE_AVX`),
+        // and in `dispatch`'s copies, which run after `is_x86_feature_detected!`. The loads
+        // and the store touch whole `[f32; 8]` arrays through references to them.
         unsafe {
             let plane = |k: usize| _mm256_loadu_ps(n.planes[k].as_ptr());
             let dist = |k: usize, a: usize, o: f32| {
@@ -1025,7 +1010,7 @@ mod dispatch {
 
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
     fn closest_hit_avx2(bvh: &Bvh, ray: &Ray, t_max: f32) -> Option<Hit> {
-        bvh.closest_hit_in(ray, t_max)
+        bvh.closest_hit_in::<true>(ray, t_max)
     }
 
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
@@ -1035,7 +1020,7 @@ mod dispatch {
         t_max: f32,
         skip: impl Fn(u32) -> bool,
     ) -> Option<f32> {
-        bvh.any_hit_except_in::<FAR_FIRST>(ray, t_max, skip)
+        bvh.any_hit_except_in::<true, FAR_FIRST>(ray, t_max, skip)
     }
 
     /// The AVX2 copy of [`Bvh::closest_hit`]; call only where [`avx2`] is true.
@@ -1502,6 +1487,26 @@ mod tests {
         }
         // Disagreement on the patch is only possible for rays exactly through shared edges.
         assert!(agree as f64 >= 0.999 * trials as f64, "{agree}");
+    }
+
+    /// The two box tests (lane by lane, for CPUs without AVX2, and the fused AVX2 one the
+    /// queries use where the CPU has it) lead to the same hits: the lane-by-lane one is
+    /// otherwise exercised only on such CPUs.
+    #[test]
+    fn both_box_tests_find_the_same_hits() {
+        let mesh = Mesh::build(&builtin::cornell(), MeshParams::Patches(3000)).unwrap();
+        let bvh = Bvh::build(&mesh);
+        let mut rng = crate::sampling::stream(5, 0, 0, 0);
+        let mut u = || crate::sampling::uniform(&mut rng);
+        for _ in 0..20_000 {
+            let o = Vec3::new(20.0 + 500.0 * u(), 10.0 + 500.0 * u(), 10.0 + 500.0 * u());
+            let d = Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5).normalize();
+            let ray = Ray::new(o, d);
+            let a = bvh.closest_hit_in::<false>(&ray, f32::INFINITY);
+            assert_eq!(a, bvh.closest_hit(&ray, f32::INFINITY), "{ray:?}");
+            let blocked = bvh.any_hit_except_in::<false, true>(&ray, 300.0, |_| false);
+            assert_eq!(blocked.is_some(), bvh.occluded(&ray, 300.0), "{ray:?}");
+        }
     }
 
     /// Rays aimed just inside the corners of triangles (which lie on their leaves' box
