@@ -13,10 +13,10 @@
 //! siblings); the children met are ordered nearest first by a branch-free sorting network
 //! (with fast paths for one and two), pushed without branches, and skipped when they begin
 //! beyond the closest hit; the stack is a small fixed array that spills to the heap only for
-//! a pathologically deep tree. Triangle test: Möller–Trumbore on blocks of four, edges precomputed, which also
-//! tells which side was hit; each triangle's edges are widened by a few epsilons of the
-//! distance along the ray over its smallest height, which closes `f32` cracks between
-//! neighbours without fattening triangles near the ray's origin.
+//! a pathologically deep tree. Triangle test: Möller–Trumbore on blocks of four, edges
+//! precomputed, which also tells which side was hit; each triangle's edges are widened by a
+//! few epsilons of the distance along the ray over its smallest height, which closes `f32`
+//! cracks between neighbours without fattening triangles near the ray's origin.
 //!
 //! Ties (two faces at the same distance, within a relative 10⁻⁶ or the ray offset): the front side
 //! wins, and between faces of the same side the lower patch number, so coincident copies of a
@@ -26,7 +26,8 @@
 //! Portable builds (without `-C target-cpu=native`, which `.cargo/config.toml` sets) compile
 //! the queries a second time for AVX2, FMA and BMI and choose that copy at run time where the
 //! CPU has them (module `dispatch`). With `unsafe` also: the box test in AVX2 intrinsics
-//! (module `avx`, for builds that assume AVX2 and FMA) and the prefetch hint (`hint`).
+//! (module `avx`, run by builds that assume AVX2 and FMA and by that run-time copy) and the
+//! prefetch hint (`hint`).
 //!
 //! Self-intersection: callers start rays a small distance off the surface (see
 //! [`Bvh::ray_offset`]) along its normal; since patches are planar and rays leave into the
@@ -379,8 +380,8 @@ impl Ray4 {
     }
 
     /// Entry distances into a node's child boxes, and the mask of the children the ray
-    /// meets with `0 ≤ t ≤ t_max`.
-    /// `AVX`: in AVX2 and FMA intrinsics ([`avx::enter`]); only where the CPU has them.
+    /// meets with `0 ≤ t ≤ t_max`. With `AVX`, in AVX2 and FMA intrinsics
+    /// ([`avx::enter`]): only where the CPU has them.
     #[inline(always)]
     fn enter<const AVX: bool>(&self, n: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
         #[cfg(target_arch = "x86_64")]

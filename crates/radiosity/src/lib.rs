@@ -19,8 +19,8 @@
 
 // Unsafe code is refused everywhere but in three small audited modules of the ray caster
 // (`accel`): the run-time dispatch to its AVX2 build, called only on a CPU that has AVX2; the
-// box test in AVX2/FMA intrinsics, compiled only into builds that assume those features; and
-// the cache prefetch hint.
+// box test in AVX2/FMA intrinsics, run only by builds that assume those features and by that
+// AVX2 build; and the cache prefetch hint.
 #![deny(unsafe_code)]
 
 pub mod accel;
