@@ -220,7 +220,7 @@ struct Tri {
 /// The (up to) four triangles of a leaf in structure-of-arrays form, tested in one SIMD pass.
 /// Unused lanes hold a degenerate triangle (zero edges), which no ray hits.
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
+#[repr(C, align(64))]
 struct TriBlock {
     v0: [Vec4; 3],
     e1: [Vec4; 3],
