@@ -234,6 +234,21 @@ pub enum Command {
     Thermal(ThermalArgs),
 }
 
+impl Command {
+    /// The `--threads` the command was given, if it takes one.
+    pub fn threads(&self) -> Option<usize> {
+        match self {
+            Command::Render(a) => a.solve.threads,
+            Command::Solve(a) => a.solve.threads,
+            Command::Bench(a) => a.threads,
+            Command::FormFactors(a) => a.threads,
+            Command::Experiment(a) => a.threads,
+            Command::Thermal(a) => a.threads,
+            Command::View(_) | Command::SolveSystem(_) | Command::Fuzz(_) => None,
+        }
+    }
+}
+
 const EXAMPLES_THERMAL: &str = "Examples:
   radiosity thermal examples/hot-plate.obj --boundary examples/hot-plate-bc.csv --out surfaces.csv
   radiosity thermal room.vs3 --boundary bc.csv --out surfaces.csv --unit mm --environment 293.15";

@@ -35,6 +35,22 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
+/// Run one command.
+fn run(command: Command) -> Result<()> {
+    let single = |what: &str| ranks::refuse_unless_single(what);
+    match command {
+        Command::Render(a) => single("render").and_then(|()| render(a)),
+        Command::Solve(a) => solve(a),
+        Command::View(a) => single("view").and_then(|()| view(a)),
+        Command::Bench(a) => bench::run(a),
+        Command::SolveSystem(a) => single("solve-system").and_then(|()| solve_system(a)),
+        Command::FormFactors(a) => view_factors::run(a),
+        Command::Experiment(a) => single("experiment").and_then(|()| experiment::run(a)),
+        Command::Fuzz(a) => single("fuzz").and_then(|()| fuzz::run_all(a)),
+        Command::Thermal(a) => thermal::run(a),
+    }
+}
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -48,18 +64,15 @@ fn main() -> ExitCode {
         eprintln!("radiosity: error: {e:#}");
         return ExitCode::FAILURE;
     }
-    let single = |what: &str| ranks::refuse_unless_single(what);
-    let result = match cli.command {
-        Command::Render(a) => single("render").and_then(|()| render(a)),
-        Command::Solve(a) => solve(a),
-        Command::View(a) => single("view").and_then(|()| view(a)),
-        Command::Bench(a) => bench::run(a),
-        Command::SolveSystem(a) => single("solve-system").and_then(|()| solve_system(a)),
-        Command::FormFactors(a) => view_factors::run(a),
-        Command::Experiment(a) => single("experiment").and_then(|()| experiment::run(a)),
-        Command::Fuzz(a) => single("fuzz").and_then(|()| fuzz::run_all(a)),
-        Command::Thermal(a) => thermal::run(a),
-    };
+    let result = settings::threads(cli.command.threads()).and_then(|()| {
+        // MPI was initialised on this thread (its communicator is thread-local, and MPI is
+        // told only this thread calls it): under mpirun the command stays here.
+        if ranks::launched().is_some() {
+            run(cli.command)
+        } else {
+            settings::on_worker(|| run(cli.command))
+        }
+    });
     match result {
         Ok(()) => {
             ranks::finish();

@@ -630,7 +630,9 @@ fn solve(
                 .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
             py.allow_threads(|| pool.install(|| run(&scene.inner)))
         }
-        None => py.allow_threads(|| run(&scene.inner)),
+        // On a worker of the global pool, as with a pool of `threads`: a method of many short
+        // parallel steps (progressive refinement) pays for each one started from outside it.
+        None => py.allow_threads(|| rayon::scope(|_| run(&scene.inner))),
     };
     if let Some(e) = observer.error() {
         return Err(e);

@@ -632,9 +632,9 @@ impl Bvh {
         const NODE_LINES: usize = std::mem::size_of::<WideNode>().div_ceil(64);
         if c & LEAF != 0 {
             let b = self.blocks.as_ptr().wrapping_add((c & !LEAF) as usize);
-            hint::prefetch(b, BLOCK_LINES);
+            crate::hint::prefetch(b, BLOCK_LINES);
         } else {
-            hint::prefetch(self.nodes.as_ptr().wrapping_add(c as usize), NODE_LINES);
+            crate::hint::prefetch(self.nodes.as_ptr().wrapping_add(c as usize), NODE_LINES);
         }
     }
 
@@ -967,25 +967,6 @@ mod avx {
             _mm256_storeu_ps(out.as_mut_ptr(), near);
             (out, mask)
         }
-    }
-}
-
-/// A hint to the memory system that data will be read soon.
-#[allow(unsafe_code)]
-mod hint {
-    /// Ask for the `lines` cache lines from `p` on to be brought to the cache closest to the
-    /// core. It never faults and changes nothing observable, whatever `p` is.
-    #[inline(always)]
-    pub(super) fn prefetch<T>(p: *const T, lines: usize) {
-        #[cfg(target_arch = "x86_64")]
-        for k in 0..lines {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            // SAFETY: `prefetch` only hints; it reads nothing architecturally and does not
-            // fault on any address, and SSE is part of every x86-64 CPU.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>((p as *const i8).wrapping_add(64 * k)) };
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = (p, lines);
     }
 }
 

@@ -17,10 +17,10 @@
 //! assert!((mean - 2.0).abs() < 0.1);
 //! ```
 
-// Unsafe code is refused everywhere but in three small audited modules of the ray caster
-// (`accel`): the run-time dispatch to its AVX2 build, called only on a CPU that has AVX2; the
-// box test in AVX2/FMA intrinsics, run only by builds that assume those features and by that
-// AVX2 build; and the cache prefetch hint.
+// Unsafe code is refused everywhere but in three small audited modules: two of the ray caster
+// (`accel`), the run-time dispatch to its AVX2 build, called only on a CPU that has AVX2, and
+// the box test in AVX2/FMA intrinsics, run only by builds that assume those features and by
+// that AVX2 build; and `hint`, the cache prefetch hint.
 #![deny(unsafe_code)]
 
 pub mod accel;
@@ -32,6 +32,7 @@ pub mod formfactor;
 pub mod fuzz;
 pub mod geom;
 pub mod hierarchical;
+mod hint;
 pub mod io;
 pub mod loc;
 pub mod mesh;

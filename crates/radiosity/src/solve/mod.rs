@@ -374,6 +374,12 @@ pub fn start<'s>(
 /// iteration and after each, and returns false to stop there (the result so far, reported as
 /// not converged unless it is); with `exact_status` every status is exact (see
 /// [`SolverState::unshot_fraction`]), which costs `overshoot` a pass over F per iteration.
+///
+/// Call it from a worker of a rayon pool (`ThreadPool::install`, or `rayon::scope` for the
+/// global pool) when the method takes many short steps: each parallel step started from
+/// outside the pool wakes a worker and puts the caller to sleep until it is done. Progressive
+/// refinement on the hospital at 100k patches (35,000 rows of ~1,500 rays, 90,000 shots) ran
+/// 19 % longer that way; the results are the same either way.
 pub fn run(
     solver: &mut dyn SolverState,
     source: &mut dyn Operator,

@@ -182,6 +182,14 @@ impl<'a> Leaves<'a> {
         self.keys[i - self.first]
     }
 
+    /// Ask the cache for what [`Self::set`] of key `i` reads: the key and its block's node.
+    #[inline]
+    pub fn prefetch(&self, i: usize) {
+        let k = i.wrapping_sub(self.first);
+        crate::hint::prefetch_at(self.keys, k);
+        crate::hint::prefetch_at(self.blocks, k / BLOCK);
+    }
+
     /// Set key `i` (an index of the whole tree, inside the span) and its block's node; the
     /// block is marked for [`MaxTree::settle`] if its node changed.
     pub fn set(&mut self, i: usize, key: f64) {
