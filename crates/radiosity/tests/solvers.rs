@@ -340,7 +340,7 @@ fn stochastic_jacobi_is_unbiased_thread_independent_and_balanced() {
     assert_eq!(on(1), on(2));
 }
 
-/// A shot's receivers are updated in parallel spans when the column is long (over 512
+/// A shot's receivers are updated in parallel spans when the column is long (over 128
 /// entries): the residuals are bit-identical to a plain serial loop over the column with a
 /// linear-scan shooter, on 1 and on 2 threads; and an operator that hands out rows for the
 /// solver to apply reciprocity to (`Column::Reciprocal`) gives the bits of one that hands out

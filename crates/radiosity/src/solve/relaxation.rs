@@ -136,10 +136,9 @@ const AHEAD: usize = 8;
 /// middle receiver and the halves updated by `rayon::join`, so that the receivers' cache misses
 /// (arrays of 10⁶ patches do not fit in any cache) are shared by the threads; the sums of the
 /// halves are added left to right, so the result depends on the column only.
-fn update(
+fn update<const RESIDUAL: bool>(
     receivers: &[(Rgb, f64)],
     delta: Rgb,
-    residual: bool,
     reciprocal: Option<f32>,
     span: Span<'_>,
 ) -> Sums {
@@ -152,7 +151,16 @@ fn update(
         if at <= first {
             at = MaxTree::block_start(middle + MaxTree::BLOCK);
         }
-        let k = column.partition_point(|e| (e.0 as usize) < at);
+        // The first entry at or past `at`: a few steps from the middle (the column is sorted
+        // and a block holds few receivers), where a binary search would wait on a chain of
+        // cache misses in a column read from memory.
+        let mut k = column.len() / 2;
+        while k > 0 && column[k - 1].0 as usize >= at {
+            k -= 1;
+        }
+        while k < column.len() && (column[k].0 as usize) < at {
+            k += 1;
+        }
         let (r0, r1) = span.r.split_at_mut(at - first);
         let (l0, l1) = match span.leaves {
             Some(l) => {
@@ -174,8 +182,8 @@ fn update(
             leaves: l1,
         };
         let (a, b) = rayon::join(
-            || update(receivers, delta, residual, reciprocal, left),
-            || update(receivers, delta, residual, reciprocal, right),
+            || update::<RESIDUAL>(receivers, delta, reciprocal, left),
+            || update::<RESIDUAL>(receivers, delta, reciprocal, right),
         );
         return a + b;
     }
@@ -205,7 +213,7 @@ fn update(
         sums.abs += e - abs_sum(r[k]) * a;
         r[k] = rj;
         if let Some(l) = &mut leaves {
-            l.set(j, if residual { e / a } else { e });
+            l.set(j, if RESIDUAL { e / a } else { e });
         }
     }
     sums
@@ -377,7 +385,12 @@ impl<'s> Relaxation<'s> {
                     r: &mut self.r,
                     leaves: Some(t.leaves()),
                 };
-                let sums = update(&self.receivers, delta, residual, reciprocal, span);
+                // Two copies, so that progressive refinement's has no division by the area.
+                let sums = if residual {
+                    update::<true>(&self.receivers, delta, reciprocal, span)
+                } else {
+                    update::<false>(&self.receivers, delta, reciprocal, span)
+                };
                 for &(j, _) in column {
                     t.settle(MaxTree::block_of(j as usize));
                 }
@@ -390,7 +403,7 @@ impl<'s> Relaxation<'s> {
                     r: &mut self.r,
                     leaves: None,
                 };
-                update(&self.receivers, delta, residual, reciprocal, span)
+                update::<false>(&self.receivers, delta, reciprocal, span)
             }
         };
         self.signed_unshot += sums.signed;
