@@ -106,6 +106,18 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
         threads,
         a.runs
     );
+    let info = bvh.info();
+    println!(
+        "radiosity BVH: {} triangles; {} nodes of {} children ({:.2} MB), {} leaves of {:.2} triangles on average ({:.2} MB), depth {}",
+        info.triangles,
+        info.nodes,
+        radiosity::accel::WIDTH,
+        info.node_bytes as f64 / 1e6,
+        info.leaves,
+        info.triangles as f64 / info.leaves.max(1) as f64,
+        (info.bytes - info.node_bytes) as f64 / 1e6,
+        info.depth
+    );
     println!(
         "{:<16} {:>10} {:>9} {:>14} {:>9}",
         "backend", "M rays/s", "hit rate", "ns/ray/thread", "build s"

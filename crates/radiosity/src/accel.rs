@@ -72,7 +72,7 @@ struct Node {
 }
 
 /// Children per node of the wide tree.
-const WIDTH: usize = 8;
+pub const WIDTH: usize = 8;
 
 /// A wide node: the boxes of up to [`WIDTH`] children in structure-of-arrays form, one SIMD
 /// lane each. An empty lane's box is +∞ in every coordinate, which no ray enters.
@@ -501,8 +501,12 @@ pub struct BvhInfo {
     pub triangles: usize,
     /// Depth of the deepest leaf.
     pub depth: usize,
+    /// Number of leaves (blocks of at most [`MAX_LEAF`] triangles).
+    pub leaves: usize,
     /// Bytes held.
     pub bytes: usize,
+    /// Of which the nodes'.
+    pub node_bytes: usize,
 }
 
 struct Prim {
@@ -610,12 +614,15 @@ impl Bvh {
                 }
             }
         }
+        let node_bytes = self.nodes.len() * std::mem::size_of::<WideNode>();
         BvhInfo {
             nodes: self.nodes.len(),
             triangles: self.tris.len(),
             depth,
-            bytes: self.nodes.len() * std::mem::size_of::<WideNode>()
-                + self.blocks.len() * std::mem::size_of::<TriBlock>(),
+            // The first block is the one empty lanes refer to.
+            leaves: self.blocks.len() - 1,
+            bytes: node_bytes + self.blocks.len() * std::mem::size_of::<TriBlock>(),
+            node_bytes,
         }
     }
 
@@ -1481,6 +1488,28 @@ mod tests {
         }
         // Disagreement on the patch is only possible for rays exactly through shared edges.
         assert!(agree as f64 >= 0.999 * trials as f64, "{agree}");
+    }
+
+    /// The statistics count what the hierarchy holds: every triangle in one leaf of at most
+    /// MAX_LEAF, the bytes those leaves and the nodes take.
+    #[test]
+    fn info_counts_what_it_holds() {
+        let mesh = Mesh::build(&builtin::cornell(), MeshParams::Patches(3000)).unwrap();
+        let bvh = Bvh::build(&mesh);
+        let info = bvh.info();
+        let tris: usize = mesh.patches.iter().map(|p| p.triangles().count()).sum();
+        assert_eq!(info.triangles, tris);
+        assert!(
+            info.leaves * MAX_LEAF >= tris && info.leaves <= tris,
+            "{info:?}"
+        );
+        let used: usize = bvh.blocks[1..]
+            .iter()
+            .map(|b| b.id.iter().filter(|&&id| id != NO_TRIANGLE).count())
+            .sum();
+        assert_eq!(used, tris);
+        assert_eq!(info.node_bytes, info.nodes * 256);
+        assert_eq!(info.bytes, info.node_bytes + (info.leaves + 1) * 192);
     }
 
     /// The two box tests (lane by lane, for CPUs without AVX2, and the fused AVX2 one the
