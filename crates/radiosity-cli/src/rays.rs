@@ -108,7 +108,7 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
     );
     let info = bvh.info();
     println!(
-        "radiosity BVH: {} triangles; {} nodes of {} children ({:.2} MB), {} leaves of {:.2} triangles on average ({:.2} MB), depth {}",
+        "radiosity BVH: {} triangles; {} nodes of {} children ({:.2} MB), {} leaves of {:.2} triangles on average ({:.2} MB), depth {}; SAH cost {:.2} (nodes) + {:.2} (leaves)",
         info.triangles,
         info.nodes,
         radiosity::accel::WIDTH,
@@ -116,7 +116,9 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
         info.leaves,
         info.triangles as f64 / info.leaves.max(1) as f64,
         (info.bytes - info.node_bytes) as f64 / 1e6,
-        info.depth
+        info.depth,
+        info.sah_nodes,
+        info.sah_leaves
     );
     println!(
         "{:<16} {:>10} {:>9} {:>14} {:>9}",

@@ -507,6 +507,12 @@ pub struct BvhInfo {
     pub bytes: usize,
     /// Of which the nodes'.
     pub node_bytes: usize,
+    /// The surface-area-heuristic cost of visiting the nodes: the sum of their boxes' areas
+    /// over the root's (the expected number of nodes a random line through the scene's box
+    /// visits), as Embree's `verbose=2` statistics count it.
+    pub sah_nodes: f64,
+    /// The same for the leaves (one block of triangles each).
+    pub sah_leaves: f64,
 }
 
 struct Prim {
@@ -605,14 +611,33 @@ impl Bvh {
     /// Sizes and depth.
     pub fn info(&self) -> BvhInfo {
         let mut depth = 0;
+        let root = f64::from(self.bounds.surface_area());
+        let (mut sah_nodes, mut sah_leaves) = (0.0, 0.0);
         let mut stack = vec![(0usize, 1usize)];
         while let Some((i, d)) = stack.pop() {
             depth = depth.max(d);
-            for &c in &self.nodes[i].child {
-                if c != EMPTY_LANE && c & LEAF == 0 {
+            let n = &self.nodes[i];
+            for (lane, &c) in n.child.iter().enumerate() {
+                if c == EMPTY_LANE {
+                    continue;
+                }
+                let area = f64::from(
+                    Aabb {
+                        min: Vec3::from_array([0, 1, 2].map(|a| n.planes[a][lane])),
+                        max: Vec3::from_array([3, 4, 5].map(|a| n.planes[a][lane])),
+                    }
+                    .surface_area(),
+                ) / root;
+                if c & LEAF == 0 {
+                    sah_nodes += area;
                     stack.push((c as usize, d + 1));
+                } else {
+                    sah_leaves += area;
                 }
             }
+        }
+        if !self.tris.is_empty() {
+            sah_nodes += 1.0; // the root
         }
         let node_bytes = self.nodes.len() * std::mem::size_of::<WideNode>();
         BvhInfo {
@@ -623,6 +648,8 @@ impl Bvh {
             leaves: self.blocks.len() - 1,
             bytes: node_bytes + self.blocks.len() * std::mem::size_of::<TriBlock>(),
             node_bytes,
+            sah_nodes,
+            sah_leaves,
         }
     }
 
@@ -1510,6 +1537,92 @@ mod tests {
         assert_eq!(used, tris);
         assert_eq!(info.node_bytes, info.nodes * 256);
         assert_eq!(info.bytes, info.node_bytes + (info.leaves + 1) * 192);
+        // The SAH costs are expected counts of boxes that a uniformly random line through
+        // the root's box crosses (Crofton: a convex body inside another is crossed with
+        // probability the ratio of their surface areas). Such lines: a uniform point on the
+        // root box's surface, a cosine-distributed direction into it. Counted by brute force
+        // over every child box, they must agree within a few standard errors.
+        let root = bvh.bounds;
+        let ext = root.extent();
+        let faces = [ext.y * ext.z, ext.x * ext.z, ext.x * ext.y];
+        let mut rng = crate::sampling::stream(9, 0, 0, 0);
+        let mut u = || crate::sampling::uniform(&mut rng);
+        let lines = 20_000;
+        // The root counts once per line.
+        let (mut nodes, mut leaves) = (lines as f64, 0.0f64);
+        let (mut sq_nodes, mut sq_leaves) = (0.0f64, 0.0f64);
+        for _ in 0..lines {
+            // A face (area-weighted), which side, a point on it, the inward normal.
+            let pick = u() * (faces[0] + faces[1] + faces[2]);
+            let axis = if pick < faces[0] {
+                0
+            } else if pick < faces[0] + faces[1] {
+                1
+            } else {
+                2
+            };
+            let upper = u() < 0.5;
+            let mut p = root.min + ext * Vec3::new(u(), u(), u());
+            p[axis] = if upper {
+                root.max[axis]
+            } else {
+                root.min[axis]
+            };
+            let mut n = Vec3::ZERO;
+            n[axis] = if upper { -1.0 } else { 1.0 };
+            let (t, b) = crate::geom::orthonormal_basis(n);
+            let d = crate::sampling::cosine_direction_in(n, t, b, u(), u());
+            let crosses = |lo: Vec3, hi: Vec3| {
+                let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+                for a in 0..3 {
+                    let (o, d) = (p[a] as f64, d[a] as f64);
+                    let (l, h) = (lo[a] as f64, hi[a] as f64);
+                    if d == 0.0 {
+                        if o < l || o > h {
+                            return false;
+                        }
+                    } else {
+                        let (x, y) = ((l - o) / d, (h - o) / d);
+                        t0 = t0.max(x.min(y));
+                        t1 = t1.min(x.max(y));
+                    }
+                }
+                t0 <= t1
+            };
+            let (mut my_nodes, mut my_leaves) = (1.0, 0.0);
+            for node in &bvh.nodes {
+                for (lane, &c) in node.child.iter().enumerate() {
+                    if c == EMPTY_LANE {
+                        continue;
+                    }
+                    let lo = Vec3::from_array([0, 1, 2].map(|a| node.planes[a][lane]));
+                    let hi = Vec3::from_array([3, 4, 5].map(|a| node.planes[a][lane]));
+                    if crosses(lo, hi) {
+                        if c & LEAF == 0 {
+                            my_nodes += 1.0;
+                        } else {
+                            my_leaves += 1.0;
+                        }
+                    }
+                }
+            }
+            nodes += my_nodes - 1.0;
+            leaves += my_leaves;
+            sq_nodes += my_nodes * my_nodes;
+            sq_leaves += my_leaves * my_leaves;
+        }
+        let m = lines as f64;
+        let (nodes, leaves) = (nodes / m, leaves / m);
+        let sigma = |mean: f64, sq: f64| ((sq / m - mean * mean) / m).sqrt();
+        let (sn, sl) = (sigma(nodes, sq_nodes), sigma(leaves, sq_leaves));
+        assert!(
+            (nodes - info.sah_nodes).abs() < 4.0 * sn,
+            "{nodes} ± {sn}: {info:?}"
+        );
+        assert!(
+            (leaves - info.sah_leaves).abs() < 4.0 * sl,
+            "{leaves} ± {sl}: {info:?}"
+        );
     }
 
     /// The two box tests (lane by lane, for CPUs without AVX2, and the fused AVX2 one the
