@@ -453,6 +453,37 @@ fn lanes_hit(b: &TriBlock, t: Vec4, u: Vec4, v: Vec4, t_below: f32) -> u32 {
     .bitmask()
 }
 
+/// Sorting networks for three and four keys: the fewest compare-exchanges (Knuth, TAOCP
+/// vol. 3, §5.3.4).
+const SORT3: [(usize, usize); 3] = [(0, 1), (1, 2), (0, 1)];
+/// See [`SORT3`].
+const SORT4: [(usize, usize); 5] = [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)];
+
+/// The keys of the `K` children met (`mask` has exactly `K` bits), as [`sorted_keys`] makes
+/// them, sorted nearest first by the network `net`. Most nodes a ray enters with more than
+/// two children met have three or four (hospital, 25,051 patches: 0.74 and 0.24 per ray
+/// against 0.16 with five or more); the eight-key network costs them five to six times as
+/// many compare-exchanges (closest hit 2.8 → 3.05 M rays/s there, one thread).
+#[inline(always)]
+fn sorted_met<const K: usize>(
+    dist: &[f32; WIDTH],
+    mut mask: u32,
+    net: &[(usize, usize)],
+) -> [u32; K] {
+    let mut k = [0u32; K];
+    for slot in &mut k {
+        let l = mask.trailing_zeros() as usize % WIDTH;
+        *slot = (dist[l].to_bits() & !7) | l as u32;
+        mask &= mask.wrapping_sub(1);
+    }
+    for &(a, b) in net {
+        let (x, y) = (k[a], k[b]);
+        k[a] = x.min(y);
+        k[b] = x.max(y);
+    }
+    k
+}
+
 /// The children met (`mask`), sorted by entry distance without branches: each lane's key is
 /// its distance's bits (non-negative floats order as their bits) with the lane in the three
 /// low bits, `u32::MAX` for a lane missed; a sorting network of 19 compare-exchanges (Knuth,
@@ -751,13 +782,28 @@ impl Bvh {
                     cur = n.child[near];
                     continue 'outer;
                 }
-                if count > 2 {
+                // Push the farther ones (farthest deepest); go on with the nearest.
+                let entry = |key: u32| (n.child[(key & 7) as usize], f32::from_bits(key & !7));
+                if count == 3 {
+                    let k = sorted_met::<3>(&dist, mask, &SORT3);
+                    stack.push(entry(k[2]));
+                    stack.push(entry(k[1]));
+                    cur = n.child[(k[0] & 7) as usize];
+                    continue 'outer;
+                }
+                if count == 4 {
+                    let k = sorted_met::<4>(&dist, mask, &SORT4);
+                    stack.push(entry(k[3]));
+                    stack.push(entry(k[2]));
+                    stack.push(entry(k[1]));
+                    cur = n.child[(k[0] & 7) as usize];
+                    continue 'outer;
+                }
+                if count > 4 {
                     let k = sorted_keys(&dist, mask);
-                    // Push the farther ones (farthest deepest), each write kept only when
-                    // its lane was met; go on with the nearest.
+                    // Each write kept only when its lane was met.
                     for i in (1..WIDTH).rev() {
-                        let entry = (n.child[(k[i] & 7) as usize], f32::from_bits(k[i] & !7));
-                        stack.push_if(entry, count > i);
+                        stack.push_if(entry(k[i]), count > i);
                     }
                     cur = n.child[(k[0] & 7) as usize];
                     continue 'outer;
@@ -872,7 +918,20 @@ impl Bvh {
                     stack.push(n.child[near]);
                     cur = n.child[far];
                     continue;
-                } else if count > 2 {
+                } else if count == 3 {
+                    let k = sorted_met::<3>(&dist, mask, &SORT3);
+                    stack.push(n.child[(k[0] & 7) as usize]);
+                    stack.push(n.child[(k[1] & 7) as usize]);
+                    cur = n.child[(k[2] & 7) as usize];
+                    continue;
+                } else if count == 4 {
+                    let k = sorted_met::<4>(&dist, mask, &SORT4);
+                    for &key in &k[..3] {
+                        stack.push(n.child[(key & 7) as usize]);
+                    }
+                    cur = n.child[(k[3] & 7) as usize];
+                    continue;
+                } else if count > 4 {
                     let k = sorted_keys(&dist, mask);
                     // Farthest first: in a closed scene the far children hold the surface
                     // the ray ends on.
