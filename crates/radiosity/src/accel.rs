@@ -696,18 +696,18 @@ impl Bvh {
 
     /// Start bringing child `c` (a node or a leaf's block) into the cache: the traversal
     /// asks for every child it will visit as soon as it knows it, so the memory latency of
-    /// a tree larger than the cache overlaps with the work in between.
+    /// a tree larger than the cache overlaps with the work in between. Without a branch
+    /// (whether a child is a leaf is as good as random): the address is selected, and four
+    /// lines are asked for either way, a node's four or a block's three and the line after.
     #[inline(always)]
     fn prefetch(&self, c: u32) {
         // Both are aligned to cache lines of 64 bytes: a block spans 3 lines, a node 4.
-        const BLOCK_LINES: usize = std::mem::size_of::<TriBlock>().div_ceil(64);
-        const NODE_LINES: usize = std::mem::size_of::<WideNode>().div_ceil(64);
-        if c & LEAF != 0 {
-            let b = self.blocks.as_ptr().wrapping_add((c & !LEAF) as usize);
-            crate::hint::prefetch(b, BLOCK_LINES);
-        } else {
-            crate::hint::prefetch(self.nodes.as_ptr().wrapping_add(c as usize), NODE_LINES);
-        }
+        const LINES: usize = std::mem::size_of::<WideNode>().div_ceil(64);
+        let leaf = c & LEAF != 0;
+        let i = (c & !LEAF) as usize;
+        let node = self.nodes.as_ptr().wrapping_add(i) as *const u8;
+        let block = self.blocks.as_ptr().wrapping_add(i) as *const u8;
+        crate::hint::prefetch(if leaf { block } else { node }, LINES);
     }
 
     /// [`Bvh::prefetch`] every child of `n` in `mask`.
