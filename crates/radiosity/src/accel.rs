@@ -728,6 +728,11 @@ impl Bvh {
         let r = Ray4::new(ray);
         let mut best_t = t_max;
         let tie_abs = self.tie;
+        // How far a hit or a box may begin and still matter: up to the tie distance beyond
+        // the best hit (a tie there, a front face meeting the back face hit so far at an
+        // edge, must be seen); kept with `best_t`.
+        let reach = |best_t: f32| best_t * (1.0 + TIE) + tie_abs;
+        let mut far = reach(best_t);
         let mut best = u32::MAX; // triangle id of the closest hit
         let (mut bu, mut bv, mut bdet) = (0.0f32, 0.0f32, 0.0f32);
         let mut stack = Stack::<(u32, f32)>::new();
@@ -737,7 +742,7 @@ impl Bvh {
                 let b = &self.blocks[(cur & !LEAF) as usize];
                 let (t, u, v, det) = r.intersect(b);
                 // Hits up to TIE beyond the best are kept for the tie rule below.
-                let mut mask = lanes_hit(b, t, u, v, best_t * (1.0 + TIE) + tie_abs);
+                let mut mask = lanes_hit(b, t, u, v, far);
                 if mask != 0 {
                     let (ta, ua, va, da) =
                         (t.to_array(), u.to_array(), v.to_array(), det.to_array());
@@ -747,7 +752,7 @@ impl Bvh {
                         // Closer, or a tie (a ray through the edge where two faces meet) won by the
                         // front side: at a convex edge the front-facing surface is the visible one.
                         let closer = ta[l] < best_t * (1.0 - TIE) - tie_abs;
-                        let tie = !closer && ta[l] <= best_t * (1.0 + TIE) + tie_abs;
+                        let tie = !closer && ta[l] <= far;
                         if closer
                             || (tie && da[l] > 0.0 && (best == u32::MAX || bdet <= 0.0))
                             || (tie
@@ -755,6 +760,7 @@ impl Bvh {
                                 && (ta[l] < best_t || (ta[l] == best_t && b.id[l] < best)))
                         {
                             best_t = ta[l];
+                            far = reach(best_t);
                             best = b.id[l];
                             bu = ua[l];
                             bv = va[l];
@@ -766,7 +772,7 @@ impl Bvh {
                 let n = &self.nodes[cur as usize];
                 // Boxes up to the tie distance beyond the best are entered: a tie it holds
                 // (a front face meeting the back face hit so far at an edge) must be seen.
-                let (dist, mask) = r.enter::<AVX>(n, best_t * (1.0 + TIE) + tie_abs);
+                let (dist, mask) = r.enter::<AVX>(n, far);
                 let count = mask.count_ones() as usize;
                 self.prefetch_met(n, mask);
                 if count == 1 {
@@ -811,7 +817,7 @@ impl Bvh {
             }
             // Pop the next node still worth visiting.
             while let Some((c, dist)) = stack.pop() {
-                if dist <= best_t * (1.0 + TIE) + tie_abs {
+                if dist <= far {
                     cur = c;
                     continue 'outer;
                 }
