@@ -773,21 +773,29 @@ impl Bvh {
                 // Boxes up to the tie distance beyond the best are entered: a tie it holds
                 // (a front face meeting the back face hit so far at an edge) must be seen.
                 let (dist, mask) = r.enter::<AVX>(n, far);
-                let count = mask.count_ones() as usize;
-                self.prefetch_met(n, mask);
-                if count == 1 {
-                    cur = n.child[mask.trailing_zeros() as usize % WIDTH];
-                    continue 'outer;
-                }
-                stack.reserve();
-                if count == 2 {
+                if mask != 0 {
+                    // The first and last children met are asked for without a loop (the
+                    // same one when only one is met), the others below: a loop's exit
+                    // would be a branch on how many were met, which no predictor knows.
                     let a = mask.trailing_zeros() as usize % WIDTH;
-                    let b = (mask & (mask - 1)).trailing_zeros() as usize % WIDTH;
-                    let (near, far) = if dist[a] <= dist[b] { (a, b) } else { (b, a) };
-                    stack.push((n.child[far], dist[far]));
-                    cur = n.child[near];
-                    continue 'outer;
+                    let b = (31 - mask.leading_zeros()) as usize % WIDTH;
+                    self.prefetch(n.child[a]);
+                    self.prefetch(n.child[b]);
+                    if a == b {
+                        cur = n.child[a];
+                        continue 'outer;
+                    }
+                    stack.reserve();
+                    let middle = mask & !(1 << a | 1 << b);
+                    if middle == 0 {
+                        let (near, far) = if dist[a] <= dist[b] { (a, b) } else { (b, a) };
+                        stack.push((n.child[far], dist[far]));
+                        cur = n.child[near];
+                        continue 'outer;
+                    }
+                    self.prefetch_met(n, middle);
                 }
+                let count = mask.count_ones() as usize;
                 // Push the farther ones (farthest deepest); go on with the nearest.
                 let entry = |key: u32| (n.child[(key & 7) as usize], f32::from_bits(key & !7));
                 if count == 3 {
