@@ -1,6 +1,6 @@
 //! A thin binding of Intel Embree 3 (the system's `libembree3`, Debian's `libembree-dev`),
 //! enough to cast the same closest-hit rays as the engine's BVH: one triangle mesh, one
-//! committed scene, `rtcIntersect1`. Built only with the `embree` feature; the structures are
+//! committed scene, `rtcIntersect1` (one ray) and `rtcIntersect1M` (a stream of rays). Built only with the `embree` feature; the structures are
 //! laid out as `embree3/rtcore_ray.h` and `rtcore_common.h` define them (Embree 3.13,
 //! `RTC_MAX_INSTANCE_LEVEL_COUNT` 1). FFI is unsafe by nature: this module and `alloc.rs` are
 //! the only places that allow it.
@@ -80,6 +80,13 @@ extern "C" {
     fn rtcAttachGeometry(scene: *mut c_void, geometry: *mut c_void) -> u32;
     fn rtcReleaseGeometry(geometry: *mut c_void);
     fn rtcIntersect1(scene: *mut c_void, context: *mut RtcIntersectContext, rayhit: *mut RtcRayHit);
+    fn rtcIntersect1M(
+        scene: *mut c_void,
+        context: *mut RtcIntersectContext,
+        rayhit: *mut RtcRayHit,
+        m: u32,
+        byte_stride: usize,
+    );
 }
 
 /// An Embree scene of a mesh's triangles, and which patch each came from.
@@ -190,13 +197,10 @@ impl Drop for Embree {
     }
 }
 
-impl Caster for Embree {
-    fn name(&self) -> &'static str {
-        "Embree 3"
-    }
-
-    fn cast(&self, ray: &Ray) -> (u32, f32) {
-        let mut rh = RtcRayHit {
+impl Embree {
+    /// A ray as Embree takes it: from `tnear` 0 to infinity, no hit yet.
+    fn ray_hit(ray: &Ray) -> RtcRayHit {
+        RtcRayHit {
             ray: RtcRay {
                 org: ray.origin.to_array(),
                 tnear: 0.0,
@@ -213,14 +217,20 @@ impl Caster for Embree {
                 inst_id: [INVALID_ID],
                 ..Default::default()
             },
-        };
-        let mut ctx = RtcIntersectContext {
+        }
+    }
+
+    /// A context for incoherent rays (flags 0), without a filter.
+    fn context() -> RtcIntersectContext {
+        RtcIntersectContext {
             flags: 0,
             filter: std::ptr::null(),
             inst_id: [INVALID_ID],
-        };
-        // SAFETY: the scene is committed; `ctx` and `rh` are valid, aligned as Embree requires.
-        unsafe { rtcIntersect1(self.scene, &mut ctx, &mut rh) };
+        }
+    }
+
+    /// What Embree found for `ray`, as [`Caster::cast`] reports it.
+    fn answer(&self, ray: &Ray, rh: &RtcRayHit) -> (u32, f32) {
         if rh.hit.geom_id == INVALID_ID {
             return (u32::MAX, f32::INFINITY);
         }
@@ -233,6 +243,53 @@ impl Caster for Embree {
             (patch, t)
         } else {
             (u32::MAX, t)
+        }
+    }
+}
+
+impl Caster for Embree {
+    fn name(&self) -> &'static str {
+        "Embree 3"
+    }
+
+    fn cast(&self, ray: &Ray) -> (u32, f32) {
+        let mut rh = Self::ray_hit(ray);
+        let mut ctx = Self::context();
+        // SAFETY: the scene is committed; `ctx` and `rh` are valid, aligned as Embree requires.
+        unsafe { rtcIntersect1(self.scene, &mut ctx, &mut rh) };
+        self.answer(ray, &rh)
+    }
+
+    fn batch_name(&self) -> &'static str {
+        "Embree 3 stream"
+    }
+
+    /// `rtcIntersect1M`: Embree's stream of single rays.
+    fn cast_batch(&self, rays: &[Ray], out: &mut [(u32, f32)]) {
+        let mut rh = [RtcRayHit::default(); crate::rays::BATCH];
+        for (r, o) in rays
+            .chunks(crate::rays::BATCH)
+            .zip(out.chunks_mut(crate::rays::BATCH))
+        {
+            let rh = &mut rh[..r.len()];
+            for (h, ray) in rh.iter_mut().zip(r) {
+                *h = Self::ray_hit(ray);
+            }
+            let mut ctx = Self::context();
+            // SAFETY: the scene is committed; `rh` holds `r.len()` (at most BATCH) valid,
+            // aligned ray-hits laid out at the stride given.
+            unsafe {
+                rtcIntersect1M(
+                    self.scene,
+                    &mut ctx,
+                    rh.as_mut_ptr(),
+                    rh.len() as u32,
+                    std::mem::size_of::<RtcRayHit>(),
+                )
+            };
+            for ((h, ray), o) in rh.iter().zip(r).zip(o.iter_mut()) {
+                *o = self.answer(ray, h);
+            }
         }
     }
 }

@@ -7,9 +7,10 @@
 use crate::args::BenchArgs;
 use anyhow::{bail, Result};
 use radiosity::accel::Bvh;
-use radiosity::geom::{orthonormal_basis, Ray};
+use radiosity::formfactor::monte_carlo::photon_ray;
+use radiosity::geom::Ray;
 use radiosity::mesh::{Mesh, MeshParams};
-use radiosity::sampling::{cosine_direction_in, stream, uniform};
+use radiosity::sampling::{stream, uniform};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -26,16 +27,7 @@ pub fn workload(mesh: &Mesh, offset: f32, count: usize, seed: u64) -> Vec<(Ray, 
                 .map(|_| {
                     let r = (uniform(&mut rng) as f64 * n as f64) as u64;
                     let i = r.min(n - 1) as usize;
-                    let p = mesh.sample_point(
-                        i,
-                        uniform(&mut rng),
-                        uniform(&mut rng),
-                        uniform(&mut rng),
-                    );
-                    let nn = mesh.patches[i].normal;
-                    let (t, b) = orthonormal_basis(nn);
-                    let d = cosine_direction_in(nn, t, b, uniform(&mut rng), uniform(&mut rng));
-                    (Ray::new(p + nn * offset, d), i as u32)
+                    (photon_ray(mesh, i, offset, &mut rng), i as u32)
                 })
                 .collect::<Vec<_>>()
         })
@@ -49,20 +41,49 @@ pub trait Caster: Sync {
     /// The patch hit first if its front faces the ray (`u32::MAX` for none), and the hit
     /// distance (infinite for a miss).
     fn cast(&self, ray: &Ray) -> (u32, f32);
+    /// Name in the table of [`Caster::cast_batch`].
+    fn batch_name(&self) -> &'static str;
+    /// [`Caster::cast`] on each of a batch of rays, by the backend's query for many rays.
+    fn cast_batch(&self, rays: &[Ray], out: &mut [(u32, f32)]);
 }
+
+/// The rays one call of [`Caster::cast_batch`] takes.
+pub const BATCH: usize = 256;
 
 impl Caster for Bvh {
     fn name(&self) -> &'static str {
         "radiosity BVH"
     }
     fn cast(&self, ray: &Ray) -> (u32, f32) {
-        match self.closest_hit(ray, f32::INFINITY) {
-            Some(h) if h.front => (h.patch, h.t),
-            Some(h) => (u32::MAX, h.t),
-            None => (u32::MAX, f32::INFINITY),
+        front_hit(self.closest_hit(ray, f32::INFINITY))
+    }
+    fn batch_name(&self) -> &'static str {
+        "BVH, 8 in flight"
+    }
+    /// `Bvh::closest_hits`: several rays in flight on each thread.
+    fn cast_batch(&self, rays: &[Ray], out: &mut [(u32, f32)]) {
+        let mut hits = [None; BATCH];
+        for (r, o) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
+            let hits = &mut hits[..r.len()];
+            self.closest_hits(r, f32::INFINITY, hits);
+            for (h, o) in hits.iter().zip(o.iter_mut()) {
+                *o = front_hit(*h);
+            }
         }
     }
 }
+
+/// A closest hit as [`Caster::cast`] reports it.
+fn front_hit(h: Option<radiosity::accel::Hit>) -> (u32, f32) {
+    match h {
+        Some(h) if h.front => (h.patch, h.t),
+        Some(h) => (u32::MAX, h.t),
+        None => (u32::MAX, f32::INFINITY),
+    }
+}
+
+/// A backend's median rate (rays a second) and the hits of its first run.
+type Timed = (f64, Vec<(u32, f32)>);
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -70,14 +91,32 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Time `caster` over `rays`, `runs` times: (median rays/s, hits per patch result).
-fn measure(caster: &dyn Caster, rays: &[(Ray, u32)], runs: usize) -> (f64, Vec<(u32, f32)>) {
+fn measure(caster: &dyn Caster, rays: &[(Ray, u32)], runs: usize) -> Timed {
     let cast = || -> Vec<(u32, f32)> { rays.par_iter().map(|(r, _)| caster.cast(r)).collect() };
+    time_runs(cast, rays.len(), runs)
+}
+
+/// [`measure`] through [`Caster::cast_batch`], [`BATCH`] rays a call.
+fn measure_batch(caster: &dyn Caster, rays: &[Ray], runs: usize) -> Timed {
+    let cast = || -> Vec<(u32, f32)> {
+        let mut out = vec![(0, 0.0); rays.len()];
+        out.par_chunks_mut(BATCH)
+            .zip(rays.par_chunks(BATCH))
+            .for_each(|(o, r)| caster.cast_batch(r, o));
+        out
+    };
+    time_runs(cast, rays.len(), runs)
+}
+
+/// Run `cast` once to warm up (its hits are returned), then `runs` times: the median rate of
+/// `count` rays.
+fn time_runs(cast: impl Fn() -> Vec<(u32, f32)>, count: usize, runs: usize) -> Timed {
     let out = cast(); // warm-up, and the hits compared between backends
     let mut rates = Vec::new();
     for _ in 0..runs {
         let t = Instant::now();
         let h = cast();
-        rates.push(rays.len() as f64 / t.elapsed().as_secs_f64());
+        rates.push(count as f64 / t.elapsed().as_secs_f64());
         std::hint::black_box(h);
     }
     (median(rates), out)
@@ -108,7 +147,7 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
     );
     let info = bvh.info();
     println!(
-        "radiosity BVH: {} triangles; {} nodes of {} children ({:.2} MB), {} leaves of {:.2} triangles on average ({:.2} MB), depth {}; SAH cost {:.2} (nodes) + {:.2} (leaves)",
+        "hierarchy: {} triangles; {} nodes of {} children ({:.2} MB), {} leaves of {:.2} triangles on average ({:.2} MB), depth {}; SAH cost {:.2} (nodes) + {:.2} (leaves)",
         info.triangles,
         info.nodes,
         radiosity::accel::WIDTH,
@@ -132,7 +171,9 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
         let e = crate::embree::Embree::new(&mesh)?;
         backends.push((Box::new(e), t.elapsed().as_secs_f64()));
     }
-    let mut results: Vec<(f64, Vec<(u32, f32)>)> = Vec::new();
+    // Per backend: (rays/s one at a time and its hits, rays/s in batches).
+    let mut results: Vec<(Timed, f64)> = Vec::new();
+    let only: Vec<Ray> = rays.iter().map(|r| r.0).collect();
     // The BVH's hits are the reference every backend is compared with.
     let ours = measure(&bvh, &rays, a.runs);
     let show = |name: &str, rate: f64, hits: &[(u32, f32)], build: f64| {
@@ -146,14 +187,23 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
             build
         );
     };
+    let mut ours_batch = 0.0;
     if a.backend != BackendArg::Embree {
         show(bvh.name(), ours.0, &ours.1, build);
+        let (rate, hits) = measure_batch(&bvh, &only, a.runs);
+        if hits != ours.1 {
+            bail!("the BVH's query for many rays found other hits than its query for one");
+        }
+        show(bvh.batch_name(), rate, &hits, build);
+        ours_batch = rate;
     }
     if a.backend == BackendArg::All {
         for (b, build) in &backends {
             let r = measure(b.as_ref(), &rays, a.runs);
             show(b.name(), r.0, &r.1, *build);
-            results.push(r);
+            let (rate, hits) = measure_batch(b.as_ref(), &only, a.runs);
+            show(b.batch_name(), rate, &hits, *build);
+            results.push((r, rate));
         }
     }
     // Two surfaces at the same distance (coincident, overlapping polygons) are a tie either
@@ -163,6 +213,8 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
         for (b, build) in &backends {
             let r = measure(b.as_ref(), &rays, a.runs);
             show(b.name(), r.0, &r.1, *build);
+            let (rate, hits) = measure_batch(b.as_ref(), &only, a.runs);
+            show(b.batch_name(), rate, &hits, *build);
         }
         return Ok(());
     }
@@ -189,7 +241,7 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
         rays.len() - blocked.abs_diff(any_hit),
         rays.len()
     );
-    for ((b, _), (rate, hits)) in backends.iter().zip(&results) {
+    for ((b, _), ((rate, hits), batch)) in backends.iter().zip(&results) {
         let differ: Vec<_> = hits
             .iter()
             .zip(&ours.1)
@@ -206,6 +258,12 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
             differ.len(),
             hits.len(),
             100.0 * differ.len() as f64 / hits.len() as f64
+        );
+        println!(
+            "{} / {}: {:.2}×",
+            b.batch_name(),
+            bvh.batch_name(),
+            batch / ours_batch
         );
     }
     if ours.1.iter().all(|h| h.0 == u32::MAX) {

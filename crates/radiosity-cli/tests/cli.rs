@@ -2764,6 +2764,18 @@ fn bench_rays_on_a_scene() {
         .parse()
         .unwrap();
     assert!(hit > 70.0, "{line}");
+    // The same rays cast eight at a time on each thread (the command checks that they find
+    // the same hits, and fails otherwise): the same hit rate.
+    let batch = text
+        .lines()
+        .find(|l| l.starts_with("BVH, 8 in flight"))
+        .expect("a line for several rays in flight");
+    assert_eq!(
+        batch.split_whitespace().nth(5),
+        line.split_whitespace().nth(3),
+        "{batch}"
+    );
+    assert!(text.lines().any(|l| l.starts_with("hierarchy: ")), "{text}");
 }
 
 /// With the `embree` feature, Embree casts the same rays and hits the same patches (rounding

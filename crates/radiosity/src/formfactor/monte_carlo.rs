@@ -59,6 +59,10 @@ pub fn estimate_row(
     scratch.hits.resize(n, MISS);
     let trace = |c: usize, chunk: &mut [u32]| {
         let mut rng = stream(seed, i as u64, version, c as u64);
+        // One ray at a time: a row's rays share their origin's patch, so their traversals
+        // share the tree's upper levels in the cache, and casting several at once
+        // (`Bvh::closest_hits`) costs more than the memory waits it hides (hospital, 400k
+        // patches: rows 34 → 41 s).
         for slot in chunk.iter_mut() {
             let (u1, u2, u3) = (uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
             let p = mesh.sample_point(i, u1, u2, u3);
@@ -121,19 +125,14 @@ pub fn trace_random_rays(mesh: &Mesh, bvh: &Bvh, count: usize, seed: u64) -> u64
         .map(|c| {
             let mut rng = stream(seed, u64::MAX, 0, c as u64);
             let todo = (count - c * 1024).min(1024);
-            let mut hits = 0u64;
-            for _ in 0..todo {
+            let mut rays = [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); 1024];
+            for ray in &mut rays[..todo] {
                 let i = ((rng.random::<u32>() as u64 * n) >> 32) as usize;
-                let p =
-                    mesh.sample_point(i, uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
-                let n = mesh.patches[i].normal;
-                let (t, b) = orthonormal_basis(n);
-                let d = cosine_direction_in(n, t, b, uniform(&mut rng), uniform(&mut rng));
-                if let Some(h) = bvh.closest_hit(&Ray::new(p + n * offset, d), f32::INFINITY) {
-                    hits += h.front as u64;
-                }
+                *ray = photon_ray(mesh, i, offset, &mut rng);
             }
-            hits
+            let mut hits = [None; 1024];
+            bvh.closest_hits(&rays[..todo], f32::INFINITY, &mut hits[..todo]);
+            hits.iter().flatten().filter(|h| h.front).count() as u64
         })
         .sum()
 }
@@ -169,14 +168,43 @@ pub fn gather_photon(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> crate
     }
 }
 
-/// Where one photon leaving patch `i` first lands: a ray from a uniform point of patch i in a
-/// cosine-distributed direction; `None` when it escapes or hits a back side.
-pub fn sample_photon(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> Option<u32> {
+/// The ray of a photon leaving patch `i`, as form-factor estimation casts it: from a uniform
+/// point of the patch (three draws from `rng`) lifted `offset` off it along its normal, in a
+/// cosine-distributed direction (two more draws).
+pub fn photon_ray(mesh: &Mesh, i: usize, offset: f32, rng: &mut Rng64) -> Ray {
     let p = mesh.sample_point(i, uniform(rng), uniform(rng), uniform(rng));
     let n = mesh.patches[i].normal;
     let (t, b) = orthonormal_basis(n);
     let d = cosine_direction_in(n, t, b, uniform(rng), uniform(rng));
-    match bvh.closest_hit(&Ray::new(p + n * bvh.ray_offset(), d), f32::INFINITY) {
+    Ray::new(p + n * offset, d)
+}
+
+/// [`sample_photon`] for each patch of `sources` in turn, with the same draws from `rng`, into
+/// `out` (`u32::MAX` where lost): the rays cast [`CHUNK`] at a time by [`Bvh::closest_hits`].
+pub fn sample_photons(mesh: &Mesh, bvh: &Bvh, sources: &[u32], rng: &mut Rng64, out: &mut [u32]) {
+    let offset = bvh.ray_offset();
+    let mut rays = [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); CHUNK];
+    let mut hits = [None; CHUNK];
+    for (from, out) in sources.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+        let rays = &mut rays[..from.len()];
+        for (ray, &i) in rays.iter_mut().zip(from) {
+            *ray = photon_ray(mesh, i as usize, offset, rng);
+        }
+        let hits = &mut hits[..from.len()];
+        bvh.closest_hits(rays, f32::INFINITY, hits);
+        for ((o, h), &i) in out.iter_mut().zip(hits.iter()).zip(from) {
+            *o = match h {
+                Some(h) if h.front && h.patch != i => h.patch,
+                _ => u32::MAX,
+            };
+        }
+    }
+}
+
+/// Where one photon leaving patch `i` first lands: a ray from a uniform point of patch i in a
+/// cosine-distributed direction; `None` when it escapes or hits a back side.
+pub fn sample_photon(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> Option<u32> {
+    match bvh.closest_hit(&photon_ray(mesh, i, bvh.ray_offset(), rng), f32::INFINITY) {
         Some(h) if h.front && h.patch as usize != i => Some(h.patch),
         _ => None,
     }

@@ -180,6 +180,14 @@ impl PhotonSampler for OnDemandRows<'_> {
         monte_carlo::sample_photon(self.estimator.mesh(), self.estimator.bvh(), i, rng)
     }
 
+    /// The same rays, cast several at a time ([`monte_carlo::sample_photons`]).
+    fn sample_many(&self, sources: &[u32], rng: &mut Rng64, out: &mut [u32]) {
+        self.photon_rays
+            .fetch_add(sources.len() as u64, Ordering::Relaxed);
+        let (mesh, bvh) = (self.estimator.mesh(), self.estimator.bvh());
+        monte_carlo::sample_photons(mesh, bvh, sources, rng, out);
+    }
+
     /// The same ray, unless the point is covered ([`monte_carlo::gather_photon`]).
     fn gather(&self, i: usize, rng: &mut Rng64) -> crate::system::Gathered {
         self.photon_rays.fetch_add(1, Ordering::Relaxed);
@@ -196,6 +204,36 @@ mod tests {
     use crate::mesh::MeshParams;
     use crate::scene::builtin;
     use crate::system::Operator;
+
+    /// Photons cast several at a time land where they land one at a time, with the same
+    /// draws from the random stream (which then goes on in step).
+    #[test]
+    fn photons_in_batches_are_the_photons_one_at_a_time() {
+        use crate::system::PhotonSampler;
+        let scene = builtin::cornell();
+        let mesh = Mesh::build(&scene, MeshParams::Patches(500)).unwrap();
+        let bvh = Bvh::build(&mesh);
+        let params = Params {
+            method: FormFactorMethod::MonteCarlo,
+            ..Default::default()
+        };
+        let rows = OnDemandRows::new(Estimator::new(&mesh, &bvh, params).unwrap());
+        let sources: Vec<u32> = (0..300).map(|k| (k * 7 % mesh.len()) as u32).collect();
+        let mut a = crate::sampling::stream(3, 1, 4, 1);
+        let mut b = a.clone();
+        let one: Vec<u32> = sources
+            .iter()
+            .map(|&i| rows.sample(i as usize, &mut a).unwrap_or(u32::MAX))
+            .collect();
+        let mut many = vec![0; sources.len()];
+        rows.sample_many(&sources, &mut b, &mut many);
+        assert_eq!(many, one);
+        assert!(one.iter().filter(|&&j| j != u32::MAX).count() > 200);
+        assert_eq!(
+            crate::sampling::uniform(&mut a),
+            crate::sampling::uniform(&mut b)
+        );
+    }
 
     /// Rows on demand are the rows of the stored matrix, and columns follow by reciprocity.
     #[test]

@@ -219,10 +219,15 @@ impl<'s> StochasticJacobi<'s> {
             let trace = |c: usize, out: &mut [(u32, u32)]| {
                 let mut rng = stream(seed, iteration, first_chunk + c as u64, 1);
                 let start = done + (c * CHUNK) as u64;
-                for (slot, k) in out.iter_mut().zip(start..) {
-                    let i = source_of(k);
-                    let hit = sampler.sample(i, &mut rng).unwrap_or(u32::MAX);
-                    *slot = (i as u32, hit);
+                // The chunk's sources, then their draws in order, several rays at a time.
+                let (mut from, mut hit) = ([0u32; CHUNK], [0u32; CHUNK]);
+                let (from, hit) = (&mut from[..out.len()], &mut hit[..out.len()]);
+                for (s, k) in from.iter_mut().zip(start..) {
+                    *s = source_of(k) as u32;
+                }
+                sampler.sample_many(from, &mut rng, hit);
+                for ((slot, &i), &j) in out.iter_mut().zip(from.iter()).zip(hit.iter()) {
+                    *slot = (i, j);
                 }
             };
             match self.ranks {

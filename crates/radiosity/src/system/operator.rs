@@ -98,6 +98,15 @@ pub trait PhotonSampler: Sync {
     /// One draw, from the random stream `rng`.
     fn sample(&self, i: usize, rng: &mut Rng64) -> Option<u32>;
 
+    /// [`Self::sample`] for each patch of `sources` in turn, drawing from `rng` in the same
+    /// order, into `out` (`u32::MAX` where lost): the same draws, but a sampler that casts
+    /// rays casts them several at a time.
+    fn sample_many(&self, sources: &[u32], rng: &mut Rng64, out: &mut [u32]) {
+        for (o, &i) in out.iter_mut().zip(sources) {
+            *o = self.sample(i as usize, rng).unwrap_or(u32::MAX);
+        }
+    }
+
     /// One draw for *gathering* at patch `i` (a ray from i finding what i sees): as
     /// [`Self::sample`], except where a scene knows that part of `i` is covered (by a
     /// coincident twin or a flush surface), which then sees nothing ([`Gathered::Covered`]).
