@@ -30,6 +30,10 @@ use rayon::prelude::*;
 pub const CHUNK: usize = 32;
 const MISS: u32 = u32::MAX;
 
+/// Photons [`sample_photons`] casts in one call of [`Bvh::closest_hits`]: long enough that
+/// its eight rays in flight seldom drain.
+pub const PHOTON_BATCH: usize = 256;
+
 /// Reusable buffers for estimating rows (no allocation per row once warmed up).
 #[derive(Debug, Default)]
 pub struct RowScratch {
@@ -180,12 +184,16 @@ pub fn photon_ray(mesh: &Mesh, i: usize, offset: f32, rng: &mut Rng64) -> Ray {
 }
 
 /// [`sample_photon`] for each patch of `sources` in turn, with the same draws from `rng`, into
-/// `out` (`u32::MAX` where lost): the rays cast [`CHUNK`] at a time by [`Bvh::closest_hits`].
+/// `out` (`u32::MAX` where lost): the rays cast [`PHOTON_BATCH`] at a time by
+/// [`Bvh::closest_hits`].
 pub fn sample_photons(mesh: &Mesh, bvh: &Bvh, sources: &[u32], rng: &mut Rng64, out: &mut [u32]) {
     let offset = bvh.ray_offset();
-    let mut rays = [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); CHUNK];
-    let mut hits = [None; CHUNK];
-    for (from, out) in sources.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+    let mut rays = [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); PHOTON_BATCH];
+    let mut hits = [None; PHOTON_BATCH];
+    for (from, out) in sources
+        .chunks(PHOTON_BATCH)
+        .zip(out.chunks_mut(PHOTON_BATCH))
+    {
         let rays = &mut rays[..from.len()];
         for (ray, &i) in rays.iter_mut().zip(from) {
             *ray = photon_ray(mesh, i as usize, offset, rng);
