@@ -412,9 +412,10 @@ pub fn solve(
     });
     let mut radiosity = Vec::new();
     solver.radiosity(&mut radiosity);
-    let unshot = solver
-        .unshot()
-        .map_or_else(|| vec![Rgb::BLACK; system.len()], <[Rgb]>::to_vec);
+    let unshot = solver.unshot().map_or_else(
+        || vec![Rgb::BLACK; system.len()],
+        std::borrow::Cow::into_owned,
+    );
     drop(solver);
     if let Some(rows) = &on_demand {
         form_factors = rows.stats();

@@ -211,7 +211,7 @@ pub fn solve(
         solver.radiosity(&mut b);
         unshot = solver
             .unshot()
-            .map_or_else(|| vec![Rgb::BLACK; n], <[Rgb]>::to_vec);
+            .map_or_else(|| vec![Rgb::BLACK; n], std::borrow::Cow::into_owned);
         radiosity = b;
         solve_s = i.seconds;
         info = i;

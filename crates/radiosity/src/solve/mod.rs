@@ -304,7 +304,7 @@ pub trait SolverState {
     fn radiosity(&self, out: &mut Vec<Rgb>);
     /// For shooting methods whose output already includes it, the unshot radiosity per patch
     /// (non-negative): what the display-only ambient term stands in for.
-    fn unshot(&self) -> Option<&[Rgb]> {
+    fn unshot(&self) -> Option<std::borrow::Cow<'_, [Rgb]>> {
         None
     }
     /// Unshot energy Σ |r_i| A_i over the emitted energy. Methods that keep the residual give

@@ -65,8 +65,8 @@ impl SolverState for OvershootAmbient<'_> {
     fn step(&mut self, source: &mut dyn Operator) -> bool {
         let ambient = self.ambient();
         let sys = self.core.system;
-        let r = &self.core.r;
-        let amount = |i: usize| r[i] + sys.reflectance[i] * ambient;
+        let core = &self.core;
+        let amount = |i: usize| core.r(i) + sys.reflectance[i] * ambient;
         let (i, best) = self.core.shooter(ambient);
         if best <= 0.0 {
             return false;

@@ -19,6 +19,7 @@
 use super::relaxation::{Relaxation, SelectKind};
 use super::{Operator, Solver, SolverState, System};
 use crate::color::Rgb;
+use std::borrow::Cow;
 
 /// Progressive refinement in progress.
 #[derive(Clone, Debug)]
@@ -46,8 +47,8 @@ impl<'s> Progressive<'s> {
     }
 
     /// Current unshot radiosities ΔB.
-    pub fn unshot(&self) -> &[Rgb] {
-        &self.core.r
+    pub fn unshot(&self) -> Vec<Rgb> {
+        self.core.residuals().collect()
     }
 }
 
@@ -72,8 +73,8 @@ impl SolverState for Progressive<'_> {
         true
     }
 
-    fn unshot(&self) -> Option<&[Rgb]> {
-        Some(&self.core.r)
+    fn unshot(&self) -> Option<Cow<'_, [Rgb]>> {
+        Some(Cow::Owned(Progressive::unshot(self)))
     }
 
     super::relaxation::relaxation_accessors!();

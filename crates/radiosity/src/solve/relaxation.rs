@@ -12,7 +12,7 @@
 //! and `1 − ρ_j` is absorbed; the rest escapes. Then emitted = absorbed + escaped + Σ r_i A_i
 //! holds exactly at every step (the terms cancel in pairs), also for negative δ.
 
-use super::select::{AmbientTree, Leaves, MaxTree};
+use super::select::{AmbientTree, Blocks, Keyed, MaxTree, Nodes};
 use super::{Info, Operator, System};
 use crate::color::Rgb;
 use crate::hint;
@@ -49,8 +49,8 @@ pub struct Relaxation<'s> {
     pub system: &'s System,
     /// The unknowns x.
     pub x: Vec<Rgb>,
-    /// The residuals r = E + ρ F x − x.
-    pub r: Vec<Rgb>,
+    /// Per patch: the residual r = E + ρ F x − x ([`Self::r`]) with what its update reads.
+    cells: Vec<Cell>,
     /// Σ r_i A_i (signed), per channel.
     pub signed_unshot: Rgb,
     abs_unshot: f64,
@@ -62,9 +62,33 @@ pub struct Relaxation<'s> {
     pub iterations: u64,
     updates: u64,
     select: Select,
-    /// Each patch's reflectance and area side by side: a receiver's update reads both, and
-    /// from one array that is one cache miss instead of two.
-    receivers: Vec<(Rgb, f64)>,
+}
+
+/// One patch as a shot's update reads and writes it: its residual, reflectance, area and key
+/// in the shooter's max-tree, in one cache line. At 10⁵–10⁶ patches no cache holds the
+/// patches, and a receiver scattered over four arrays cost four cache misses where this costs
+/// one; the memory is the same (64 bytes a patch).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Cell {
+    r: Rgb,
+    rho: Rgb,
+    area: f64,
+    /// The shooter's key ([`SelectKind::Energy`] or [`SelectKind::Residual`]), else unused.
+    key: f64,
+}
+
+const _: () = assert!(std::mem::size_of::<Cell>() == 64);
+
+impl Keyed for Cell {
+    #[inline]
+    fn key(&self) -> f64 {
+        self.key
+    }
+    #[inline]
+    fn set_key(&mut self, key: f64) {
+        self.key = key;
+    }
 }
 
 /// Which patch a method shoots next.
@@ -84,9 +108,9 @@ enum Select {
     /// None kept (the method sweeps in order).
     None,
     /// The largest unshot energy `|r_i|₁ A_i` (progressive refinement).
-    Energy(MaxTree),
+    Energy(Blocks),
     /// The largest `|r_i|₁` (Southwell).
-    Residual(MaxTree),
+    Residual(Blocks),
     /// The largest `|r_i + ρ_i · ambient|₁ A_i` (overshooting with the ambient term).
     Ambient(AmbientTree),
 }
@@ -117,12 +141,12 @@ impl std::ops::Add for Sums {
 }
 
 /// The receivers of a shot with patch indices from `first` on: their column entries, and the
-/// residuals, energies and max-tree keys from `first` on.
+/// patches and the max-tree's block nodes from `first` on.
 struct Span<'a> {
     first: usize,
     column: &'a [Entry],
-    r: &'a mut [Rgb],
-    leaves: Option<Leaves<'a>>,
+    cells: &'a mut [Cell],
+    nodes: Option<Nodes<'a>>,
 }
 
 /// A span of at most this many receivers is updated by one thread: ~20 µs of work.
@@ -132,16 +156,11 @@ const SPAN: usize = 128;
 const AHEAD: usize = 8;
 
 /// Update the receivers of `span` for a shot of `delta`: `r_j += ρ_j δ F_ji` and everything
-/// that follows from it, with `receivers[j]` = `(ρ_j, A_j)`. Spans longer than [`SPAN`] are halved at a block boundary near their
+/// that follows from it. Spans longer than [`SPAN`] are halved at a block boundary near their
 /// middle receiver and the halves updated by `rayon::join`, so that the receivers' cache misses
 /// (arrays of 10⁶ patches do not fit in any cache) are shared by the threads; the sums of the
 /// halves are added left to right, so the result depends on the column only.
-fn update<const RESIDUAL: bool>(
-    receivers: &[(Rgb, f64)],
-    delta: Rgb,
-    reciprocal: Option<f32>,
-    span: Span<'_>,
-) -> Sums {
+fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<'_>) -> Sums {
     let (first, column) = (span.first, span.column);
     if column.len() > SPAN {
         // The block boundary at or below the middle receiver, or the next one up if that is
@@ -161,10 +180,10 @@ fn update<const RESIDUAL: bool>(
         while k < column.len() && (column[k].0 as usize) < at {
             k += 1;
         }
-        let (r0, r1) = span.r.split_at_mut(at - first);
-        let (l0, l1) = match span.leaves {
-            Some(l) => {
-                let (a, b) = l.split_at(at);
+        let (c0, c1) = span.cells.split_at_mut(at - first);
+        let (n0, n1) = match span.nodes {
+            Some(n) => {
+                let (a, b) = n.split_at(at);
                 (Some(a), Some(b))
             }
             None => (None, None),
@@ -172,48 +191,49 @@ fn update<const RESIDUAL: bool>(
         let left = Span {
             first,
             column: &column[..k],
-            r: r0,
-            leaves: l0,
+            cells: c0,
+            nodes: n0,
         };
         let right = Span {
             first: at,
             column: &column[k..],
-            r: r1,
-            leaves: l1,
+            cells: c1,
+            nodes: n1,
         };
         let (a, b) = rayon::join(
-            || update::<RESIDUAL>(receivers, delta, reciprocal, left),
-            || update::<RESIDUAL>(receivers, delta, reciprocal, right),
+            || update::<RESIDUAL>(delta, reciprocal, left),
+            || update::<RESIDUAL>(delta, reciprocal, right),
         );
         return a + b;
     }
-    let Span { r, mut leaves, .. } = span;
+    let Span {
+        cells, mut nodes, ..
+    } = span;
     let mut sums = Sums::default();
     for (n, &(j, f)) in column.iter().enumerate() {
-        // The receivers are scattered over arrays that no cache holds at 10⁵–10⁶ patches:
-        // ask for those of the entry AHEAD places on, so that their misses overlap.
+        // The receivers are scattered over an array that no cache holds at 10⁵–10⁶ patches:
+        // ask for the one AHEAD places on, so that the misses overlap.
         if let Some(&(next, _)) = column.get(n + AHEAD) {
             let next = next as usize;
-            hint::prefetch_at(receivers, next);
-            hint::prefetch_at(r, next - first);
-            if let Some(l) = &leaves {
+            hint::prefetch_at(cells, next - first);
+            if let Some(l) = &nodes {
                 l.prefetch(next);
             }
         }
         let j = j as usize;
-        let k = j - first;
-        let (rho, a) = receivers[j];
+        let c = &mut cells[j - first];
+        let (r, rho, a) = (c.r, c.rho, c.area);
         let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
         let power = delta * (f * a);
         sums.arrived += power;
         sums.absorbed += (Rgb::splat(1.0) - rho) * power;
-        let rj = r[k] + rho * delta * f;
-        sums.signed += (rj - r[k]) * a;
+        let rj = r + rho * delta * f;
+        sums.signed += (rj - r) * a;
         let e = abs_sum(rj) * a;
-        sums.abs += e - abs_sum(r[k]) * a;
-        r[k] = rj;
-        if let Some(l) = &mut leaves {
-            l.set(j, if RESIDUAL { e / a } else { e });
+        sums.abs += e - abs_sum(r) * a;
+        c.r = rj;
+        if let Some(l) = &mut nodes {
+            l.set(cells, j, if RESIDUAL { e / a } else { e });
         }
     }
     sums
@@ -228,13 +248,20 @@ impl<'s> Relaxation<'s> {
     pub fn from_zero(system: &'s System) -> Self {
         let n = system.len();
         let emitted = system.emitted_power();
-        let r = system.emission.to_vec();
-        let energy = (0..n).map(|i| abs_sum(r[i]) * system.area[i]);
+        let cells: Vec<Cell> = (0..n)
+            .map(|i| Cell {
+                r: system.emission[i],
+                rho: system.reflectance[i],
+                area: system.area[i],
+                key: 0.0,
+            })
+            .collect();
+        let energy = cells.iter().map(|c| abs_sum(c.r) * c.area);
         Self {
             x: vec![Rgb::BLACK; n],
             signed_unshot: emitted,
             abs_unshot: energy.sum(),
-            r,
+            cells,
             emitted,
             emitted_total: emitted.sum(),
             absorbed: Rgb::BLACK,
@@ -242,12 +269,6 @@ impl<'s> Relaxation<'s> {
             iterations: 0,
             updates: 0,
             select: Select::None,
-            receivers: system
-                .reflectance
-                .iter()
-                .zip(&system.area)
-                .map(|(&rho, &a)| (rho, a))
-                .collect(),
             system,
         }
     }
@@ -257,7 +278,10 @@ impl<'s> Relaxation<'s> {
         let mut s = Self::from_zero(system);
         s.x = system.emission.to_vec();
         let (absorbed, escaped, _, _) = crate::system::balance(system, source, &s.x);
-        s.r = crate::system::residual(system, source, &s.x);
+        let r = crate::system::residual(system, source, &s.x);
+        for (c, r) in s.cells.iter_mut().zip(r) {
+            c.r = r;
+        }
         s.absorbed = absorbed;
         s.escaped = escaped;
         s.resum();
@@ -267,24 +291,34 @@ impl<'s> Relaxation<'s> {
     /// Keep the shooter of `kind` up to date from now on, in O(log N) per changed residual.
     pub fn select_by(&mut self, kind: SelectKind) {
         self.select = match kind {
-            SelectKind::Energy => Select::Energy(MaxTree::new(&[])),
-            SelectKind::Residual => Select::Residual(MaxTree::new(&[])),
+            SelectKind::Energy => Select::Energy(Blocks::new::<f64>(&[])),
+            SelectKind::Residual => Select::Residual(Blocks::new::<f64>(&[])),
             SelectKind::Ambient => Select::Ambient(AmbientTree::new(&[], &[], &[])),
         };
         self.rebuild_selection();
     }
 
     fn rebuild_selection(&mut self) {
-        let (sys, r) = (self.system, &self.r);
-        let energy: Vec<f64> = (0..r.len()).map(|i| abs_sum(r[i]) * sys.area[i]).collect();
+        let sys = self.system;
+        let cells = &mut self.cells;
         match &mut self.select {
             Select::None => {}
-            Select::Energy(t) => *t = MaxTree::new(&energy),
-            Select::Residual(t) => {
-                let keys: Vec<f64> = (0..r.len()).map(|i| energy[i] / sys.area[i]).collect();
-                *t = MaxTree::new(&keys);
+            Select::Energy(t) => {
+                for c in cells.iter_mut() {
+                    c.key = abs_sum(c.r) * c.area;
+                }
+                *t = Blocks::new(cells);
             }
-            Select::Ambient(t) => *t = AmbientTree::new(r, &sys.reflectance, &sys.area),
+            Select::Residual(t) => {
+                for c in cells.iter_mut() {
+                    c.key = abs_sum(c.r) * c.area / c.area;
+                }
+                *t = Blocks::new(cells);
+            }
+            Select::Ambient(t) => {
+                let r: Vec<Rgb> = cells.iter().map(|c| c.r).collect();
+                *t = AmbientTree::new(&r, &sys.reflectance, &sys.area);
+            }
         }
     }
 
@@ -298,10 +332,10 @@ impl<'s> Relaxation<'s> {
                 (i, k)
             }
             Select::Ambient(t) => {
-                let (sys, r) = (self.system, &self.r);
+                let cells = &self.cells;
                 t.argmax(ambient, |i| {
-                    let a = r[i] + sys.reflectance[i] * ambient;
-                    (a.r.abs() + a.g.abs() + a.b.abs()) * sys.area[i]
+                    let a = cells[i].r + cells[i].rho * ambient;
+                    (a.r.abs() + a.g.abs() + a.b.abs()) * cells[i].area
                 })
             }
         }
@@ -311,28 +345,46 @@ impl<'s> Relaxation<'s> {
     /// array fewer to keep and to miss in the cache).
     #[inline]
     pub fn energy(&self, i: usize) -> f64 {
-        abs_sum(self.r[i]) * self.system.area[i]
+        abs_sum(self.cells[i].r) * self.cells[i].area
+    }
+
+    /// Patch i's residual `r_i`.
+    #[inline]
+    pub fn r(&self, i: usize) -> Rgb {
+        self.cells[i].r
+    }
+
+    /// The residuals, in patch order.
+    pub fn residuals(&self) -> impl ExactSizeIterator<Item = Rgb> + '_ {
+        self.cells.iter().map(|c| c.r)
     }
 
     /// Recompute the sums from the residuals (against rounding drift).
     pub fn resum(&mut self) {
-        let a = &self.system.area;
         self.rebuild_selection();
-        self.abs_unshot = (0..self.r.len()).map(|i| self.energy(i)).sum();
-        self.signed_unshot = self.r.iter().zip(a).map(|(r, a)| *r * *a).sum();
+        self.abs_unshot = (0..self.cells.len()).map(|i| self.energy(i)).sum();
+        self.signed_unshot = self.cells.iter().map(|c| c.r * c.area).sum();
         self.updates = 0;
     }
 
     fn set_r(&mut self, j: usize, v: Rgb) {
-        let a = self.system.area[j];
-        self.signed_unshot += (v - self.r[j]) * a;
+        let a = self.cells[j].area;
+        let old = self.cells[j].r;
+        self.signed_unshot += (v - old) * a;
         let e = abs_sum(v) * a;
-        self.abs_unshot += e - abs_sum(self.r[j]) * a;
-        self.r[j] = v;
+        self.abs_unshot += e - abs_sum(old) * a;
+        self.cells[j].r = v;
+        let cells = &mut self.cells;
         match &mut self.select {
             Select::None => {}
-            Select::Energy(t) => t.set(j, e),
-            Select::Residual(t) => t.set(j, e / a),
+            Select::Energy(t) => {
+                t.nodes().set(cells, j, e);
+                t.settle(MaxTree::block_of(j));
+            }
+            Select::Residual(t) => {
+                t.nodes().set(cells, j, e / a);
+                t.settle(MaxTree::block_of(j));
+            }
             Select::Ambient(t) => t.set(j, v, a),
         }
     }
@@ -356,24 +408,26 @@ impl<'s> Relaxation<'s> {
         };
         let column = column.entries();
         self.x[i] += delta;
-        let ri = self.r[i] - delta;
+        let ri = self.cells[i].r - delta;
         self.set_r(i, ri);
         let residual = matches!(self.select, Select::Residual(_));
+        let cells = &mut self.cells;
         let sums = match &mut self.select {
             Select::Ambient(tree) => {
                 let mut sums = Sums::default();
                 for &(j, f) in column {
                     let j = j as usize;
-                    let f = reciprocal.map_or(f, |ai| f * ai / sys.area[j] as f32) as f64;
-                    let power = delta * (f * sys.area[j]);
+                    let c = &mut cells[j];
+                    let (r, rho, a) = (c.r, c.rho, c.area);
+                    let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
+                    let power = delta * (f * a);
                     sums.arrived += power;
-                    sums.absorbed += (Rgb::splat(1.0) - sys.reflectance[j]) * power;
-                    let rj = self.r[j] + sys.reflectance[j] * delta * f;
-                    let a = sys.area[j];
-                    sums.signed += (rj - self.r[j]) * a;
+                    sums.absorbed += (Rgb::splat(1.0) - rho) * power;
+                    let rj = r + rho * delta * f;
+                    sums.signed += (rj - r) * a;
                     let e = abs_sum(rj) * a;
-                    sums.abs += e - abs_sum(self.r[j]) * a;
-                    self.r[j] = rj;
+                    sums.abs += e - abs_sum(r) * a;
+                    c.r = rj;
                     tree.set(j, rj, a);
                 }
                 sums
@@ -382,28 +436,26 @@ impl<'s> Relaxation<'s> {
                 let span = Span {
                     first: 0,
                     column,
-                    r: &mut self.r,
-                    leaves: Some(t.leaves()),
+                    cells,
+                    nodes: Some(t.nodes()),
                 };
                 // Two copies, so that progressive refinement's has no division by the area.
                 let sums = if residual {
-                    update::<true>(&self.receivers, delta, reciprocal, span)
+                    update::<true>(delta, reciprocal, span)
                 } else {
-                    update::<false>(&self.receivers, delta, reciprocal, span)
+                    update::<false>(delta, reciprocal, span)
                 };
-                for &(j, _) in column {
-                    t.settle(MaxTree::block_of(j as usize));
-                }
+                t.settle_all(column.iter().map(|&(j, _)| MaxTree::block_of(j as usize)));
                 sums
             }
             Select::None => {
                 let span = Span {
                     first: 0,
                     column,
-                    r: &mut self.r,
-                    leaves: None,
+                    cells,
+                    nodes: None,
                 };
-                update::<false>(&self.receivers, delta, reciprocal, span)
+                update::<false>(delta, reciprocal, span)
             }
         };
         self.signed_unshot += sums.signed;
@@ -411,7 +463,7 @@ impl<'s> Relaxation<'s> {
         self.absorbed += sums.absorbed;
         self.escaped += delta * sys.area[i] - sums.arrived;
         self.updates += column.len() as u64 + 1;
-        if self.updates > 8 * self.r.len() as u64 + 1024 {
+        if self.updates > 8 * self.cells.len() as u64 + 1024 {
             self.resum();
         }
     }
@@ -426,7 +478,7 @@ impl<'s> Relaxation<'s> {
 
     /// Relax `x_i` with factor ω: `x_i += ω r_i / M_ii`. Returns false if `r_i` was zero.
     pub fn relax(&mut self, i: usize, omega: f64, source: &mut dyn Operator) -> bool {
-        let r = self.r[i];
+        let r = self.cells[i].r;
         if r == Rgb::BLACK {
             self.iterations += 1;
             return false;
@@ -464,7 +516,7 @@ impl<'s> Relaxation<'s> {
     pub fn output(&self, plus_residual: bool, out: &mut Vec<Rgb>) {
         out.clear();
         if plus_residual {
-            out.extend(self.x.iter().zip(&self.r).map(|(x, r)| *x + *r));
+            out.extend(self.x.iter().zip(&self.cells).map(|(x, c)| *x + c.r));
         } else {
             out.extend_from_slice(&self.x);
         }

@@ -7,74 +7,77 @@
 
 use crate::color::Rgb;
 
-/// Keys a leaf block of [`MaxTree`] holds: one cache line of `f64`.
+/// Keys a leaf block of the tree holds: one cache line of `f64`.
 const BLOCK: usize = 8;
 
-/// A max-tree over N keys: update and arg-max in O(log N); ties to the lowest index.
-///
-/// The keys are kept in blocks of [`MaxTree::BLOCK`], one cache line each, and the binary tree is built
-/// over the blocks' maxima, so that it is a sixteenth of the size of a tree over single keys
-/// and its lower levels stay in the cache. Setting a key that is not its block's maximum and
-/// does not become it touches only the key and the block's node; a block's maximum that falls
-/// is found again by scanning its line.
-#[derive(Clone, Debug)]
-pub struct MaxTree {
-    keys: Vec<f64>,
-    size: usize,
-    node: Vec<(f64, u32)>,
-    /// Blocks whose node [`Leaves::set`] changed and [`MaxTree::settle`] has not yet carried up.
-    dirty: Vec<bool>,
+/// Something that holds a key of the max-tree: the key itself, or a patch's record with the
+/// key beside the data it is derived from, so that an update reads and writes one cache line
+/// ([`super::relaxation`]).
+pub trait Keyed {
+    /// The key.
+    fn key(&self) -> f64;
+    /// Replace the key.
+    fn set_key(&mut self, key: f64);
 }
 
-impl MaxTree {
-    /// A tree over `keys`.
-    pub fn new(keys: &[f64]) -> Self {
+impl Keyed for f64 {
+    #[inline]
+    fn key(&self) -> f64 {
+        *self
+    }
+    #[inline]
+    fn set_key(&mut self, key: f64) {
+        *self = key;
+    }
+}
+
+/// The part of a max-tree above its keys: each block of [`MaxTree::BLOCK`] keys' maximum and the binary
+/// tree over those maxima, a sixteenth of the size of a tree over single keys, so that its
+/// lower levels stay in the cache. The keys live elsewhere (in [`MaxTree`], or in the
+/// records of [`super::relaxation`]) and are passed in where they are read.
+#[derive(Clone, Debug)]
+pub struct Blocks {
+    size: usize,
+    node: Vec<(f64, u32)>,
+    /// Blocks whose node [`Nodes::set`] changed and [`Blocks::settle`] has not yet carried up.
+    dirty: Vec<bool>,
+    /// The nodes of one level that [`Blocks::settle_all`] recomputes.
+    level: Vec<u32>,
+}
+
+impl Blocks {
+    /// The tree over `keys`.
+    pub fn new<K: Keyed>(keys: &[K]) -> Self {
         let blocks = keys.len().div_ceil(BLOCK);
         let size = blocks.next_power_of_two().max(1);
         let mut tree = Self {
-            keys: keys.to_vec(),
             size,
             node: vec![(f64::NEG_INFINITY, 0u32); 2 * size],
             dirty: vec![false; blocks],
+            level: Vec::new(),
         };
         for b in 0..blocks {
-            tree.node[size + b] = block_max(&tree.keys[b * BLOCK..], b * BLOCK);
+            tree.node[size + b] = block_max(&keys[b * BLOCK..], b * BLOCK);
         }
         for p in (1..size).rev() {
-            tree.node[p] = Self::better(tree.node[2 * p], tree.node[2 * p + 1]);
+            tree.node[p] = better(tree.node[2 * p], tree.node[2 * p + 1]);
         }
         tree
     }
 
-    /// The larger of two entries; `a` (the left, lower indices) on ties.
-    fn better(a: (f64, u32), b: (f64, u32)) -> (f64, u32) {
-        if b.0 > a.0 {
-            b
-        } else {
-            a
-        }
-    }
-
-    /// Set key `i`: its block's node, then the nodes above it while they change.
-    pub fn set(&mut self, i: usize, key: f64) {
-        self.leaves().set(i, key);
-        self.settle(i / BLOCK);
-    }
-
-    /// The keys and the blocks' nodes, to set keys of disjoint ranges from several threads
-    /// ([`Leaves::split_at`]). The nodes above the blocks are brought up to date by
+    /// The blocks' nodes, to set keys of disjoint ranges from several threads
+    /// ([`Nodes::split_at`]). The nodes above the blocks are brought up to date by
     /// [`Self::settle`] afterwards; [`Self::max`] is stale until then.
-    pub fn leaves(&mut self) -> Leaves<'_> {
+    pub fn nodes(&mut self) -> Nodes<'_> {
         let blocks = self.dirty.len();
-        Leaves {
+        Nodes {
             first: 0,
-            keys: &mut self.keys,
             blocks: &mut self.node[self.size..self.size + blocks],
             dirty: &mut self.dirty,
         }
     }
 
-    /// Carry the change of block `b`'s node made by [`Leaves::set`] up the tree, if it changed.
+    /// Carry the change of block `b`'s node made by [`Nodes::set`] up the tree, if it changed.
     /// Cheap for a block that did not: one flag.
     pub fn settle(&mut self, b: usize) {
         if !std::mem::take(&mut self.dirty[b]) {
@@ -82,13 +85,104 @@ impl MaxTree {
         }
         let mut p = (self.size + b) / 2;
         while p >= 1 {
-            let best = Self::better(self.node[2 * p], self.node[2 * p + 1]);
+            let best = better(self.node[2 * p], self.node[2 * p + 1]);
             if self.node[p] == best {
                 break;
             }
             self.node[p] = best;
             p /= 2;
         }
+    }
+
+    /// [`Self::settle`] every block in `blocks` (in ascending order, repeats allowed), a level
+    /// of the tree at a time: the parents of one level's changed nodes are recomputed together,
+    /// each once, and in ascending order, so their reads do not wait on one another as a walk
+    /// from each block to the root would (at 10⁶ patches the tree's lower levels are not in
+    /// the cache). The tree ends as the walks would leave it.
+    pub fn settle_all(&mut self, blocks: impl Iterator<Item = usize>) {
+        let mut level = std::mem::take(&mut self.level);
+        level.clear();
+        for b in blocks {
+            if std::mem::take(&mut self.dirty[b]) {
+                let p = ((self.size + b) / 2) as u32;
+                if level.last() != Some(&p) {
+                    level.push(p);
+                }
+            }
+        }
+        while !level.is_empty() {
+            let mut kept = 0;
+            for k in 0..level.len() {
+                let p = level[k] as usize;
+                let best = better(self.node[2 * p], self.node[2 * p + 1]);
+                if self.node[p] != best {
+                    self.node[p] = best;
+                    let q = (p / 2) as u32;
+                    if q >= 1 && (kept == 0 || level[kept - 1] != q) {
+                        level[kept] = q;
+                        kept += 1;
+                    }
+                }
+            }
+            level.truncate(kept);
+        }
+        self.level = level;
+    }
+
+    /// The largest key and its index (the lowest index among equal keys).
+    pub fn max(&self) -> (f64, usize) {
+        let (k, i) = self.node[1];
+        (k, i as usize)
+    }
+}
+
+/// The larger of two entries; `a` (the left, lower indices) on ties.
+fn better(a: (f64, u32), b: (f64, u32)) -> (f64, u32) {
+    if b.0 > a.0 {
+        b
+    } else {
+        a
+    }
+}
+
+/// A max-tree over N keys: update and arg-max in O(log N); ties to the lowest index.
+///
+/// The keys are kept in blocks of [`MaxTree::BLOCK`], one cache line each, under [`Blocks`].
+/// Setting a key that is not its block's maximum and does not become it touches only the key
+/// and the block's node; a block's maximum that falls is found again by scanning its line.
+#[derive(Clone, Debug)]
+pub struct MaxTree {
+    keys: Vec<f64>,
+    blocks: Blocks,
+}
+
+impl MaxTree {
+    /// A tree over `keys`.
+    pub fn new(keys: &[f64]) -> Self {
+        Self {
+            keys: keys.to_vec(),
+            blocks: Blocks::new(keys),
+        }
+    }
+
+    /// Set key `i`: its block's node, then the nodes above it while they change.
+    pub fn set(&mut self, i: usize, key: f64) {
+        self.blocks.nodes().set(&mut self.keys, i, key);
+        self.blocks.settle(i / BLOCK);
+    }
+
+    /// The keys and the blocks' nodes, to set keys of disjoint ranges from several threads
+    /// ([`Leaves::split_at`]); [`Self::settle`] afterwards.
+    pub fn leaves(&mut self) -> Leaves<'_> {
+        Leaves {
+            keys: &mut self.keys,
+            nodes: self.blocks.nodes(),
+        }
+    }
+
+    /// Carry the change of block `b`'s node up the tree ([`Blocks::settle`]).
+    pub fn settle(&mut self, b: usize) {
+        self.blocks.settle(b);
     }
 
     /// Keys a block holds.
@@ -99,22 +193,14 @@ impl MaxTree {
         i / BLOCK
     }
 
-    /// The first key of the block of key `i`: where [`Leaves::split_at`] can split.
+    /// The first key of the block of key `i`: where [`Nodes::split_at`] can split.
     pub fn block_start(i: usize) -> usize {
         i / BLOCK * BLOCK
     }
 
     /// The largest key and its index (the lowest index among equal keys).
     pub fn max(&self) -> (f64, usize) {
-        let (k, i) = self.node[1];
-        (k, i as usize)
-    }
-
-    /// Read key `i` and its block's node: what [`Self::set`] reads first. Returns their sum,
-    /// for a caller that loads them ahead of the update only to bring them into the cache.
-    #[inline]
-    pub fn touch(&self, i: usize) -> f64 {
-        self.keys[i] + self.node[self.size + i / BLOCK].0
+        self.blocks.max()
     }
 
     /// Key `i`.
@@ -123,82 +209,74 @@ impl MaxTree {
     }
 }
 
-/// The largest of `keys[..BLOCK]` (fewer at the end) and its index plus `first`, the lowest on
-/// ties.
-fn block_max(keys: &[f64], first: usize) -> (f64, u32) {
+/// The largest key of `keys[..BLOCK]` (fewer at the end) and its index plus `first`, the
+/// lowest on ties.
+fn block_max<K: Keyed>(keys: &[K], first: usize) -> (f64, u32) {
     let keys = &keys[..keys.len().min(BLOCK)];
-    let mut best = (keys[0], first as u32);
-    for (k, &key) in keys.iter().enumerate().skip(1) {
-        if key > best.0 {
-            best = (key, (first + k) as u32);
+    let mut best = (keys[0].key(), first as u32);
+    for (k, key) in keys.iter().enumerate().skip(1) {
+        if key.key() > best.0 {
+            best = (key.key(), (first + k) as u32);
         }
     }
     best
 }
 
-/// The keys `first..` of a [`MaxTree`] and their blocks' nodes, borrowed to be set apart from
-/// the nodes above (which [`MaxTree::settle`] updates afterwards). `first` is a multiple of the
-/// block size, so that disjoint spans own disjoint blocks.
+/// The nodes of the blocks of keys `first..`, borrowed to be set apart from the nodes above
+/// (which [`Blocks::settle`] updates afterwards). `first` is a multiple of the block size, so
+/// that disjoint spans own disjoint blocks.
 #[derive(Debug)]
-pub struct Leaves<'a> {
+pub struct Nodes<'a> {
     first: usize,
-    keys: &'a mut [f64],
     blocks: &'a mut [(f64, u32)],
     dirty: &'a mut [bool],
 }
 
-impl<'a> Leaves<'a> {
+impl<'a> Nodes<'a> {
     /// The first key index of the span.
     pub fn first(&self) -> usize {
         self.first
     }
 
-    /// Split into the keys before `at` (a key index, rounded down to a block) and from it.
-    pub fn split_at(self, at: usize) -> (Leaves<'a>, Leaves<'a>) {
-        let at = (at / BLOCK * BLOCK).clamp(self.first, self.first + self.keys.len());
-        let (k0, k1) = self.keys.split_at_mut(at - self.first);
+    /// Split into the blocks before key `at` (rounded down to a block) and from it; `at` is
+    /// clamped to the span.
+    pub fn split_at(self, at: usize) -> (Nodes<'a>, Nodes<'a>) {
+        let end = self.first + self.blocks.len() * BLOCK;
+        let at = (at / BLOCK * BLOCK).clamp(self.first, end);
         let b = (at - self.first) / BLOCK;
         let (b0, b1) = self.blocks.split_at_mut(b);
         let (d0, d1) = self.dirty.split_at_mut(b);
         (
-            Leaves {
+            Nodes {
                 first: self.first,
-                keys: k0,
                 blocks: b0,
                 dirty: d0,
             },
-            Leaves {
+            Nodes {
                 first: at,
-                keys: k1,
                 blocks: b1,
                 dirty: d1,
             },
         )
     }
 
-    /// Read key `i`: what [`Self::set`] reads first, for a caller that loads it ahead.
-    #[inline]
-    pub fn get(&self, i: usize) -> f64 {
-        self.keys[i - self.first]
-    }
-
-    /// Ask the cache for what [`Self::set`] of key `i` reads: the key and its block's node.
+    /// Ask the cache for the node of key `i`'s block.
     #[inline]
     pub fn prefetch(&self, i: usize) {
-        let k = i.wrapping_sub(self.first);
-        crate::hint::prefetch_at(self.keys, k);
-        crate::hint::prefetch_at(self.blocks, k / BLOCK);
+        crate::hint::prefetch_at(self.blocks, i.wrapping_sub(self.first) / BLOCK);
     }
 
-    /// Set key `i` (an index of the whole tree, inside the span) and its block's node; the
-    /// block is marked for [`MaxTree::settle`] if its node changed.
-    pub fn set(&mut self, i: usize, key: f64) {
+    /// Set key `i` (an index of the whole tree, inside the span) to `key` in `keys`, the keys
+    /// of the span (`keys[0]` is key `first`), and its block's node; the block is marked for
+    /// [`Blocks::settle`] if its node changed.
+    #[inline]
+    pub fn set<K: Keyed>(&mut self, keys: &mut [K], i: usize, key: f64) {
         let k = i - self.first;
-        let old = self.keys[k];
+        let old = keys[k].key();
         if old == key {
             return;
         }
-        self.keys[k] = key;
+        keys[k].set_key(key);
         let b = k / BLOCK;
         let cur = self.blocks[b];
         let me = (key, i as u32);
@@ -206,7 +284,7 @@ impl<'a> Leaves<'a> {
             if key > old {
                 me
             } else {
-                block_max(&self.keys[b * BLOCK..], self.first + b * BLOCK)
+                block_max(&keys[b * BLOCK..], self.first + b * BLOCK)
             }
         } else if key > cur.0 || (key == cur.0 && me.1 < cur.1) {
             me
@@ -217,6 +295,43 @@ impl<'a> Leaves<'a> {
             self.blocks[b] = new;
             self.dirty[b] = true;
         }
+    }
+}
+
+/// The keys `first..` of a [`MaxTree`] and their blocks' nodes.
+#[derive(Debug)]
+pub struct Leaves<'a> {
+    keys: &'a mut [f64],
+    nodes: Nodes<'a>,
+}
+
+impl<'a> Leaves<'a> {
+    /// The first key index of the span.
+    pub fn first(&self) -> usize {
+        self.nodes.first
+    }
+
+    /// Split into the keys before `at` (a key index, rounded down to a block) and from it.
+    pub fn split_at(self, at: usize) -> (Leaves<'a>, Leaves<'a>) {
+        let first = self.nodes.first;
+        let at = (at / BLOCK * BLOCK).clamp(first, first + self.nodes.blocks.len() * BLOCK);
+        let (k0, k1) = self.keys.split_at_mut((at - first).min(self.keys.len()));
+        let (n0, n1) = self.nodes.split_at(at);
+        (
+            Leaves {
+                keys: k0,
+                nodes: n0,
+            },
+            Leaves {
+                keys: k1,
+                nodes: n1,
+            },
+        )
+    }
+
+    /// Set key `i` (an index of the whole tree, inside the span) and its block's node.
+    pub fn set(&mut self, i: usize, key: f64) {
+        self.nodes.set(self.keys, i, key);
     }
 }
 
@@ -366,6 +481,34 @@ mod tests {
                     tree.settle(MaxTree::block_of(i));
                 }
                 let (k, j) = tree.max();
+                assert_eq!((j, k), scan(&keys));
+            }
+        }
+    }
+
+    /// Keys set through [`Nodes`] and settled a level at a time ([`Blocks::settle_all`]) give
+    /// the linear scan's arg-max, for keys that rise and fall, blocks repeated and ties common.
+    #[test]
+    fn blocks_settled_a_level_at_a_time_agree_with_a_linear_scan() {
+        let mut rng = stream(6, 0, 0, 0);
+        for n in [1usize, 8, 9, 100, 1000, 5000] {
+            let mut keys: Vec<f64> = (0..n)
+                .map(|_| (uniform(&mut rng) * 8.0).floor() as f64)
+                .collect();
+            let mut blocks = Blocks::new(&keys);
+            for _ in 0..300 {
+                let mut changed: Vec<usize> = (0..1 + n / 7)
+                    .map(|_| (uniform(&mut rng) * n as f32) as usize % n)
+                    .collect();
+                changed.sort_unstable();
+                let mut nodes = blocks.nodes();
+                for &i in &changed {
+                    let key = (uniform(&mut rng) * 8.0).floor() as f64;
+                    nodes.set(&mut keys, i, key);
+                    assert_eq!(keys[i], key);
+                }
+                blocks.settle_all(changed.iter().map(|&i| MaxTree::block_of(i)));
+                let (k, j) = blocks.max();
                 assert_eq!((j, k), scan(&keys));
             }
         }

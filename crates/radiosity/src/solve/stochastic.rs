@@ -116,8 +116,8 @@ impl SolverState for Stochastic<'_> {
         out.extend_from_slice(&self.b);
     }
 
-    fn unshot(&self) -> Option<&[Rgb]> {
-        Some(&self.u)
+    fn unshot(&self) -> Option<std::borrow::Cow<'_, [Rgb]>> {
+        Some(std::borrow::Cow::Borrowed(&self.u))
     }
 
     fn unshot_fraction(&mut self, _: &mut dyn Operator, exact: bool) -> f64 {

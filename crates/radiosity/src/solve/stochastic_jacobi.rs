@@ -404,8 +404,8 @@ impl SolverState for StochasticJacobi<'_> {
         out.extend_from_slice(&self.b);
     }
 
-    fn unshot(&self) -> Option<&[Rgb]> {
-        Some(&self.unshot)
+    fn unshot(&self) -> Option<std::borrow::Cow<'_, [Rgb]>> {
+        Some(std::borrow::Cow::Borrowed(&self.unshot))
     }
 
     fn unshot_fraction(&mut self, _: &mut dyn Operator, _: bool) -> f64 {
