@@ -447,3 +447,34 @@ fn long_shots_match_the_serial_loop_on_any_thread_count() {
     };
     assert_eq!(by(true), by(false));
 }
+
+/// On a worker of a pool of two threads, `run` keeps the other worker awake while it solves
+/// (`KeepAwake`): the result is bit for bit the one off the pool and on one thread, for a
+/// shooting method and for a sweeping one, and the pool is free for other work afterwards.
+#[test]
+fn solves_on_a_worker_match_solves_off_the_pool() {
+    // Rows of about 200 entries: shots update their receivers in parallel spans.
+    let mut r = section6(2000, 0.1, 0.8, 20, 11);
+    let (sys, f) = r.parts();
+    for method in [Solver::Progressive, Solver::GaussSeidel] {
+        let params = SolverParams {
+            tolerance: 1e-6,
+            ..Default::default()
+        };
+        let off = solve(method, sys, f, &params).unwrap();
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let on = pool.install(|| solve(method, sys, f, &params).unwrap());
+            assert_eq!(on.0, off.0, "{method:?} on {threads} threads");
+            assert_eq!(on.1.iterations, off.1.iterations);
+            let sum: u64 = pool.install(|| {
+                use rayon::prelude::*;
+                (0..10_000u64).into_par_iter().sum()
+            });
+            assert_eq!(sum, 49_995_000);
+        }
+    }
+}
