@@ -448,9 +448,9 @@ fn long_shots_match_the_serial_loop_on_any_thread_count() {
     assert_eq!(by(true), by(false));
 }
 
-/// On a worker of a pool of two threads, `run` keeps the other worker awake while it solves
-/// (`KeepAwake`): the result is bit for bit the one off the pool and on one thread, for a
-/// shooting method and for a sweeping one, and the pool is free for other work afterwards.
+/// On a worker of a pool of two or three threads, `run` keeps the other workers awake while it
+/// solves (`KeepAwake`): the result is bit for bit the one off the pool and on one thread, for
+/// a shooting method and for a sweeping one, and the pool is free for other work afterwards.
 #[test]
 fn solves_on_a_worker_match_solves_off_the_pool() {
     // Rows of about 200 entries: shots update their receivers in parallel spans.
@@ -462,7 +462,7 @@ fn solves_on_a_worker_match_solves_off_the_pool() {
             ..Default::default()
         };
         let off = solve(method, sys, f, &params).unwrap();
-        for threads in [1, 2] {
+        for threads in [1, 2, 3] {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()

@@ -448,7 +448,9 @@ pub fn run(
 
 /// While it lives, the other workers of the caller's thread pool look for work without ever
 /// going to sleep: each runs a job that takes whatever work the pool has
-/// (`rayon::yield_now`) and spins when there is none, until the guard is dropped.
+/// (`rayon::yield_now`) and, when there is none, yields the core to the operating system
+/// (which hands it straight back unless another thread is waiting for it), until the guard is
+/// dropped.
 ///
 /// Shooting methods alternate 10⁵–10⁶ times between a short parallel step (a row's rays, a
 /// shot's receivers) and a short serial one (choosing the next shooter). An idle rayon worker
@@ -473,7 +475,9 @@ impl KeepAwake {
                 rayon::spawn(move || {
                     while !stop.load(Ordering::Relaxed) {
                         if rayon::yield_now() != Some(rayon::Yield::Executed) {
-                            std::hint::spin_loop();
+                            // Give the core away if another thread wants it: with more
+                            // workers than cores, a pure spin would starve the solve.
+                            std::thread::yield_now();
                         }
                     }
                 });
