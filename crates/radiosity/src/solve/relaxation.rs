@@ -310,6 +310,7 @@ impl<'s> Relaxation<'s> {
                 *t = Blocks::new(cells);
             }
             Select::Residual(t) => {
+                // `e / a` as a shot computes it, so that keys compare bit for bit.
                 for c in cells.iter_mut() {
                     c.key = abs_sum(c.r) * c.area / c.area;
                 }

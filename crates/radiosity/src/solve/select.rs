@@ -171,24 +171,10 @@ impl MaxTree {
         self.blocks.settle(i / BLOCK);
     }
 
-    /// The keys and the blocks' nodes, to set keys of disjoint ranges from several threads
-    /// ([`Leaves::split_at`]); [`Self::settle`] afterwards.
-    pub fn leaves(&mut self) -> Leaves<'_> {
-        Leaves {
-            keys: &mut self.keys,
-            nodes: self.blocks.nodes(),
-        }
-    }
-
-    /// Carry the change of block `b`'s node up the tree ([`Blocks::settle`]).
-    pub fn settle(&mut self, b: usize) {
-        self.blocks.settle(b);
-    }
-
     /// Keys a block holds.
     pub const BLOCK: usize = BLOCK;
 
-    /// The block of key `i`, for [`Self::settle`].
+    /// The block of key `i`, for [`Blocks::settle`].
     pub fn block_of(i: usize) -> usize {
         i / BLOCK
     }
@@ -295,43 +281,6 @@ impl<'a> Nodes<'a> {
             self.blocks[b] = new;
             self.dirty[b] = true;
         }
-    }
-}
-
-/// The keys `first..` of a [`MaxTree`] and their blocks' nodes.
-#[derive(Debug)]
-pub struct Leaves<'a> {
-    keys: &'a mut [f64],
-    nodes: Nodes<'a>,
-}
-
-impl<'a> Leaves<'a> {
-    /// The first key index of the span.
-    pub fn first(&self) -> usize {
-        self.nodes.first
-    }
-
-    /// Split into the keys before `at` (a key index, rounded down to a block) and from it.
-    pub fn split_at(self, at: usize) -> (Leaves<'a>, Leaves<'a>) {
-        let first = self.nodes.first;
-        let at = (at / BLOCK * BLOCK).clamp(first, first + self.nodes.blocks.len() * BLOCK);
-        let (k0, k1) = self.keys.split_at_mut((at - first).min(self.keys.len()));
-        let (n0, n1) = self.nodes.split_at(at);
-        (
-            Leaves {
-                keys: k0,
-                nodes: n0,
-            },
-            Leaves {
-                keys: k1,
-                nodes: n1,
-            },
-        )
-    }
-
-    /// Set key `i` (an index of the whole tree, inside the span) and its block's node.
-    pub fn set(&mut self, i: usize, key: f64) {
-        self.nodes.set(self.keys, i, key);
     }
 }
 
@@ -452,35 +401,38 @@ mod tests {
         best
     }
 
-    /// Keys set through split spans of leaves, then settled, give the linear scan's arg-max.
+    /// Keys set through split spans of block nodes (as a shot's receivers are updated by
+    /// several threads), then settled block by block, give the linear scan's arg-max.
     #[test]
-    fn leaves_set_apart_then_settled_agree_with_a_linear_scan() {
+    fn nodes_set_apart_then_settled_agree_with_a_linear_scan() {
         let mut rng = stream(4, 0, 0, 0);
         for n in [1usize, 9, 64, 1000] {
             let mut keys: Vec<f64> = (0..n)
                 .map(|_| (uniform(&mut rng) * 8.0).floor() as f64)
                 .collect();
-            let mut tree = MaxTree::new(&keys);
+            let mut blocks = Blocks::new(&keys);
             for _ in 0..300 {
                 let cut = (uniform(&mut rng) * n as f32) as usize;
                 let changed: Vec<usize> = (0..1 + n / 10)
                     .map(|_| (uniform(&mut rng) * n as f32) as usize % n)
                     .collect();
                 {
-                    let (mut a, mut b) = tree.leaves().split_at(cut);
+                    let (mut a, mut b) = blocks.nodes().split_at(cut);
+                    let at = b.first().min(n);
+                    let (ka, kb) = keys.split_at_mut(at);
                     for &i in &changed {
-                        keys[i] = (uniform(&mut rng) * 8.0).floor() as f64;
-                        if i < b.first() {
-                            a.set(i, keys[i]);
+                        let key = (uniform(&mut rng) * 8.0).floor() as f64;
+                        if i < at {
+                            a.set(ka, i, key);
                         } else {
-                            b.set(i, keys[i]);
+                            b.set(kb, i, key);
                         }
                     }
                 }
                 for &i in &changed {
-                    tree.settle(MaxTree::block_of(i));
+                    blocks.settle(MaxTree::block_of(i));
                 }
-                let (k, j) = tree.max();
+                let (k, j) = blocks.max();
                 assert_eq!((j, k), scan(&keys));
             }
         }
