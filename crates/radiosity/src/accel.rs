@@ -37,6 +37,7 @@ use crate::geom::{Aabb, Ray, Vec3};
 use crate::mesh::Mesh;
 use glam::Vec4;
 use rayon::prelude::*;
+use std::mem::MaybeUninit;
 
 /// Most triangles in a leaf.
 pub const MAX_LEAF: usize = 4;
@@ -147,18 +148,27 @@ const HALVING_DEPTH: usize = MAX_DEPTH - 31;
 /// box (9,992 patches) cast 9.6–9.8 M rays/s with 2 MiB worker stacks, 11.1–11.7 with 64 MiB
 /// ones and 11.6–12.2 from the main thread; aligned, 11.7–12.4 in every case (hospital, two
 /// threads: 4.8–5.0 → 5.4).
+///
+/// The array is left uninitialised: zeroing its 448 bytes for every ray (fourteen stores,
+/// some split across cache lines) was 8 % of a closest-hit query's time (hospital, 28,735
+/// patches, one thread: 2.86 → 3.1 M rays/s without it). Every slot below `sp` has been
+/// written since the last [`Stack::clear`]: pushes write at `sp` before counting, a spill
+/// moves written slots down, and a refill writes the slots it counts.
 #[repr(align(64))]
-struct Stack<T: Copy + Default> {
-    top: [T; STACK],
+struct Stack<T: Copy> {
+    top: [MaybeUninit<T>; STACK],
     sp: usize,
     spill: Vec<T>,
 }
 
-impl<T: Copy + Default> Stack<T> {
+#[allow(unsafe_code)]
+impl<T: Copy> Stack<T> {
     #[inline(always)]
     fn new() -> Self {
         Stack {
-            top: [T::default(); STACK],
+            // SAFETY: an array of `MaybeUninit` needs no initialisation. (The array
+            // expression `[MaybeUninit::uninit(); STACK]` was compiled to zeroing stores.)
+            top: unsafe { MaybeUninit::<[MaybeUninit<T>; STACK]>::uninit().assume_init() },
             sp: 0,
             spill: Vec::new(),
         }
@@ -182,21 +192,26 @@ impl<T: Copy + Default> Stack<T> {
     #[cold]
     #[inline(never)]
     fn spill_half(&mut self) {
-        self.spill.extend_from_slice(&self.top[..STACK / 2]);
+        // Called with `sp > STACK − WIDTH ≥ STACK / 2`: the bottom half is written.
+        // SAFETY: slots below `sp` are initialised (the type's invariant).
+        let bottom = self.top[..STACK / 2]
+            .iter()
+            .map(|v| unsafe { v.assume_init() });
+        self.spill.extend(bottom);
         self.top.copy_within(STACK / 2..self.sp, 0);
         self.sp -= STACK / 2;
     }
 
     #[inline(always)]
     fn push(&mut self, v: T) {
-        self.top[self.sp] = v;
+        self.top[self.sp] = MaybeUninit::new(v);
         self.sp += 1;
     }
 
     /// Write `v` on top, but count it pushed only if `keep`: a push without a branch.
     #[inline(always)]
     fn push_if(&mut self, v: T, keep: bool) {
-        self.top[self.sp] = v;
+        self.top[self.sp] = MaybeUninit::new(v);
         self.sp += keep as usize;
     }
 
@@ -206,7 +221,8 @@ impl<T: Copy + Default> Stack<T> {
             return None;
         }
         self.sp -= 1;
-        Some(self.top[self.sp])
+        // SAFETY: `sp` was above this slot, so it is initialised (the type's invariant).
+        Some(unsafe { self.top[self.sp].assume_init() })
     }
 
     /// Bring back the top of what was spilled; false if nothing was.
@@ -215,7 +231,9 @@ impl<T: Copy + Default> Stack<T> {
     fn refill(&mut self) -> bool {
         let k = self.spill.len().min(STACK / 2);
         let from = self.spill.len() - k;
-        self.top[..k].copy_from_slice(&self.spill[from..]);
+        for (slot, &v) in self.top[..k].iter_mut().zip(&self.spill[from..]) {
+            *slot = MaybeUninit::new(v);
+        }
         self.spill.truncate(from);
         self.sp = k;
         k > 0
@@ -622,6 +640,14 @@ macro_rules! closest_visit {
 /// 8 4.9, 16 4.1–4.3; one at a time 2.6–2.8).
 const IN_FLIGHT: usize = 8;
 
+/// Bytes of hierarchy from which [`Bvh::closest_hits`] interleaves its rays. Below, one ray at
+/// a time is as fast or faster: the interleaving costs about what the overlap of memory waits
+/// saves while most of the tree sits in the L2 cache (2 MiB a core on the machine measured).
+/// Hospital, one thread, `bench --rays`, one at a time against interleaved (M rays/s): 3 MB
+/// (28,735 patches) 2.90 / 2.84, 5.4 MB 3.78 / 3.81, 8.4 MB 3.75 / 3.58, 15.7 MB 3.90 / 4.52,
+/// 74 MB (10⁶ patches) 3.2 / 5.0.
+const INTERLEAVE_FROM: usize = 12 << 20;
+
 /// One ray's closest-hit traversal, advanced a visit at a time by [`Bvh::closest_step`]: the
 /// state [`Bvh::closest_hit`] keeps in locals.
 struct Closest {
@@ -951,15 +977,17 @@ impl Bvh {
     }
 
     /// The closest hit of each ray of `rays` with `0 < t < t_max`, into the same place of
-    /// `out`: exactly what [`Bvh::closest_hit`] finds for it, but eight rays at a
-    /// time on each thread. A ray's traversal is a chain of dependent loads, each waiting on
-    /// the memory once the tree is larger than the cache; here each visit of one ray asks
-    /// for the next node it needs and the other rays' visits run while it comes, so that
-    /// their waits overlap (the interleaving of Kocberber et al. 2015, "Asynchronous Memory
-    /// Access Chaining", applied to BVH traversal). Incoherent rays on the hospital at 10⁶
-    /// patches (a tree of 74 MB): 2.6–2.8 → 4.7–4.9 M rays/s on one thread. Where the tree
-    /// fits the L2 cache it gains nothing, and rays that share an origin (a row of form
-    /// factors) lose to one at a time: the cache already holds their common path.
+    /// `out`: exactly what [`Bvh::closest_hit`] finds for it, but on a hierarchy of
+    /// [`INTERLEAVE_FROM`] bytes or more eight rays at a time on each thread. A ray's
+    /// traversal is a chain of dependent loads, each waiting on the memory once the tree is
+    /// larger than the cache; here each visit of one ray asks for the next node it needs and
+    /// the other rays' visits run while it comes, so that their waits overlap (the
+    /// interleaving of Kocberber et al. 2015, "Asynchronous Memory Access Chaining", applied
+    /// to BVH traversal). Incoherent rays on the hospital at 10⁶ patches (a tree of 74 MB):
+    /// 2.6–2.8 → 4.7–4.9 M rays/s on one thread. Where most of the tree fits the L2 cache
+    /// it gains nothing, so smaller hierarchies cast one ray at a time; and rays that share
+    /// an origin (a row of form factors) lose to one at a time: the cache already holds
+    /// their common path.
     ///
     /// # Panics
     /// If `out` and `rays` differ in length.
@@ -972,13 +1000,31 @@ impl Bvh {
         self.closest_hits_in::<NATIVE_AVX>(rays, t_max, out)
     }
 
-    /// [`Bvh::closest_hits`], compiled for whatever instruction set its caller is.
+    /// [`Bvh::closest_hits`], compiled for whatever instruction set its caller is: one ray at
+    /// a time on a hierarchy smaller than [`INTERLEAVE_FROM`], else [`Bvh::interleaved`].
     #[inline(always)]
     fn closest_hits_in<const AVX: bool>(&self, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
-        if self.tris.is_empty() || rays.len() < 2 {
+        if self.tris.is_empty() || rays.len() < 2 || self.bytes() < INTERLEAVE_FROM {
             for (ray, o) in rays.iter().zip(out.iter_mut()) {
                 *o = self.closest_hit_in::<AVX>(ray, t_max);
             }
+            return;
+        }
+        self.interleaved::<AVX>(rays, t_max, out);
+    }
+
+    /// Bytes of the nodes and leaf blocks, which a traversal reads.
+    fn bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<WideNode>()
+            + self.blocks.len() * std::mem::size_of::<TriBlock>()
+    }
+
+    /// [`Bvh::closest_hits`] with [`IN_FLIGHT`] rays interleaved a visit at a time, whatever
+    /// the hierarchy's size; `rays` and `out` have the same length.
+    #[inline(always)]
+    fn interleaved<const AVX: bool>(&self, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
+        if self.tris.is_empty() || rays.is_empty() {
+            out.fill(None);
             return;
         }
         // The rays in flight: lane `k` traces ray `which[k]`; lanes from `live` on are idle.
@@ -1260,17 +1306,19 @@ mod avx {
             let fx = dist(r.far[0], 0, r.o_far[0]);
             let fy = dist(r.far[1], 1, r.o_far[1]);
             let fz = dist(r.far[2], 2, r.o_far[2]);
-            let near = _mm256_max_ps(
-                _mm256_max_ps(_mm256_setzero_ps(), nz),
-                _mm256_max_ps(nx, ny),
+            let i = _mm256_castps_si256;
+            let near = _mm256_max_epi32(
+                _mm256_max_epi32(_mm256_setzero_si256(), i(nz)),
+                _mm256_max_epi32(i(nx), i(ny)),
             );
-            let far = _mm256_min_ps(
-                _mm256_min_ps(_mm256_set1_ps(t_max), fz),
-                _mm256_min_ps(fx, fy),
+            let far = _mm256_min_epi32(
+                _mm256_min_epi32(i(_mm256_set1_ps(t_max)), i(fz)),
+                _mm256_min_epi32(i(fx), i(fy)),
             );
-            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32;
+            let beyond = _mm256_cmpgt_epi32(near, far);
+            let mask = !(_mm256_movemask_ps(_mm256_castsi256_ps(beyond)) as u32) & 0xff;
             let mut out = [0.0f32; WIDTH];
-            _mm256_storeu_ps(out.as_mut_ptr(), near);
+            _mm256_storeu_ps(out.as_mut_ptr(), _mm256_castsi256_ps(near));
             (out, mask)
         }
     }
@@ -2110,6 +2158,12 @@ mod tests {
                 let mut out = vec![None; len];
                 bvh.closest_hits(&rays[..len], t_max, &mut out);
                 assert_eq!(out, one[..len], "{len} rays, reach {t_max}");
+                // The interleaved traversal itself: this tree is below the size from which
+                // `closest_hits` chooses it.
+                assert!(bvh.bytes() < INTERLEAVE_FROM);
+                let mut out = vec![None; len];
+                bvh.interleaved::<NATIVE_AVX>(&rays[..len], t_max, &mut out);
+                assert_eq!(out, one[..len], "{len} rays interleaved, reach {t_max}");
             }
         }
         let empty = Bvh::build(&Mesh::default());
@@ -2125,6 +2179,16 @@ mod tests {
             3
         ];
         empty.closest_hits(&rays[..3], f32::INFINITY, &mut out);
+        assert_eq!(out, vec![None; 3]);
+        out[1] = Some(Hit {
+            t: 2.0,
+            patch: 1,
+            sub: 1,
+            u: 0.5,
+            v: 0.5,
+            front: false,
+        });
+        empty.interleaved::<NATIVE_AVX>(&rays[..3], f32::INFINITY, &mut out);
         assert_eq!(out, vec![None; 3]);
     }
 
