@@ -26,8 +26,8 @@
 //! Portable builds (without `-C target-cpu=native`, which `.cargo/config.toml` sets) compile
 //! the queries a second time for AVX2, FMA and BMI and choose that copy at run time where the
 //! CPU has them (module `dispatch`). With `unsafe` also: the box test in AVX2 intrinsics
-//! (module `avx`, run by builds that assume AVX2 and FMA and by that run-time copy) and the
-//! prefetch hint (`hint`).
+//! (module `avx`, run by builds that assume AVX2 and FMA and by that run-time copy), the
+//! prefetch hint (`hint`) and the traversal stack's uninitialised array (`Stack`).
 //!
 //! Self-intersection: callers start rays a small distance off the surface (see
 //! [`Bvh::ray_offset`]) along its normal; since patches are planar and rays leave into the
@@ -978,7 +978,7 @@ impl Bvh {
 
     /// The closest hit of each ray of `rays` with `0 < t < t_max`, into the same place of
     /// `out`: exactly what [`Bvh::closest_hit`] finds for it, but on a hierarchy of
-    /// [`INTERLEAVE_FROM`] bytes or more eight rays at a time on each thread. A ray's
+    /// 12 MiB or more (`INTERLEAVE_FROM`) eight rays at a time on each thread. A ray's
     /// traversal is a chain of dependent loads, each waiting on the memory once the tree is
     /// larger than the cache; here each visit of one ray asks for the next node it needs and
     /// the other rays' visits run while it comes, so that their waits overlap (the
@@ -1011,6 +1011,12 @@ impl Bvh {
             return;
         }
         self.interleaved::<AVX>(rays, t_max, out);
+    }
+
+    /// Whether [`Bvh::closest_hits`] interleaves its rays on this hierarchy (12 MiB or more
+    /// of nodes and leaves) rather than casting one at a time.
+    pub fn interleaves(&self) -> bool {
+        self.bytes() >= INTERLEAVE_FROM
     }
 
     /// Bytes of the nodes and leaf blocks, which a traversal reads.
