@@ -104,6 +104,23 @@ fn measure(caster: &dyn Caster, rays: &[(Ray, u32)], runs: usize) -> Timed {
     time_runs(cast, rays.len(), runs)
 }
 
+/// Time `bvh.occluded` over `rays`, ray `k` reaching `reach[k]`, `runs` times (at least
+/// once): (median rays/s, rays blocked).
+fn measure_occluded(bvh: &Bvh, rays: &[(Ray, u32)], reach: &[f32], runs: usize) -> (f64, usize) {
+    let mut rates = Vec::new();
+    let mut blocked = 0;
+    for _ in 0..runs.max(1) {
+        let t = Instant::now();
+        blocked = rays
+            .par_iter()
+            .zip(reach)
+            .filter(|((r, _), &t_max)| bvh.occluded(r, t_max))
+            .count();
+        rates.push(rays.len() as f64 / t.elapsed().as_secs_f64());
+    }
+    (median(rates), blocked)
+}
+
 /// [`measure`] through [`Caster::cast_batch`], [`BATCH`] rays a call.
 fn measure_batch(caster: &dyn Caster, rays: &[Ray], runs: usize) -> Timed {
     let cast = || -> Vec<(u32, f32)> {
@@ -227,17 +244,8 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
         return Ok(());
     }
     // Any-hit (occlusion) queries on the same rays, unbounded: what shadow rays cost.
-    let mut occ_rates = Vec::new();
-    let mut blocked = 0usize;
-    for _ in 0..a.runs.max(1) {
-        let t = Instant::now();
-        blocked = rays
-            .par_iter()
-            .filter(|(r, _)| bvh.occluded(r, f32::INFINITY))
-            .count();
-        occ_rates.push(rays.len() as f64 / t.elapsed().as_secs_f64());
-    }
-    let occ = median(occ_rates);
+    let unbounded = vec![f32::INFINITY; rays.len()];
+    let (occ, blocked) = measure_occluded(&bvh, &rays, &unbounded, a.runs);
     let any_hit = ours.1.iter().filter(|h| h.1.is_finite()).count();
     println!(
         "{:<16} {:>10.2} {:>8.1}% {:>14.0}    ({:.2}× closest-hit; agrees on {} of {} rays)",
@@ -253,18 +261,7 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
     // of a point that is in fact visible (the costly case: nothing blocks it, so every box
     // within reach is searched). Rays that escaped keep an unbounded reach.
     let reach: Vec<f32> = ours.1.iter().map(|h| h.1 * SHORT_OF_HIT).collect();
-    let mut bounded_rates = Vec::new();
-    let mut bounded_blocked = 0usize;
-    for _ in 0..a.runs.max(1) {
-        let t = Instant::now();
-        bounded_blocked = rays
-            .par_iter()
-            .zip(&reach)
-            .filter(|((r, _), &t_max)| bvh.occluded(r, t_max))
-            .count();
-        bounded_rates.push(rays.len() as f64 / t.elapsed().as_secs_f64());
-    }
-    let bounded = median(bounded_rates);
+    let (bounded, bounded_blocked) = measure_occluded(&bvh, &rays, &reach, a.runs);
     println!(
         "{:<16} {:>10.2} {:>8.1}% {:>14.0}    ({:.2}× closest-hit; reach {SHORT_OF_HIT} of the closest hit's distance)",
         "BVH any, bounded",
