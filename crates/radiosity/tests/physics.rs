@@ -124,6 +124,41 @@ fn rows_sum_to_one_in_a_closed_scene() {
     assert!(worst < 1e-4, "worst |row sum − 1| = {worst}");
 }
 
+/// A Monte Carlo row lists each patch hit once, in order, with `k/n` for its `k > 0` hits,
+/// and is the same whether its buffers are fresh or were used for other rows before (the
+/// bitmap that lists the patches hit is left clear by every row).
+#[test]
+fn rows_are_sorted_and_do_not_depend_on_the_buffers_history() {
+    let mesh = Mesh::build(&builtin::cornell(), MeshParams::Patches(2000)).unwrap();
+    let bvh = Bvh::build(&mesh);
+    let mut reused = RowScratch::default();
+    let (mut row, mut fresh_row) = (Vec::new(), Vec::new());
+    let n = 3000;
+    for i in (0..mesh.len()).step_by(37) {
+        estimate_row(&mesh, &bvh, i, n, 9, 1, &mut reused, &mut row);
+        let mut fresh = RowScratch::default();
+        estimate_row(&mesh, &bvh, i, n, 9, 1, &mut fresh, &mut fresh_row);
+        assert_eq!(row, fresh_row, "row {i}");
+        assert!(
+            row.windows(2).all(|w| w[0].0 < w[1].0),
+            "row {i} not sorted"
+        );
+        let hits: f64 = row
+            .iter()
+            .map(|&(j, f)| {
+                let k = f as f64 * n as f64;
+                assert!((j as usize) < mesh.len() && j as usize != i);
+                assert!(
+                    k >= 0.5 && (k - k.round()).abs() < 1e-3,
+                    "row {i}: {k} hits"
+                );
+                k.round()
+            })
+            .sum();
+        assert!(hits <= n as f64, "row {i}: {hits} hits of {n} rays");
+    }
+}
+
 fn furnace_solution(rays: u32, patches: usize) -> pipeline::Solution {
     let settings = Settings {
         mesh: MeshParams::Patches(patches),

@@ -39,7 +39,10 @@ pub const PHOTON_BATCH: usize = 256;
 pub struct RowScratch {
     hits: Vec<u32>,
     counts: Vec<u32>,
-    touched: Vec<u32>,
+    /// One bit per patch: hit by the row being counted.
+    hit: Vec<u64>,
+    /// One bit per word of `hit`: that word has a bit set.
+    words: Vec<u64>,
 }
 
 /// Estimate row `i` of F with `n` rays (eq. 7) into `out` (cleared first), using the random
@@ -93,26 +96,39 @@ pub fn estimate_row(
     } else {
         trace(0, &mut scratch.hits);
     }
-    // Count hits per patch in a fixed order.
-    if scratch.counts.len() < mesh.len() {
-        scratch.counts.resize(mesh.len(), 0);
+    // Count hits per patch, and mark the patches hit in a two-level bitmap, whose set bits
+    // read in order are the row's patches sorted: the hit patches of a row are a few
+    // hundred of up to millions, and sorting them cost more than the marks (hospital,
+    // 400k patches: about 2 % of the wall time, on one thread).
+    let n_patches = mesh.len();
+    if scratch.counts.len() < n_patches {
+        scratch.counts.resize(n_patches, 0);
+        scratch.hit.resize(n_patches.div_ceil(64), 0);
+        scratch.words.resize(n_patches.div_ceil(64 * 64), 0);
     }
-    scratch.touched.clear();
     for &h in &scratch.hits {
         if h != MISS {
-            let c = &mut scratch.counts[h as usize];
-            if *c == 0 {
-                scratch.touched.push(h);
-            }
-            *c += 1;
+            let h = h as usize;
+            scratch.hit[h / 64] |= 1 << (h % 64);
+            scratch.words[h / 4096] |= 1 << (h / 64 % 64);
+            scratch.counts[h] += 1;
         }
     }
-    scratch.touched.sort_unstable();
     out.clear();
     let inv_n = 1.0 / n as f64;
-    for &j in &scratch.touched {
-        let c = std::mem::take(&mut scratch.counts[j as usize]);
-        out.push((j, (c as f64 * inv_n) as f32));
+    for (w, word) in scratch.words.iter_mut().enumerate() {
+        let mut high = std::mem::take(word);
+        while high != 0 {
+            let k = w * 64 + high.trailing_zeros() as usize;
+            high &= high - 1;
+            let mut low = std::mem::take(&mut scratch.hit[k]);
+            while low != 0 {
+                let j = k * 64 + low.trailing_zeros() as usize;
+                low &= low - 1;
+                let c = std::mem::take(&mut scratch.counts[j]);
+                out.push((j as u32, (c as f64 * inv_n) as f32));
+            }
+        }
     }
 }
 
