@@ -897,7 +897,7 @@ impl Bvh {
             depth,
             // The first block is the one empty lanes refer to.
             leaves: self.blocks.len() - 1,
-            bytes: node_bytes + self.blocks.len() * std::mem::size_of::<TriBlock>(),
+            bytes: self.bytes(),
             node_bytes,
             sah_nodes,
             sah_leaves,
@@ -1004,7 +1004,7 @@ impl Bvh {
     /// a time on a hierarchy smaller than [`INTERLEAVE_FROM`], else [`Bvh::interleaved`].
     #[inline(always)]
     fn closest_hits_in<const AVX: bool>(&self, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
-        if self.tris.is_empty() || rays.len() < 2 || self.bytes() < INTERLEAVE_FROM {
+        if self.tris.is_empty() || rays.len() < 2 || !self.interleaves() {
             for (ray, o) in rays.iter().zip(out.iter_mut()) {
                 *o = self.closest_hit_in::<AVX>(ray, t_max);
             }
