@@ -172,13 +172,14 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
     );
     let info = bvh.info();
     println!(
-        "hierarchy: {} triangles; {} nodes of {} children ({:.2} MB), {} leaves of {:.2} triangles on average ({:.2} MB), depth {}; SAH cost {:.2} (nodes) + {:.2} (leaves)",
+        "hierarchy: {} triangles ({} references after spatial splits); {} nodes of {} children ({:.2} MB), {} leaves of {:.2} references on average ({:.2} MB), depth {}; SAH cost {:.2} (nodes) + {:.2} (leaves)",
         info.triangles,
+        info.references,
         info.nodes,
         radiosity::accel::WIDTH,
         info.node_bytes as f64 / 1e6,
         info.leaves,
-        info.triangles as f64 / info.leaves.max(1) as f64,
+        info.references as f64 / info.leaves.max(1) as f64,
         (info.bytes - info.node_bytes) as f64 / 1e6,
         info.depth,
         info.sah_nodes,
