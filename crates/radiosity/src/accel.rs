@@ -3,15 +3,15 @@
 //! Build: a binary tree by the binned surface-area heuristic (32 bins per axis, Wald 2007 "On
 //! fast Construction of SAH-based Bounding Volume Hierarchies"; the cost counts blocks of
 //! [`MAX_LEAF`] triangles, which one SIMD test takes), leaves of at most [`MAX_LEAF`]
-//! triangles. Where a node's best split by objects leaves its halves overlapping (by more than
-//! 10⁻⁴ of the scene's surface area), a spatial split is tried too (Stich, Friedrich & Dietrich
-//! 2009, "Spatial Splits in Bounding Volume Hierarchies"): a plane along the node's longest axis
-//! that cuts the triangles it crosses, each side keeping the box of its part, chosen when its
-//! SAH cost is lower, within a budget of 30 % more triangle references; a triangle may then
-//! sit in several leaves. The binary tree is then collapsed into an 8-wide tree by the SAH-optimal dynamic programme of
-//! Ylitie, Karras & Laine 2017 ("Efficient Incoherent Ray Traversal on GPUs Through Compressed
-//! Wide BVHs", §3.1). A node holds its eight children's boxes in structure-of-arrays form, so
-//! one AVX pass tests all eight (the layout of Embree's BVH8): each slab's near and far
+//! triangles. Where a node's best split by objects leaves its halves overlapping (by more
+//! than 10⁻⁴ of the scene's surface area), a spatial split is tried too (Stich, Friedrich &
+//! Dietrich 2009, "Spatial Splits in Bounding Volume Hierarchies"): a plane along the node's
+//! longest axis that cuts the triangles it crosses, each side keeping the box of its part,
+//! chosen when its SAH cost is lower, within a budget of 30 % more triangle references; a
+//! triangle may then sit in several leaves. The binary tree is then collapsed into an 8-wide
+//! tree by the SAH-optimal dynamic programme of Ylitie, Karras & Laine 2017 ("Efficient
+//! Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs", §3.1). A node holds its
+//! eight children's boxes in structure-of-arrays form, so one AVX pass tests all eight (the layout of Embree's BVH8): each slab's near and far
 //! planes are chosen once per ray by the direction's signs, and each distance is one fused
 //! multiply-add. Traversal: iterative; every child met is prefetched into the cache at once
 //! (the latency of a tree larger than the cache then overlaps with the work on its
@@ -1666,8 +1666,8 @@ enum Cut {
     Leaf,
     /// The first `mid` references (reordered in place) and the rest.
     At(usize),
-    /// A spatial split: new lists of references for each side.
-    Spatial(Vec<Prim>, Vec<Prim>),
+    /// A spatial split: the first `n` references (rewritten in place) and a new list.
+    Spatial(usize, Vec<Prim>),
 }
 
 /// Build the binary tree over the references `prims` (reordered in place), which may grow by
@@ -1711,7 +1711,7 @@ fn build_tree(prims: &mut [Prim], depth: usize, budget: usize, split: &Splits) -
             let (l, r) = prims.split_at_mut(mid);
             kids(l, r)
         }
-        Cut::Spatial(mut l, mut r) => kids(&mut l, &mut r),
+        Cut::Spatial(nl, mut r) => kids(&mut prims[..nl], &mut r),
         Cut::Leaf => Built::Leaf {
             bounds,
             tris: prims.iter().map(|p| p.tri).collect(),
@@ -1927,8 +1927,8 @@ fn choose_split(prims: &mut [Prim], bounds: Aabb, budget: usize, split: &Splits)
             if overlap.surface_area() > split.min_overlap {
                 if let Some((cost, axis, b, cut)) = spatial_split(prims, &bounds) {
                     if cost < o.cost && cut <= budget {
-                        if let Some((l, r)) = spatial_partition(prims, &bounds, axis, b) {
-                            return Cut::Spatial(l, r);
+                        if let Some((nl, r)) = spatial_partition(prims, &bounds, axis, b) {
+                            return Cut::Spatial(nl, r);
                         }
                     }
                 }
@@ -1948,42 +1948,65 @@ fn choose_split(prims: &mut [Prim], bounds: Aabb, budget: usize, split: &Splits)
 
 /// Cut `prims` at bin boundary `b` of the spatial split along `axis`: a reference wholly on
 /// one side goes there; one that straddles the plane goes to both, each with the box of its
-/// part on that side. `None` when a side would be empty or hold every reference.
+/// part on that side. The left side is written over the front of `prims` (it is shorter, and
+/// each reference gives it at most one), the right side into a new list, so that a split
+/// copies only half its node. `None`, with `prims` untouched, when a side would be empty or
+/// hold every reference.
 fn spatial_partition(
-    prims: &[Prim],
+    prims: &mut [Prim],
     bounds: &Aabb,
     axis: usize,
     b: usize,
-) -> Option<(Vec<Prim>, Vec<Prim>)> {
+) -> Option<(usize, Vec<Prim>)> {
     let ext = bounds.extent()[axis];
     let nb = spatial_bins(prims.len());
     let scale = nb as f32 / ext;
     let lo = bounds.min[axis];
     let plane = lo + b as f32 * (ext / nb as f32);
-    let (mut l, mut r) = (Vec::new(), Vec::new());
-    for p in prims {
+    let part = |p: &Prim, lo: f32, hi: f32| {
+        let bx = clip(&p.tri, axis, lo, hi, &p.bounds);
+        (!bx.is_empty()).then_some(Prim {
+            bounds: bx,
+            centroid: bx.centre(),
+            tri: p.tri,
+        })
+    };
+    // Which side each reference goes to: wholly left, wholly right, or cut.
+    let side = |p: &Prim| {
         let b0 = spatial_bin(p.bounds.min[axis], lo, scale, nb);
         let b1 = spatial_bin(p.bounds.max[axis], lo, scale, nb);
-        if b1 < b {
-            l.push(*p);
-        } else if b0 >= b {
-            r.push(*p);
-        } else {
-            let lb = clip(&p.tri, axis, f32::NEG_INFINITY, plane, &p.bounds);
-            let rb = clip(&p.tri, axis, plane, f32::INFINITY, &p.bounds);
-            for (side, bx) in [(&mut l, lb), (&mut r, rb)] {
-                if !bx.is_empty() {
-                    side.push(Prim {
-                        bounds: bx,
-                        centroid: bx.centre(),
-                        tri: p.tri,
-                    });
-                }
+        (b0 >= b, b1 < b)
+    };
+    let n = prims.len();
+    let (mut left, mut right) = (0, Vec::new());
+    for p in prims.iter() {
+        match side(p) {
+            (false, true) => left += 1,
+            (true, false) => right.push(*p),
+            _ => {
+                left += part(p, f32::NEG_INFINITY, plane).is_some() as usize;
+                right.extend(part(p, plane, f32::INFINITY));
             }
         }
     }
-    let n = prims.len();
-    (!l.is_empty() && !r.is_empty() && l.len() < n && r.len() < n).then_some((l, r))
+    if left == 0 || right.is_empty() || left == n || right.len() == n {
+        return None;
+    }
+    let mut w = 0;
+    for k in 0..n {
+        let p = prims[k];
+        let keep = match side(&p) {
+            (false, true) => Some(p),
+            (true, false) => None,
+            _ => part(&p, f32::NEG_INFINITY, plane),
+        };
+        if let Some(q) = keep {
+            prims[w] = q;
+            w += 1;
+        }
+    }
+    debug_assert_eq!(w, left);
+    Some((left, right))
 }
 
 /// The binned SAH's bins of `prims` along `axis`: each bin's bounds and count, in parallel for
