@@ -1641,6 +1641,7 @@ const SPLIT_BUDGET: f64 = 0.3;
 const SPLIT_OVERLAP: f32 = 1e-4;
 /// Bins of a spatial split, at most.
 const SPATIAL_BINS: usize = 32;
+const _: () = assert!(SPATIAL_BINS <= BINS, "sweep's arrays hold BINS");
 
 /// Bins of a spatial split of `n` references: fewer for small nodes, whose triangles span
 /// many of a fine grid's bins, each to be clipped.
@@ -1888,26 +1889,53 @@ fn spatial_split(prims: &[Prim], bounds: &Aabb) -> Option<(f32, usize, usize, us
             },
         )
     };
-    let mut right = [(0.0f32, 0usize); SPATIAL_BINS];
+    let best = sweep(&bins[..nb])?;
+    Some((best.cost, axis, best.bin, best.nl + best.nr - prims.len()))
+}
+
+/// The cheapest boundary of a binned sweep: its SAH cost (counting blocks of [`MAX_LEAF`]),
+/// the first bin above it, and each side's box and references.
+struct Sweep {
+    cost: f32,
+    bin: usize,
+    left: Aabb,
+    right: Aabb,
+    nl: usize,
+    nr: usize,
+}
+
+/// The cheapest boundary between `bins` (at most [`BINS`]), each holding a box, the references
+/// that begin in it and those that end in it (the same count for an object split, whose
+/// references each fall in one bin); `None` when every boundary leaves a side empty.
+fn sweep(bins: &[(Aabb, usize, usize)]) -> Option<Sweep> {
+    // From the right: the boxes and counts above each boundary.
+    let mut right = [(Aabb::EMPTY, 0usize); BINS];
     let (mut rb, mut rc) = (Aabb::EMPTY, 0);
-    for b in (1..nb).rev() {
+    for b in (1..bins.len()).rev() {
         rb = rb.union(bins[b].0);
         rc += bins[b].2;
-        right[b] = (rb.surface_area(), rc);
+        right[b] = (rb, rc);
     }
-    let mut best: Option<(f32, usize, usize, usize)> = None;
+    let mut best: Option<Sweep> = None;
     let (mut lb, mut lc) = (Aabb::EMPTY, 0);
-    for b in 1..nb {
+    for b in 1..bins.len() {
         lb = lb.union(bins[b - 1].0);
         lc += bins[b - 1].1;
-        let (ra, rcount) = right[b];
+        let (rbox, rcount) = right[b];
         if lc == 0 || rcount == 0 {
             continue;
         }
         let cost = lb.surface_area() * lc.div_ceil(MAX_LEAF) as f32
-            + ra * rcount.div_ceil(MAX_LEAF) as f32;
-        if best.is_none_or(|(c, ..)| cost < c) {
-            best = Some((cost, axis, b, lc + rcount - prims.len()));
+            + rbox.surface_area() * rcount.div_ceil(MAX_LEAF) as f32;
+        if best.as_ref().is_none_or(|s| cost < s.cost) {
+            best = Some(Sweep {
+                cost,
+                bin: b,
+                left: lb,
+                right: rbox,
+                nl: lc,
+                nr: rcount,
+            });
         }
     }
     best
@@ -1915,7 +1943,7 @@ fn spatial_split(prims: &[Prim], bounds: &Aabb) -> Option<(f32, usize, usize, us
 
 /// Split `prims` (more than [`MAX_LEAF`]) by the binned SAH, by objects or, where the objects'
 /// halves would overlap and the budget allows, by a plane that cuts the triangles it crosses
-/// into a part for each side (a spatial split); `Err` gives them back for a leaf.
+/// into a part for each side (a spatial split); or a leaf.
 fn choose_split(prims: &mut [Prim], bounds: Aabb, budget: usize, split: &Splits) -> Cut {
     let object = object_split(prims);
     if budget > 0 {
@@ -2062,37 +2090,21 @@ fn object_split(prims: &[Prim]) -> Option<ObjectSplit> {
             continue;
         }
         let scale = BINS as f32 / ext[axis];
-        let bins = bins_of(prims, axis, cb.min[axis], scale);
-        // Sweep from the right to get the right-side boxes and counts.
-        let mut right = [(Aabb::EMPTY, 0usize); BINS];
-        let (mut rb, mut rc) = (Aabb::EMPTY, 0);
-        for b in (1..BINS).rev() {
-            rb = rb.union(bins[b].0);
-            rc += bins[b].1;
-            right[b] = (rb, rc);
-        }
-        let (mut lb, mut lc) = (Aabb::EMPTY, 0);
-        for b in 1..BINS {
-            lb = lb.union(bins[b - 1].0);
-            lc += bins[b - 1].1;
-            let (rbox, rcount) = right[b];
-            if lc == 0 || rcount == 0 {
-                continue;
-            }
-            let cost = lb.surface_area() * lc.div_ceil(MAX_LEAF) as f32
-                + rbox.surface_area() * rcount.div_ceil(MAX_LEAF) as f32;
-            if best.as_ref().is_none_or(|o| cost < o.cost) {
-                best = Some(ObjectSplit {
-                    cost,
-                    axis,
-                    bin: b,
-                    lo: cb.min[axis],
-                    scale,
-                    mid: lc,
-                    left: lb,
-                    right: rbox,
-                });
-            }
+        let bins = bins_of(prims, axis, cb.min[axis], scale).map(|(b, n)| (b, n, n));
+        let Some(s) = sweep(&bins) else {
+            continue;
+        };
+        if best.as_ref().is_none_or(|o| s.cost < o.cost) {
+            best = Some(ObjectSplit {
+                cost: s.cost,
+                axis,
+                bin: s.bin,
+                lo: cb.min[axis],
+                scale,
+                mid: s.nl,
+                left: s.left,
+                right: s.right,
+            });
         }
     }
     best
