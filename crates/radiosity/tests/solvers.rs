@@ -425,7 +425,10 @@ fn long_shots_match_the_serial_loop_on_any_thread_count() {
         }
         fn shot_column(&mut self, i: usize, share: f64) -> Column<'_> {
             if self.as_rows {
-                Column::Reciprocal(self.f.row(i, share))
+                Column::Reciprocal {
+                    row: self.f.row(i, share),
+                    diagonal: None,
+                }
             } else {
                 Column::Entries(self.column(i, share))
             }

@@ -25,6 +25,9 @@ use std::time::Instant;
 struct Cached {
     entries: Box<[Entry]>,
     rays: u32,
+    /// `F_ii`, kept aside while the row is in the cache: a shot needs it first, and searching
+    /// a row read from memory for it waits on a cache miss at every step.
+    diagonal: f32,
 }
 
 /// An [`Operator`] whose rows an estimator computes when asked, cached under a budget.
@@ -34,8 +37,9 @@ pub struct OnDemandRows<'a> {
     cache: Vec<Option<Cached>>,
     versions: Vec<u32>,
     scratch: Scratch,
-    /// The last row computed, when it is not in the cache.
+    /// The last row computed, when it is not in the cache, and its `F_ii`.
     current: Vec<Entry>,
+    current_diagonal: f32,
     current_row: Option<usize>,
     column: Vec<Entry>,
     stats: FormFactorStats,
@@ -53,6 +57,7 @@ impl<'a> OnDemandRows<'a> {
             versions: vec![0; n],
             scratch: Scratch::default(),
             current: Vec::new(),
+            current_diagonal: 0.0,
             current_row: None,
             column: Vec::new(),
             stats: FormFactorStats::default(),
@@ -104,6 +109,10 @@ impl<'a> OnDemandRows<'a> {
             &mut self.current,
         );
         self.current_row = Some(i);
+        self.current_diagonal = self
+            .current
+            .binary_search_by_key(&(i as u32), |e| e.0)
+            .map_or(0.0, |k| self.current[k].1);
         self.stats.rows += 1;
         self.stats.rays += need as u64;
         self.stats.seconds += start.elapsed().as_secs_f64();
@@ -118,6 +127,7 @@ impl<'a> OnDemandRows<'a> {
             self.cache[i] = Some(Cached {
                 entries: self.current.as_slice().into(),
                 rays: need,
+                diagonal: self.current_diagonal,
             });
             true
         } else {
@@ -163,7 +173,14 @@ impl Operator for OnDemandRows<'_> {
     /// The row itself: the solver applies reciprocity as it reads each receiver.
     fn shot_column(&mut self, i: usize, share: f64) -> crate::system::Column<'_> {
         let cached = self.ensure_row(i, share);
-        crate::system::Column::Reciprocal(self.row_slice(i, cached))
+        let diagonal = match &self.cache[i] {
+            Some(c) if cached => c.diagonal,
+            _ => self.current_diagonal,
+        };
+        crate::system::Column::Reciprocal {
+            row: self.row_slice(i, cached),
+            diagonal: Some(diagonal),
+        }
     }
 
     /// Monte Carlo only: photons are single rays, which threads can cast at once. Rows of the

@@ -115,26 +115,38 @@ enum Select {
     Ambient(AmbientTree),
 }
 
-/// What a shot's receivers add to the bookkeeping, summed over a range of them.
+/// What a shot's receivers add to the bookkeeping, summed over a range of them: for a shot
+/// of δ, the power arriving is `δ Σ F_ji A_j`, the part of it reflected (which stays unshot,
+/// the change of Σ r_j A_j) `δ Σ ρ_j F_ji A_j`, and the rest is absorbed, so that two sums
+/// serve all three.
 #[derive(Clone, Copy, Debug, Default)]
 struct Sums {
-    /// Power arriving.
-    arrived: Rgb,
-    /// Power absorbed.
-    absorbed: Rgb,
-    /// Change of Σ r_j A_j.
-    signed: Rgb,
+    /// Σ F_ji A_j.
+    fa: f64,
+    /// Σ ρ_j F_ji A_j.
+    rho_fa: Rgb,
     /// Change of Σ |r_j| A_j.
     abs: f64,
+}
+
+impl Sums {
+    /// Receiver j with column entry `f` = F_ji, area `a`, reflectance `rho`, and unshot energy
+    /// `|r_j|₁ A_j` from `old` to `new`.
+    #[inline(always)]
+    fn add(&mut self, f: f64, a: f64, rho: Rgb, old: f64, new: f64) {
+        let fa = f * a;
+        self.fa += fa;
+        self.rho_fa += rho * fa;
+        self.abs += new - old;
+    }
 }
 
 impl std::ops::Add for Sums {
     type Output = Sums;
     fn add(self, o: Sums) -> Sums {
         Sums {
-            arrived: self.arrived + o.arrived,
-            absorbed: self.absorbed + o.absorbed,
-            signed: self.signed + o.signed,
+            fa: self.fa + o.fa,
+            rho_fa: self.rho_fa + o.rho_fa,
             abs: self.abs + o.abs,
         }
     }
@@ -149,8 +161,12 @@ struct Span<'a> {
     nodes: Option<Nodes<'a>>,
 }
 
-/// A span of at most this many receivers is updated by one thread: ~20 µs of work.
-const SPAN: usize = 128;
+/// A span of at most this many receivers is updated by one thread (and the max-tree above its
+/// blocks settled by it): 3–5 µs of work at 10⁵–10⁶ patches. Shorter spans hand more of a
+/// shot to the other thread but wait on it more often: on the hospital at 400k patches the
+/// receivers' update and settling took 3.2 s with spans of 512, 3.4 with 1,024, 3.8–5.1 with
+/// 128 and 3.8 s on one thread (docs/benchmarks.md).
+const SPAN: usize = 512;
 
 /// How many receivers ahead of the one being updated [`update`] asks the cache for.
 const AHEAD: usize = 8;
@@ -181,7 +197,8 @@ fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<
             k += 1;
         }
         let (c0, c1) = span.cells.split_at_mut(at - first);
-        let (n0, n1) = match span.nodes {
+        let mut nodes = span.nodes;
+        let (n0, n1) = match &mut nodes {
             Some(n) => {
                 let (a, b) = n.split_at(at);
                 (Some(a), Some(b))
@@ -204,6 +221,10 @@ fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<
             || update::<RESIDUAL>(delta, reciprocal, left),
             || update::<RESIDUAL>(delta, reciprocal, right),
         );
+        // The halves settled the tree above their own blocks; what straddles them is ours.
+        if let Some(n) = &mut nodes {
+            n.settle_across(at);
+        }
         return a + b;
     }
     let Span {
@@ -224,17 +245,26 @@ fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<
         let c = &mut cells[j - first];
         let (r, rho, a) = (c.r, c.rho, c.area);
         let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
-        let power = delta * (f * a);
-        sums.arrived += power;
-        sums.absorbed += (Rgb::splat(1.0) - rho) * power;
         let rj = r + rho * delta * f;
-        sums.signed += (rj - r) * a;
         let e = abs_sum(rj) * a;
-        sums.abs += e - abs_sum(r) * a;
+        // Progressive refinement's key is the receiver's unshot energy before the shot, set
+        // from its residual by this very expression.
+        let old = if !RESIDUAL && nodes.is_some() {
+            debug_assert_eq!(c.key, abs_sum(r) * a);
+            c.key
+        } else {
+            abs_sum(r) * a
+        };
+        sums.add(f, a, rho, old, e);
         c.r = rj;
         if let Some(l) = &mut nodes {
             l.set(cells, j, if RESIDUAL { e / a } else { e });
         }
+    }
+    // The max-tree above this span's blocks, while they are in the cache and in parallel
+    // with the other spans.
+    if let Some(l) = &mut nodes {
+        l.settle(column.iter().map(|&(j, _)| j as usize / MaxTree::BLOCK));
     }
     sums
 }
@@ -379,14 +409,8 @@ impl<'s> Relaxation<'s> {
         let cells = &mut self.cells;
         match &mut self.select {
             Select::None => {}
-            Select::Energy(t) => {
-                t.nodes().set(cells, j, e);
-                t.settle(MaxTree::block_of(j));
-            }
-            Select::Residual(t) => {
-                t.nodes().set(cells, j, e / a);
-                t.settle(MaxTree::block_of(j));
-            }
+            Select::Energy(t) => t.set(cells, j, e),
+            Select::Residual(t) => t.set(cells, j, e / a),
             Select::Ambient(t) => t.set(j, v, a),
         }
     }
@@ -395,7 +419,8 @@ impl<'s> Relaxation<'s> {
     ///
     /// The receivers are updated in parallel over disjoint ranges of patches,
     /// split where the column is (not by thread), so the result does not depend on the
-    /// thread count; the shooter's max-tree is settled afterwards, one flag per receiving block.
+    /// thread count; each range settles the shooter's max-tree above its own blocks, and the
+    /// nodes that straddle two ranges are settled once both are done.
     pub fn add(&mut self, i: usize, delta: Rgb, column: &[Entry]) {
         self.add_column(i, delta, Column::Entries(column));
     }
@@ -406,7 +431,7 @@ impl<'s> Relaxation<'s> {
         let sys = self.system;
         let reciprocal = match column {
             Column::Entries(_) => None,
-            Column::Reciprocal(_) => Some(sys.area[i] as f32),
+            Column::Reciprocal { .. } => Some(sys.area[i] as f32),
         };
         let column = column.entries();
         self.x[i] += delta;
@@ -422,13 +447,8 @@ impl<'s> Relaxation<'s> {
                     let c = &mut cells[j];
                     let (r, rho, a) = (c.r, c.rho, c.area);
                     let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
-                    let power = delta * (f * a);
-                    sums.arrived += power;
-                    sums.absorbed += (Rgb::splat(1.0) - rho) * power;
                     let rj = r + rho * delta * f;
-                    sums.signed += (rj - r) * a;
-                    let e = abs_sum(rj) * a;
-                    sums.abs += e - abs_sum(r) * a;
+                    sums.add(f, a, rho, abs_sum(r) * a, abs_sum(rj) * a);
                     c.r = rj;
                     tree.set(j, rj, a);
                 }
@@ -442,13 +462,11 @@ impl<'s> Relaxation<'s> {
                     nodes: Some(t.nodes()),
                 };
                 // Two copies, so that progressive refinement's has no division by the area.
-                let sums = if residual {
+                if residual {
                     update::<true>(delta, reciprocal, span)
                 } else {
                     update::<false>(delta, reciprocal, span)
-                };
-                t.settle_all(column.iter().map(|&(j, _)| MaxTree::block_of(j as usize)));
-                sums
+                }
             }
             Select::None => {
                 let span = Span {
@@ -460,10 +478,12 @@ impl<'s> Relaxation<'s> {
                 update::<false>(delta, reciprocal, span)
             }
         };
-        self.signed_unshot += sums.signed;
+        let arrived = delta * sums.fa;
+        let reflected = delta * sums.rho_fa;
+        self.signed_unshot += reflected;
         self.abs_unshot += sums.abs;
-        self.absorbed += sums.absorbed;
-        self.escaped += delta * sys.area[i] - sums.arrived;
+        self.absorbed += arrived - reflected;
+        self.escaped += delta * sys.area[i] - arrived;
         self.updates += column.len() as u64 + 1;
         if self.updates > 8 * self.cells.len() as u64 + 1024 {
             self.resum();
@@ -489,12 +509,14 @@ impl<'s> Relaxation<'s> {
         let column = source.shot_column(i, share);
         let m = match column {
             Column::Entries(c) => self.diagonal(i, c),
-            Column::Reciprocal(row) => {
+            Column::Reciprocal { row, diagonal } => {
                 // F_ii by reciprocity from itself, rounded as every other entry.
                 let ai = self.system.area[i] as f32;
-                let f_ii = row
-                    .binary_search_by_key(&(i as u32), |e| e.0)
-                    .map_or(0.0, |k| (row[k].1 * ai / ai) as f64);
+                let f_ii = diagonal.unwrap_or_else(|| {
+                    row.binary_search_by_key(&(i as u32), |e| e.0)
+                        .map_or(0.0, |k| row[k].1)
+                });
+                let f_ii = (f_ii * ai / ai) as f64;
                 Rgb::splat(1.0) - self.system.reflectance[i] * f_ii
             }
         };

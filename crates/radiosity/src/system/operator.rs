@@ -79,14 +79,20 @@ pub enum Column<'a> {
     /// Row `i`, `(j, F_ij)` sorted by `j`, to be read as the column by reciprocity
     /// (Szirmay-Kalos & Márton 1995, eq. 24): `F_ji = F_ij A_i / A_j`, computed in `f32` as
     /// `(F_ij · A_i) / A_j` with the system's areas.
-    Reciprocal(&'a [Entry]),
+    Reciprocal {
+        /// Row `i`.
+        row: &'a [Entry],
+        /// `F_ii` (0 where the row has no entry `i`) if the operator kept it aside, so that a
+        /// solver need not search a row that is not in the cache for it; `None`: search.
+        diagonal: Option<f32>,
+    },
 }
 
 impl<'a> Column<'a> {
     /// The entries, whichever way they are to be read.
     pub fn entries(&self) -> &'a [Entry] {
         match *self {
-            Column::Entries(e) | Column::Reciprocal(e) => e,
+            Column::Entries(e) | Column::Reciprocal { row: e, .. } => e,
         }
     }
 }
