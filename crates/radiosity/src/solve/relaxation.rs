@@ -168,8 +168,11 @@ struct Span<'a> {
 /// 128 and 3.8 s on one thread (docs/benchmarks.md).
 const SPAN: usize = 512;
 
-/// How many receivers ahead of the one being updated [`update`] asks the cache for.
-const AHEAD: usize = 8;
+/// How many receivers ahead of the one being updated [`update`] asks the cache for: enough
+/// misses in flight to cover a trip to memory, where at 4 × 10⁵ patches and more the records do
+/// not fit in the last-level cache (hospital, 400k patches, bookkeeping in four alternating
+/// rounds: 3.5–4.4 s with 32 ahead, 3.9–5.5 s with 8; 64 no better than 32).
+const AHEAD: usize = 32;
 
 /// Update the receivers of `span` for a shot of `delta`: `r_j += ρ_j δ F_ji` and everything
 /// that follows from it. Spans longer than [`SPAN`] are halved at a block boundary near their
