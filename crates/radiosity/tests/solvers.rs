@@ -340,7 +340,7 @@ fn stochastic_jacobi_is_unbiased_thread_independent_and_balanced() {
     assert_eq!(on(1), on(2));
 }
 
-/// A shot's receivers are updated in parallel spans when the column is long (over 128
+/// A shot's receivers are updated in parallel spans when the column is long (over 512
 /// entries): the residuals are bit-identical to a plain serial loop over the column with a
 /// linear-scan shooter, on 1 and on 2 threads; and an operator that hands out rows for the
 /// solver to apply reciprocity to (`Column::Reciprocal`) gives the bits of one that hands out
@@ -349,7 +349,7 @@ fn stochastic_jacobi_is_unbiased_thread_independent_and_balanced() {
 fn long_shots_match_the_serial_loop_on_any_thread_count() {
     use radiosity::solve::progressive::Progressive;
     use radiosity::solve::SolverState;
-    use radiosity::system::{Column, Entry, Operator};
+    use radiosity::system::Operator;
     let shots = 40;
     let mut r = reciprocal(2000, 0.5, 0.9, (0.3, 0.8), 5, 7);
     let (sys, f) = r.parts();
@@ -398,48 +398,12 @@ fn long_shots_match_the_serial_loop_on_any_thread_count() {
     assert_eq!(on(1, f), reference);
     assert_eq!(on(2, f), reference);
 
-    /// Rows of a stored matrix, with columns by reciprocity in f32, handed out as columns or
-    /// as rows for the solver to turn.
-    struct Rows<'a> {
-        f: &'a mut SparseMatrix,
-        area: &'a [f64],
-        as_rows: bool,
-        column: Vec<Entry>,
-    }
-    impl Operator for Rows<'_> {
-        fn len(&self) -> usize {
-            self.area.len()
-        }
-        fn row(&mut self, i: usize, share: f64) -> &[Entry] {
-            self.f.row(i, share)
-        }
-        fn column(&mut self, i: usize, share: f64) -> &[Entry] {
-            let (area, ai) = (self.area, self.area[i] as f32);
-            let row = self.f.row(i, share);
-            self.column.clear();
-            self.column.extend(
-                row.iter()
-                    .map(|&(j, v)| (j, v * ai / area[j as usize] as f32)),
-            );
-            &self.column
-        }
-        fn shot_column(&mut self, i: usize, share: f64) -> Column<'_> {
-            if self.as_rows {
-                Column::Reciprocal {
-                    row: self.f.row(i, share),
-                    diagonal: None,
-                }
-            } else {
-                Column::Entries(self.column(i, share))
-            }
-        }
-    }
     let area = sys.area.clone();
-    let mut by = |as_rows: bool| {
+    let mut by = |hand: Hand| {
         let mut rows = Rows {
             f: &mut *f,
             area: &area,
-            as_rows,
+            hand,
             column: Vec::with_capacity(n),
         };
         let mut p = Progressive::new(sys);
@@ -448,7 +412,122 @@ fn long_shots_match_the_serial_loop_on_any_thread_count() {
         }
         p.unshot().to_vec()
     };
-    assert_eq!(by(true), by(false));
+    assert_eq!(by(Hand::Rows), by(Hand::Columns));
+}
+
+/// How [`Rows`] hands a shooter's column to the solver.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Hand {
+    /// The column, turned by reciprocity in f32 by the operator.
+    Columns,
+    /// The row, for the solver to turn; the solver finds `F_ii` in it.
+    Rows,
+    /// The row with `F_ii` beside it, as a cache that kept it aside hands it out.
+    RowsWithDiagonal,
+}
+
+/// Rows of a stored matrix, with columns by reciprocity in f32, handed out as [`Hand`] says.
+struct Rows<'a> {
+    f: &'a mut SparseMatrix,
+    area: &'a [f64],
+    hand: Hand,
+    column: Vec<radiosity::system::Entry>,
+}
+
+impl radiosity::system::Operator for Rows<'_> {
+    fn len(&self) -> usize {
+        self.area.len()
+    }
+    fn row(&mut self, i: usize, share: f64) -> &[radiosity::system::Entry] {
+        self.f.row(i, share)
+    }
+    fn column(&mut self, i: usize, share: f64) -> &[radiosity::system::Entry] {
+        let (area, ai) = (self.area, self.area[i] as f32);
+        let row = self.f.row(i, share);
+        self.column.clear();
+        self.column.extend(
+            row.iter()
+                .map(|&(j, v)| (j, v * ai / area[j as usize] as f32)),
+        );
+        &self.column
+    }
+    fn shot_column(&mut self, i: usize, share: f64) -> radiosity::system::Column<'_> {
+        use radiosity::system::Column;
+        match self.hand {
+            Hand::Columns => Column::Entries(self.column(i, share)),
+            Hand::Rows => Column::Reciprocal {
+                row: self.f.row(i, share),
+                diagonal: None,
+            },
+            Hand::RowsWithDiagonal => {
+                let row = self.f.row(i, share);
+                let diagonal = row.iter().find(|e| e.0 as usize == i).map_or(0.0, |e| e.1);
+                Column::Reciprocal {
+                    row,
+                    diagonal: Some(diagonal),
+                }
+            }
+        }
+    }
+}
+
+/// Patches that see themselves (`F_ii` > 0, as a concave patch does): relaxing patch i divides
+/// its residual by `M_ii = 1 − ρ_i F_ii` (Gortler et al. eq. 12), so that the shot, part of
+/// which lands on i itself, leaves i's residual at zero; whether the operator hands out the
+/// column, the row for the solver to search for `F_ii`, or the row with `F_ii` beside it (as
+/// `OnDemandRows` keeps it with a cached row), that holds after the first shot, and the
+/// converged answer is the same to the bit and the LU solution's.
+#[test]
+fn a_diagonal_handed_beside_the_row_is_the_one_searched_for() {
+    use radiosity::solve::progressive::Progressive;
+    use radiosity::solve::SolverState;
+    let mut r = reciprocal(400, 0.2, 0.85, (0.3, 0.8), 5, 3);
+    let (sys, f) = r.parts();
+    // F_ii = 0.1 on every row: rows then sum to at most 0.95, and A_i F_ii is trivially
+    // reciprocal.
+    let rows: Vec<Vec<radiosity::system::Entry>> = (0..sys.len())
+        .map(|i| {
+            let mut row = f.row_entries(i).to_vec();
+            let k = row.partition_point(|e| (e.0 as usize) < i);
+            row.insert(k, (i as u32, 0.1));
+            row
+        })
+        .collect();
+    let mut f = SparseMatrix::from_rows(rows);
+    let exact = dense_solve(sys, &mut f, 1 << 32).unwrap();
+    let params = SolverParams {
+        tolerance: 1e-10,
+        ..Default::default()
+    };
+    let area = sys.area.clone();
+    let mut by = |hand: Hand| {
+        let mut rows = Rows {
+            f: &mut f,
+            area: &area,
+            hand,
+            column: Vec::new(),
+        };
+        // One shot: the shooter's own residual is zero after it (a shot divided by 1 instead
+        // would leave ρ_i F_ii r_i there, a tenth of a third of it).
+        let mut p = Progressive::new(sys);
+        let (i, _) = p.shooter();
+        let before = p.unshot()[i];
+        assert!(p.step(&mut rows));
+        let after = p.unshot()[i];
+        assert!(
+            after.max_abs_diff(Rgb::BLACK) < 1e-14 * before.max_channel(),
+            "{hand:?}: shooter {i} kept {after} of {before}"
+        );
+        let (b, info) = solve(Solver::Progressive, sys, &mut rows, &params).unwrap();
+        assert!(info.converged, "{hand:?}");
+        b
+    };
+    let searched = by(Hand::Rows);
+    assert_eq!(by(Hand::RowsWithDiagonal), searched);
+    assert_eq!(by(Hand::Columns), searched);
+    // The criterion every method meets against LU at this tolerance (`check_all_methods`).
+    let err = max_rel_diff(&searched, &exact);
+    assert!(err < 1e-6, "progressive against LU: {err:e}");
 }
 
 /// On a worker of a pool of two or three threads, `run` keeps the other workers awake while it
