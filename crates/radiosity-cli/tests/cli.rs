@@ -2509,13 +2509,14 @@ fn read_pfm_pixels(path: &Path) -> Vec<[f32; 3]> {
 
 /// The furnace (closed, every surface emits E = 1 and reflects ρ): every pixel's radiance is
 /// E/(π(1 − ρ)). The path tracer and the gather both give it: the mean over the picture
-/// within 4 standard errors (from the pixels' own spread) and 1 %.
+/// within 4 standard errors (from the pixels' own spread), plus for the gather the deficit
+/// its solve may leave, and 1 %.
 #[test]
 fn furnace_pictures_by_path_and_gather() {
     let dir = scratch("furnace-pictures");
-    for args in [
-        &["--integrator", "path", "--spp", "64"][..],
-        &["--gather", "--spp", "4", "--tolerance", "0.0001"],
+    for (args, unshot) in [
+        (&["--integrator", "path", "--spp", "64"][..], 0.0),
+        (&["--gather", "--spp", "4", "--tolerance", "0.0001"], 1e-4),
     ] {
         let mut all = vec![
             "render", "furnace", "--width", "24", "--height", "24", "-o", "f.pfm",
@@ -2527,7 +2528,7 @@ fn furnace_pictures_by_path_and_gather() {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        assert_furnace_picture(&dir.join("f.pfm"), &format!("{args:?}"));
+        assert_furnace_picture(&dir.join("f.pfm"), unshot, &format!("{args:?}"));
     }
 }
 
@@ -2617,12 +2618,18 @@ fn gather_over_a_baked_gltf() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert_furnace_picture(&dir.join("f.pfm"), "baked furnace, gathered");
+    assert_furnace_picture(&dir.join("f.pfm"), 1e-4, "baked furnace, gathered");
 }
 
 /// Every pixel of a furnace picture is E/(π(1 − ρ)) (E = 1, ρ = 0.3, 0.5, 0.7): the mean over
-/// the picture within 4 standard errors (from the pixels' own spread) and 1 %.
-fn assert_furnace_picture(path: &Path, what: &str) {
+/// the picture within 4 standard errors (from the pixels' own spread) plus the deficit of a
+/// solve stopped at the fraction `unshot` of the emitted energy, and 1 %.
+///
+/// That deficit: the output x + r of progressive refinement lacks ρF(I − ρF)⁻¹ r, whose
+/// area-weighted sum in a closed furnace of one ρ is ρ/(1 − ρ) Σ r_i A_i. A channel holds at
+/// most all the unshot energy, `unshot` times the three channels' emission, so the mean
+/// radiosity 1/(1 − ρ) falls short by at most the relative 3 · unshot · ρ.
+fn assert_furnace_picture(path: &Path, unshot: f64, what: &str) {
     let px = read_pfm_pixels(path);
     for (c, rho) in [0.3, 0.5, 0.7].into_iter().enumerate() {
         let exact = 1.0 / (std::f64::consts::PI * (1.0 - rho));
@@ -2630,8 +2637,9 @@ fn assert_furnace_picture(path: &Path, what: &str) {
         let n = v.len() as f64;
         let mean = v.iter().sum::<f64>() / n;
         let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        let deficit = 3.0 * unshot * rho * exact;
         assert!(
-            (mean - exact).abs() < 4.0 * sd / n.sqrt() + 1e-9
+            (mean - exact).abs() < 4.0 * sd / n.sqrt() + deficit + 1e-9
                 && (mean - exact).abs() < 0.01 * exact,
             "{what} channel {c}: {mean} vs {exact} (sd {sd})"
         );
