@@ -233,3 +233,69 @@ pub fn sample_photon(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> Optio
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::MeshParams;
+    use crate::scene::builtin;
+
+    /// A row is what its rays, drawn chunk by chunk from the chunks' streams and traced one
+    /// after another, count (a plain serial loop, the estimator's definition): the parallel
+    /// chunks and the threads change nothing. Rows of one chunk, of a few, and of many with a
+    /// partial last chunk.
+    #[test]
+    fn a_row_counts_what_its_rays_drawn_in_order_hit() {
+        let scene = builtin::cornell();
+        let mesh = Mesh::build(&scene, MeshParams::Patches(400)).unwrap();
+        let bvh = Bvh::build(&mesh);
+        let (seed, version) = (7, 2);
+        for (i, n) in [(5, 20), (60, 1000), (321, 16_461usize)] {
+            let normal = mesh.patches[i].normal;
+            let (tangent, bitangent) = orthonormal_basis(normal);
+            let mut counts = std::collections::BTreeMap::<u32, u32>::new();
+            for c in 0..n.div_ceil(CHUNK) {
+                let mut rng = stream(seed, i as u64, version, c as u64);
+                for _ in c * CHUNK..n.min((c + 1) * CHUNK) {
+                    let (u1, u2, u3) = (uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
+                    let p = mesh.sample_point(i, u1, u2, u3);
+                    let (v1, v2) = (uniform(&mut rng), uniform(&mut rng));
+                    let d = cosine_direction_in(normal, tangent, bitangent, v1, v2);
+                    let ray = Ray::new(p + normal * bvh.ray_offset(), d);
+                    match bvh.closest_hit(&ray, f32::INFINITY) {
+                        Some(h) if h.front && h.patch as usize != i => {
+                            *counts.entry(h.patch).or_default() += 1
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            let expected: Vec<Entry> = counts
+                .into_iter()
+                .map(|(j, k)| (j, (k as f64 / n as f64) as f32))
+                .collect();
+            let mut scratch = RowScratch::default();
+            let mut row = Vec::new();
+            for threads in [1, 2] {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| {
+                        estimate_row(
+                            &mesh,
+                            &bvh,
+                            i,
+                            n as u32,
+                            seed,
+                            version,
+                            &mut scratch,
+                            &mut row,
+                        )
+                    });
+                assert_eq!(row, expected, "patch {i}, {n} rays, {threads} threads");
+            }
+            assert!(row.len() > 5, "{}", row.len());
+        }
+    }
+}
