@@ -137,12 +137,16 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
         fit_exponent(&rows.iter().map(|r| (r.patches, f(r))).collect::<Vec<_>>())
     };
     let show = |e: Option<f64>| e.map_or("—".to_string(), |e| format!("{e:.2}"));
+    // The stages' own exponents come last: the rows' (the rays' cost, which memory makes grow
+    // faster than the rays) and the solver's bookkeeping's; "—" where a stage took no time.
     println!(
-        "fitted exponents against N: wall {}, cpu {}, rays {}, peak memory {}",
+        "fitted exponents against N: wall {}, cpu {}, rays {}, peak memory {}, rows {}, solve {}",
         show(fit(&|r| r.wall)),
         show(fit(&|r| r.cpu)),
         show(fit(&|r| r.rays)),
-        show(fit(&|r| r.resident_mib))
+        show(fit(&|r| r.resident_mib)),
+        show(fit(&|r| r.form_factors)),
+        show(fit(&|r| r.solve))
     );
     Ok(())
 }

@@ -2734,6 +2734,101 @@ fn bench_hierarchical_makes_and_reads_its_reference() {
     );
 }
 
+/// `bench --scale`: each size is solved by a fresh `radiosity solve`, and the table reports its
+/// patches, rays and iterations exactly as that command, run alone, reports them (they depend
+/// on the seed only); its stages fit inside the wall time measured around the child; the
+/// exponent of the rays is the slope through the table's own two points. Bad sizes are refused
+/// with a one-line error naming the option.
+#[test]
+fn bench_scale_reports_each_solve_and_fits_its_exponents() {
+    let dir = scratch("bench-scale");
+    let out = run(
+        &[
+            "bench",
+            "--scale",
+            "cornell",
+            "--sizes",
+            "200,800",
+            "--tolerance",
+            "0.05",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .map(|l| l.split_whitespace().map(|t| t.parse::<f64>()).collect())
+        .filter_map(|v: Vec<Result<f64, _>>| {
+            (v.len() == 11).then(|| v.into_iter().collect::<Result<Vec<f64>, _>>().ok())?
+        })
+        .collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    for (row, size) in rows.iter().zip(["200", "800"]) {
+        let solo = run(
+            &[
+                "solve",
+                "cornell",
+                "--patches",
+                size,
+                "--tolerance",
+                "0.05",
+                "--out",
+                "s.csv",
+            ],
+            &dir,
+        );
+        assert!(solo.status.success());
+        let said = String::from_utf8_lossy(&solo.stdout).to_string();
+        let first = |key: &str| -> f64 {
+            let line = said.lines().find(|l| l.starts_with(key)).unwrap();
+            line[key.len()..]
+                .split_whitespace()
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap()
+        };
+        assert_eq!(row[0], first("patches "), "{text}\n{said}");
+        assert_eq!(row[1], first("rays "), "{text}\n{said}");
+        assert_eq!(row[2], first("iterations "), "{text}\n{said}");
+        // Mesh, hierarchy, rows and solve happen inside the child; each printed value is
+        // rounded to half its last digit at most.
+        let stages = row[5] + row[6] + row[7] + row[8];
+        assert!(stages <= row[3] + 0.0125, "{text}");
+        assert!(row[1] > 0.0 && row[2] > 0.0 && row[9] > 0.0, "{text}");
+    }
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("fitted exponents against N:"))
+        .unwrap();
+    let exponent = |name: &str| -> f64 {
+        let at = line.find(&format!(" {name} ")).unwrap() + name.len() + 2;
+        line[at..]
+            .split(',')
+            .next()
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap()
+    };
+    let slope = (rows[1][1] / rows[0][1]).ln() / (rows[1][0] / rows[0][0]).ln();
+    assert!(
+        (exponent("rays") - slope).abs() <= 0.005 + 1e-9,
+        "{line}: {slope}"
+    );
+    for bad in ["0", "200,0"] {
+        let out = run(&["bench", "--scale", "cornell", "--sizes", bad], &dir);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(!out.status.success() && err.contains("--sizes"), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
+
 /// `bench --rays SCENE`: the form-factor ray workload on a scene, with its figures.
 #[test]
 fn bench_rays_on_a_scene() {
