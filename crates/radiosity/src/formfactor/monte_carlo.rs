@@ -272,7 +272,8 @@ mod tests {
             }
             let expected: Vec<Entry> = counts
                 .into_iter()
-                .map(|(j, k)| (j, (k as f64 / n as f64) as f32))
+                // k/n, in the estimator's arithmetic (k times 1/n, in f64, then f32).
+                .map(|(j, k)| (j, (k as f64 * (1.0 / n as f64)) as f32))
                 .collect();
             let mut scratch = RowScratch::default();
             let mut row = Vec::new();
