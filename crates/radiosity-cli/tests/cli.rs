@@ -2796,10 +2796,11 @@ fn bench_scale_reports_each_solve_and_fits_its_exponents() {
         assert_eq!(row[0], first("patches "), "{text}\n{said}");
         assert_eq!(row[1], first("rays "), "{text}\n{said}");
         assert_eq!(row[2], first("iterations "), "{text}\n{said}");
-        // Mesh, hierarchy, rows and solve happen inside the child; each printed value is
-        // rounded to half its last digit at most.
+        // Mesh, hierarchy, rows and solve happen inside the child; each printed value is off
+        // by at most half its last digit: 0.005 for the wall and the rows and solve times,
+        // 0.0005 for the mesh and hierarchy.
         let stages = row[5] + row[6] + row[7] + row[8];
-        assert!(stages <= row[3] + 0.0125, "{text}");
+        assert!(stages <= row[3] + 0.016 + 1e-9, "{text}");
         assert!(row[1] > 0.0 && row[2] > 0.0 && row[9] > 0.0, "{text}");
     }
     let line = text
