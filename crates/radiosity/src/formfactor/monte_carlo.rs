@@ -241,9 +241,9 @@ mod tests {
     use crate::scene::builtin;
 
     /// A row is what its rays, drawn chunk by chunk from the chunks' streams and traced one
-    /// after another, count (a plain serial loop, the estimator's definition): the parallel
-    /// chunks and the threads change nothing. Rows of one chunk, of a few, and of many with a
-    /// partial last chunk.
+    /// after another as photons ([`sample_photon`]), count (a plain serial loop, the
+    /// estimator's definition): the parallel chunks and the threads change nothing. Rows of one
+    /// chunk, of a few, and of many with a partial last chunk.
     #[test]
     fn a_row_counts_what_its_rays_drawn_in_order_hit() {
         let scene = builtin::cornell();
@@ -251,22 +251,13 @@ mod tests {
         let bvh = Bvh::build(&mesh);
         let (seed, version) = (7, 2);
         for (i, n) in [(5, 20), (60, 1000), (321, 16_461usize)] {
-            let normal = mesh.patches[i].normal;
-            let (tangent, bitangent) = orthonormal_basis(normal);
             let mut counts = std::collections::BTreeMap::<u32, u32>::new();
             for c in 0..n.div_ceil(CHUNK) {
                 let mut rng = stream(seed, i as u64, version, c as u64);
                 for _ in c * CHUNK..n.min((c + 1) * CHUNK) {
-                    let (u1, u2, u3) = (uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
-                    let p = mesh.sample_point(i, u1, u2, u3);
-                    let (v1, v2) = (uniform(&mut rng), uniform(&mut rng));
-                    let d = cosine_direction_in(normal, tangent, bitangent, v1, v2);
-                    let ray = Ray::new(p + normal * bvh.ray_offset(), d);
-                    match bvh.closest_hit(&ray, f32::INFINITY) {
-                        Some(h) if h.front && h.patch as usize != i => {
-                            *counts.entry(h.patch).or_default() += 1
-                        }
-                        _ => {}
+                    // The same five draws and the same ray as a row's, one photon's.
+                    if let Some(j) = sample_photon(&mesh, &bvh, i, &mut rng) {
+                        *counts.entry(j).or_default() += 1;
                     }
                 }
             }
