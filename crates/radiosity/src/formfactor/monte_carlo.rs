@@ -166,25 +166,191 @@ pub fn trace_random_rays(mesh: &Mesh, bvh: &Bvh, count: usize, seed: u64) -> u64
 /// gather must not see it. The same draws are taken from `rng` either way.
 pub fn gather_photon(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> crate::system::Gathered {
     use crate::system::Gathered;
-    let p = mesh.sample_point(i, uniform(rng), uniform(rng), uniform(rng));
-    let n = mesh.patches[i].normal;
-    let (t, b) = orthonormal_basis(n);
-    let d = cosine_direction_in(n, t, b, uniform(rng), uniform(rng));
-    let off = bvh.ray_offset();
-    let twin = matches!(
-        bvh.closest_hit(&Ray::new(p - n * (0.5 * off), n), off),
-        Some(h) if h.patch as usize != i
-    );
+    let draw = GatherDraw::new(mesh, bvh, i, rng);
+    let twin = draw.twin(bvh.closest_hit(&draw.twin_probe(), draw.off));
     if twin
         || bvh
-            .closest_hit(&Ray::new(p + n * (0.5 * off), n), 8.0 * off)
+            .closest_hit(&draw.cover_probe(), 8.0 * draw.off)
             .is_some()
     {
         return Gathered::Covered;
     }
-    match bvh.closest_hit(&Ray::new(p + n * off, d), f32::INFINITY) {
-        Some(h) if h.front && h.patch as usize != i => Gathered::Hit(h.patch),
-        _ => Gathered::Lost,
+    draw.gathered(bvh.closest_hit(&draw.ray(), f32::INFINITY))
+}
+
+/// One gathering draw at patch `i` ([`gather_photon`]): its point, normal and direction from
+/// five draws of a stream, and the rays cast for it.
+#[derive(Clone, Copy, Debug)]
+struct GatherDraw {
+    i: u32,
+    p: glam::Vec3,
+    n: glam::Vec3,
+    d: glam::Vec3,
+    off: f32,
+}
+
+impl GatherDraw {
+    fn new(mesh: &Mesh, bvh: &Bvh, i: usize, rng: &mut Rng64) -> Self {
+        let p = mesh.sample_point(i, uniform(rng), uniform(rng), uniform(rng));
+        let n = mesh.patches[i].normal;
+        let (t, b) = orthonormal_basis(n);
+        let d = cosine_direction_in(n, t, b, uniform(rng), uniform(rng));
+        let off = bvh.ray_offset();
+        Self {
+            i: i as u32,
+            p,
+            n,
+            d,
+            off,
+        }
+    }
+
+    /// From half a ray offset behind the point along the normal, reaching one offset: what
+    /// it meets first, if not the patch itself, is a coincident twin reported before it.
+    fn twin_probe(&self) -> Ray {
+        Ray::new(self.p - self.n * (0.5 * self.off), self.n)
+    }
+
+    fn twin(&self, hit: Option<crate::accel::Hit>) -> bool {
+        matches!(hit, Some(h) if h.patch != self.i)
+    }
+
+    /// From half a ray offset in front, reaching eight: anything met lies flush on the patch.
+    fn cover_probe(&self) -> Ray {
+        Ray::new(self.p + self.n * (0.5 * self.off), self.n)
+    }
+
+    /// The gathering ray itself, lifted a ray offset off the patch.
+    fn ray(&self) -> Ray {
+        Ray::new(self.p + self.n * self.off, self.d)
+    }
+
+    /// What the gathering ray that met `hit` found.
+    fn gathered(&self, hit: Option<crate::accel::Hit>) -> crate::system::Gathered {
+        use crate::system::Gathered;
+        match hit {
+            Some(h) if h.front && h.patch != self.i => Gathered::Hit(h.patch),
+            _ => Gathered::Lost,
+        }
+    }
+}
+
+/// [`gather_photon`] `per` times for each patch of `patches`, patch `p` drawing from
+/// `rngs[p]` (so each stream goes on as `per` single calls leave it), into `out[p · per + s]`:
+/// the same answers, with the probes and the gathering rays cast [`PHOTON_BATCH`] at a time
+/// by [`Bvh::closest_hits`]. They are drawn draw by draw across the patches, so that the rays
+/// in flight together leave different patches: rays from one patch share their path through
+/// the tree, and interleaving them overlaps no misses.
+///
+/// # Panics
+/// If `rngs` is not one stream a patch, or `out` not `per` answers a patch.
+pub fn gather_photons(
+    mesh: &Mesh,
+    bvh: &Bvh,
+    patches: &[u32],
+    per: usize,
+    rngs: &mut [Rng64],
+    out: &mut [crate::system::Gathered],
+) {
+    use crate::system::Gathered;
+    assert_eq!(
+        rngs.len(),
+        patches.len(),
+        "gather_photons: one stream a patch"
+    );
+    assert_eq!(
+        out.len(),
+        patches.len() * per,
+        "gather_photons: per answers a patch"
+    );
+    let off = bvh.ray_offset();
+    let none = GatherDraw {
+        i: 0,
+        p: glam::Vec3::ZERO,
+        n: glam::Vec3::Z,
+        d: glam::Vec3::Z,
+        off,
+    };
+    let mut batch = [(0usize, none); PHOTON_BATCH];
+    let mut open = [0usize; PHOTON_BATCH];
+    let mut rays = [none.ray(); PHOTON_BATCH];
+    let mut hits = [None; PHOTON_BATCH];
+    // Cast `ray` of each open draw; keep open those `keep` says, close the others.
+    let mut cast = |batch: &[(usize, GatherDraw)],
+                    open: &mut [usize],
+                    ray: fn(&GatherDraw) -> Ray,
+                    t_max: f32,
+                    keep: &mut dyn FnMut(usize, &GatherDraw, Option<crate::accel::Hit>) -> bool|
+     -> usize {
+        for (r, &k) in rays.iter_mut().zip(open.iter()) {
+            *r = ray(&batch[k].1);
+        }
+        let m = open.len();
+        bvh.closest_hits(&rays[..m], t_max, &mut hits[..m]);
+        let mut kept = 0;
+        for j in 0..m {
+            let k = open[j];
+            if keep(batch[k].0, &batch[k].1, hits[j]) {
+                open[kept] = k;
+                kept += 1;
+            }
+        }
+        kept
+    };
+    let mut order = (0..per).flat_map(|s| (0..patches.len()).map(move |p| (p, s)));
+    loop {
+        let mut len = 0;
+        for (b, (p, s)) in batch.iter_mut().zip(order.by_ref()) {
+            *b = (
+                p * per + s,
+                GatherDraw::new(mesh, bvh, patches[p] as usize, &mut rngs[p]),
+            );
+            len += 1;
+        }
+        if len == 0 {
+            return;
+        }
+        let batch = &batch[..len];
+        for (k, o) in open[..len].iter_mut().enumerate() {
+            *o = k;
+        }
+        // The twin probes, the cover probes of the draws not twinned, then the gathering rays
+        // of the draws not covered.
+        let mut m = cast(
+            batch,
+            &mut open[..len],
+            GatherDraw::twin_probe,
+            off,
+            &mut |slot, d, h| {
+                let twin = d.twin(h);
+                if twin {
+                    out[slot] = Gathered::Covered;
+                }
+                !twin
+            },
+        );
+        m = cast(
+            batch,
+            &mut open[..m],
+            GatherDraw::cover_probe,
+            8.0 * off,
+            &mut |slot, _, h| {
+                if h.is_some() {
+                    out[slot] = Gathered::Covered;
+                }
+                h.is_none()
+            },
+        );
+        cast(
+            batch,
+            &mut open[..m],
+            GatherDraw::ray,
+            f32::INFINITY,
+            &mut |slot, d, h| {
+                out[slot] = d.gathered(h);
+                false
+            },
+        );
     }
 }
 
@@ -239,6 +405,83 @@ mod tests {
     use super::*;
     use crate::mesh::MeshParams;
     use crate::scene::builtin;
+
+    /// Gathering draws cast in batches ([`gather_photons`]) answer what single draws
+    /// ([`gather_photon`]) answer, from the same streams, which go on in step: on a floor with
+    /// a coincident twin on one part and a panel lying flush on another, so that every answer
+    /// (a hit, a lost ray, a twin, a cover) occurs, with more draws than one batch holds.
+    #[test]
+    fn gathering_in_batches_is_gathering_one_draw_at_a_time() {
+        use crate::color::Rgb;
+        use crate::scene::{Material, Polygon, Scene};
+        use crate::system::Gathered;
+        // Facing up, or down for the lamp (material 1).
+        let square = |x0: f32, x1: f32, y: f32, material| {
+            let mut vertices: Vec<glam::Vec3> =
+                [[x0, y, x0], [x0, y, x1], [x1, y, x1], [x1, y, x0]]
+                    .iter()
+                    .map(|v| glam::Vec3::from_array(*v))
+                    .collect();
+            if material == 1 {
+                vertices.reverse();
+            }
+            Polygon {
+                vertices,
+                material,
+                line: 0,
+                group: 0,
+            }
+        };
+        let build = |flush: f32| {
+            let scene = Scene {
+                name: "floor, twin and panel".into(),
+                materials: vec![
+                    Material::diffuse("grey", Rgb::splat(0.5)),
+                    Material::emitter("lamp", Rgb::splat(0.0), Rgb::splat(1.0)),
+                ],
+                polygons: vec![
+                    square(0.0, 1.0, 0.0, 0),
+                    square(0.05, 0.45, 0.0, 0),
+                    square(0.5, 0.9, flush, 0),
+                    square(0.2, 0.8, 1.0, 1),
+                ],
+                ..Scene::default()
+            };
+            Mesh::build(&scene, MeshParams::Patches(150)).unwrap()
+        };
+        let off = Bvh::build(&build(0.0)).ray_offset();
+        let mesh = build(2.0 * off);
+        let bvh = Bvh::build(&mesh);
+        let patches: Vec<u32> = (0..mesh.len() as u32).collect();
+        let per = 9;
+        let streams = || -> Vec<Rng64> {
+            patches
+                .iter()
+                .map(|&j| stream(5, u64::MAX, j as u64, 2))
+                .collect()
+        };
+        let (mut one, mut many) = (streams(), streams());
+        let single: Vec<Gathered> = patches
+            .iter()
+            .zip(&mut one)
+            .flat_map(|(&j, rng)| {
+                (0..per)
+                    .map(|_| gather_photon(&mesh, &bvh, j as usize, rng))
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        let mut batched = vec![Gathered::Lost; patches.len() * per];
+        gather_photons(&mesh, &bvh, &patches, per, &mut many, &mut batched);
+        assert!(batched.len() > 2 * PHOTON_BATCH);
+        assert_eq!(batched, single);
+        let count = |f: fn(&Gathered) -> bool| single.iter().filter(|g| f(g)).count();
+        assert!(count(|g| matches!(g, Gathered::Hit(_))) > 60);
+        assert!(count(|g| *g == Gathered::Lost) > 100);
+        assert!(count(|g| *g == Gathered::Covered) > 60);
+        for (a, b) in one.iter_mut().zip(&mut many) {
+            assert_eq!(uniform(a), uniform(b));
+        }
+    }
 
     /// A row is what its rays, drawn chunk by chunk from the chunks' streams and traced one
     /// after another as photons ([`sample_photon`]), count (a plain serial loop, the

@@ -210,6 +210,20 @@ impl PhotonSampler for OnDemandRows<'_> {
         self.photon_rays.fetch_add(1, Ordering::Relaxed);
         monte_carlo::gather_photon(self.estimator.mesh(), self.estimator.bvh(), i, rng)
     }
+
+    /// The same rays, cast several at a time ([`monte_carlo::gather_photons`]).
+    fn gather_many(
+        &self,
+        patches: &[u32],
+        per: usize,
+        rngs: &mut [Rng64],
+        out: &mut [crate::system::Gathered],
+    ) {
+        self.photon_rays
+            .fetch_add((patches.len() * per) as u64, Ordering::Relaxed);
+        let (mesh, bvh) = (self.estimator.mesh(), self.estimator.bvh());
+        monte_carlo::gather_photons(mesh, bvh, patches, per, rngs, out);
+    }
 }
 
 #[cfg(test)]

@@ -47,6 +47,8 @@ use rayon::prelude::*;
 pub const CHUNK: usize = 256;
 /// Rays whose hits are held at once (8 bytes each).
 const BATCH: usize = 1 << 20;
+/// Gathering rays a group of patches casts together in the final iteration.
+const GATHER_RAYS: usize = 256;
 /// Stream tag of the final gathering iteration.
 const GATHER: u64 = u64::MAX;
 
@@ -222,8 +224,13 @@ impl<'s> StochasticJacobi<'s> {
                 // The chunk's sources, then their draws in order, several rays at a time.
                 let (mut from, mut hit) = ([0u32; CHUNK], [0u32; CHUNK]);
                 let (from, hit) = (&mut from[..out.len()], &mut hit[..out.len()]);
+                // The sources of consecutive rays: one search, then a walk along `end`.
+                let mut i = source_of(start);
                 for (s, k) in from.iter_mut().zip(start..) {
-                    *s = source_of(k) as u32;
+                    while end[i] <= k && i + 1 < n {
+                        i += 1;
+                    }
+                    *s = i as u32;
                 }
                 sampler.sample_many(from, &mut rng, hit);
                 for ((slot, &i), &j) in out.iter_mut().zip(from.iter()).zip(hit.iter()) {
@@ -317,9 +324,9 @@ impl<'s> StochasticJacobi<'s> {
         let (rays, hits, direct, direct_sq) =
             (&self.rays, &self.hits, &self.direct, &self.direct_sq);
         let seed = self.seed;
-        // Per patch: the gathered B and the variance of its estimate (channels summed).
-        let gather_one = |j: usize| {
-            let mut rng = stream(seed, GATHER, j as u64, 2);
+        // Per patch: the gathered B and the variance of its estimate (channels summed), from
+        // its `per` draws in order.
+        let gather_one = |j: usize, draws: &[Gathered]| {
             // The variate only where s_j has an independent estimate.
             let (cv, s) = if rays[j] > 0 {
                 (beta, hits[j] as f64 / rays[j] as f64)
@@ -327,8 +334,8 @@ impl<'s> StochasticJacobi<'s> {
                 (Rgb::BLACK, 0.0)
             };
             let (mut sum, mut sum_sq) = (Rgb::BLACK, 0.0f64);
-            for _ in 0..per {
-                let v = match sampler.gather(j, &mut rng) {
+            for &g in draws {
+                let v = match g {
                     Gathered::Hit(i) => old[i as usize] - sys.emission[i as usize] - cv,
                     Gathered::Lost => Rgb::BLACK,
                     // A covered point sees nothing: its share of the variate's own term
@@ -356,7 +363,30 @@ impl<'s> StochasticJacobi<'s> {
             None => 0..n,
             Some(r) => crate::distributed::balance(&vec![1.0; n], r.size())[r.rank()].clone(),
         };
-        let mine: Vec<(Rgb, f64)> = range.into_par_iter().map(gather_one).collect();
+        // Groups of patches whose draws are cast together ([`PhotonSampler::gather_many`]);
+        // patch j draws from its own stream, so B does not depend on the grouping.
+        let group = (GATHER_RAYS / per.max(1)).clamp(1, GATHER_RAYS);
+        let mut mine = vec![(Rgb::BLACK, 0.0); range.len()];
+        mine.par_chunks_mut(group).enumerate().for_each_init(
+            || (Vec::new(), Vec::new(), Vec::new()),
+            |(patches, rngs, draws): &mut (Vec<u32>, Vec<_>, Vec<Gathered>), (c, out)| {
+                let first = range.start + c * group;
+                patches.clear();
+                patches.extend((first..first + out.len()).map(|j| j as u32));
+                rngs.clear();
+                rngs.extend(patches.iter().map(|&j| stream(seed, GATHER, j as u64, 2)));
+                draws.clear();
+                draws.resize(out.len() * per, Gathered::Lost);
+                sampler.gather_many(patches, per, rngs, draws);
+                for ((o, &j), d) in out
+                    .iter_mut()
+                    .zip(patches.iter())
+                    .zip(draws.chunks(per.max(1)))
+                {
+                    *o = gather_one(j as usize, &d[..per]);
+                }
+            },
+        );
         let gathered = match self.ranks {
             None => mine,
             Some(r) => r.all_gather(&mine),

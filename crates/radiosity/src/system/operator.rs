@@ -123,6 +123,17 @@ pub trait PhotonSampler: Sync {
             None => Gathered::Lost,
         }
     }
+
+    /// [`Self::gather`] `per` times for each patch of `patches`, patch `p` drawing from
+    /// `rngs[p]`, into `out[p · per + s]`: the same draws and answers, but a sampler that
+    /// casts rays casts them several at a time.
+    fn gather_many(&self, patches: &[u32], per: usize, rngs: &mut [Rng64], out: &mut [Gathered]) {
+        for ((&i, rng), out) in patches.iter().zip(rngs).zip(out.chunks_mut(per.max(1))) {
+            for o in &mut out[..per] {
+                *o = self.gather(i as usize, rng);
+            }
+        }
+    }
 }
 
 /// What one gathering draw found ([`PhotonSampler::gather`]).
