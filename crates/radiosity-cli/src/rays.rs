@@ -61,8 +61,9 @@ impl Caster for Bvh {
         front_hit(self.closest_hit(ray, f32::INFINITY))
     }
     fn batch_name(&self) -> &'static str {
+        const _: () = assert!(radiosity::accel::IN_FLIGHT == 16, "the label names it");
         if self.interleaves() {
-            "BVH, 8 in flight"
+            "BVH, 16 in flight"
         } else {
             "BVH, batches"
         }

@@ -641,9 +641,11 @@ macro_rules! closest_visit {
 
 /// Rays a thread traces at once in [`Bvh::closest_hits`]: enough that one ray's visit
 /// overlaps the memory wait of the others', few enough that their states stay in the L1
-/// cache (hospital, 10⁶ patches, one thread, `bench --rays`: 4 in flight 3.2–3.6 M rays/s,
-/// 8 4.9, 16 4.1–4.3; one at a time 2.6–2.8).
-const IN_FLIGHT: usize = 8;
+/// cache. Hospital, 10⁶ patches, one thread, `bench --rays` (M rays/s): on the 2-core AMD
+/// EPYC of 2026-11-27, 8 in flight 6.52, 16 7.77–7.97, 32 7.92–8.03, one at a time 2.9–3.9
+/// (two threads: 12.9–13.5, 16.1–16.2, 16.3); on the machine before, 4 in flight 3.2–3.6, 8
+/// 4.9, 16 4.1–4.3, one at a time 2.6–2.8.
+pub const IN_FLIGHT: usize = 16;
 
 /// Bytes of hierarchy from which [`Bvh::closest_hits`] interleaves its rays. Below, one ray at
 /// a time is as fast or faster: the interleaving costs about what the overlap of memory waits
@@ -998,16 +1000,16 @@ impl Bvh {
 
     /// The closest hit of each ray of `rays` with `0 < t < t_max`, into the same place of
     /// `out`: exactly what [`Bvh::closest_hit`] finds for it, but on a hierarchy of
-    /// 12 MiB or more (`INTERLEAVE_FROM`) eight rays at a time on each thread. A ray's
+    /// 12 MiB or more (`INTERLEAVE_FROM`) [`IN_FLIGHT`] rays at a time on each thread. A ray's
     /// traversal is a chain of dependent loads, each waiting on the memory once the tree is
     /// larger than the cache; here each visit of one ray asks for the next node it needs and
     /// the other rays' visits run while it comes, so that their waits overlap (the
     /// interleaving of Kocberber et al. 2015, "Asynchronous Memory Access Chaining", applied
     /// to BVH traversal). Incoherent rays on the hospital at 10⁶ patches (a tree of 74 MB):
-    /// 2.6–2.8 → 4.7–4.9 M rays/s on one thread. Where most of the tree fits the L2 cache
-    /// it gains nothing, so smaller hierarchies cast one ray at a time; and rays that share
-    /// an origin (a row of form factors) lose to one at a time: the cache already holds
-    /// their common path.
+    /// 2.9–3.9 → 7.8–8.0 M rays/s on one thread. Where most of the tree fits the L2 cache
+    /// it gains nothing, so smaller hierarchies cast one ray at a time. Rays that share an
+    /// origin (a row of form factors) gain less, their common path being in the cache
+    /// already: progressive refinement's rows at 10⁶ patches 11 % with 8 in flight.
     ///
     /// # Panics
     /// If `out` and `rays` differ in length.

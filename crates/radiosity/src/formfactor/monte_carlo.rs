@@ -13,9 +13,9 @@
 //! that each ray carries about the same power everywhere, which is what keeps the noise of the
 //! direct lighting at the level of the indirect.
 //!
-//! Determinism: rays are traced in parallel in chunks of [`CHUNK`]; each chunk has its own
-//! random stream keyed by `(seed, patch, row version, chunk)`, and the hits are counted in a
-//! fixed order, so a row does not depend on the number of threads.
+//! Determinism: rays are drawn in chunks of [`CHUNK`], each from its own random stream keyed by
+//! `(seed, patch, row version, chunk)`, and traced in parallel tasks of a few chunks; the hits
+//! are counted in a fixed order, so a row does not depend on the number of threads.
 
 use super::Entry;
 use crate::accel::Bvh;
@@ -26,12 +26,14 @@ use crate::sampling::{cosine_direction_in, stream, uniform, Rng64};
 use rand::Rng;
 use rayon::prelude::*;
 
-/// Rays per parallel task (and per random stream).
+/// Rays per random stream of a row.
 pub const CHUNK: usize = 32;
+/// Chunks a parallel task of a row traces together, at most.
+const CHUNKS_PER_TASK: usize = 8;
 const MISS: u32 = u32::MAX;
 
 /// Photons [`sample_photons`] casts in one call of [`Bvh::closest_hits`]: long enough that
-/// its eight rays in flight seldom drain.
+/// its rays in flight seldom drain.
 pub const PHOTON_BATCH: usize = 256;
 
 /// Reusable buffers for estimating rows (no allocation per row once warmed up).
@@ -64,24 +66,33 @@ pub fn estimate_row(
     let (tangent, bitangent) = orthonormal_basis(normal);
     scratch.hits.clear();
     scratch.hits.resize(n, MISS);
-    let trace = |c: usize, chunk: &mut [u32]| {
-        let mut rng = stream(seed, i as u64, version, c as u64);
-        // One ray at a time: a row's rays share their origin's patch, so their traversals
-        // share the tree's upper levels in the cache, and casting several at once
-        // (`Bvh::closest_hits`) costs more than the memory waits it hides (hospital, 400k
-        // patches: rows 34 → 41 s).
-        for slot in chunk.iter_mut() {
-            let (u1, u2, u3) = (uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
-            let p = mesh.sample_point(i, u1, u2, u3);
-            let d = cosine_direction_in(
-                normal,
-                tangent,
-                bitangent,
-                uniform(&mut rng),
-                uniform(&mut rng),
-            );
-            let ray = Ray::new(p + normal * offset, d);
-            *slot = match bvh.closest_hit(&ray, f32::INFINITY) {
+    // A task draws the rays of a few chunks, each chunk's from its own stream, and casts them
+    // together: `Bvh::closest_hits` keeps several in flight where the tree outgrows the cache.
+    // At least two tasks wherever there are two chunks, so that both threads share even the
+    // smallest rows.
+    let per_task = (n.div_ceil(CHUNK) / 2).clamp(1, CHUNKS_PER_TASK);
+    let trace = |task: usize, hits: &mut [u32]| {
+        let mut rays = [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); CHUNK * CHUNKS_PER_TASK];
+        let mut found = [None; CHUNK * CHUNKS_PER_TASK];
+        let (rays, found) = (&mut rays[..hits.len()], &mut found[..hits.len()]);
+        for (k, chunk) in rays.chunks_mut(CHUNK).enumerate() {
+            let mut rng = stream(seed, i as u64, version, (task * per_task + k) as u64);
+            for ray in chunk {
+                let (u1, u2, u3) = (uniform(&mut rng), uniform(&mut rng), uniform(&mut rng));
+                let p = mesh.sample_point(i, u1, u2, u3);
+                let d = cosine_direction_in(
+                    normal,
+                    tangent,
+                    bitangent,
+                    uniform(&mut rng),
+                    uniform(&mut rng),
+                );
+                *ray = Ray::new(p + normal * offset, d);
+            }
+        }
+        bvh.closest_hits(rays, f32::INFINITY, found);
+        for (slot, h) in hits.iter_mut().zip(found.iter()) {
+            *slot = match h {
                 Some(h) if h.front && h.patch as usize != i => h.patch,
                 _ => MISS,
             };
@@ -90,9 +101,9 @@ pub fn estimate_row(
     if n > CHUNK {
         scratch
             .hits
-            .par_chunks_mut(CHUNK)
+            .par_chunks_mut(CHUNK * per_task)
             .enumerate()
-            .for_each(|(c, chunk)| trace(c, chunk));
+            .for_each(|(task, hits)| trace(task, hits));
     } else {
         trace(0, &mut scratch.hits);
     }
@@ -485,15 +496,16 @@ mod tests {
 
     /// A row is what its rays, drawn chunk by chunk from the chunks' streams and traced one
     /// after another as photons ([`sample_photon`]), count (a plain serial loop, the
-    /// estimator's definition): the parallel chunks and the threads change nothing. Rows of one
-    /// chunk, of a few, and of many with a partial last chunk.
+    /// estimator's definition): the parallel tasks, the chunks they group and the threads
+    /// change nothing. Rows of one chunk, of two (a task each), of a few tasks with a partial
+    /// last one, and of many with a partial last chunk.
     #[test]
     fn a_row_counts_what_its_rays_drawn_in_order_hit() {
         let scene = builtin::cornell();
         let mesh = Mesh::build(&scene, MeshParams::Patches(400)).unwrap();
         let bvh = Bvh::build(&mesh);
         let (seed, version) = (7, 2);
-        for (i, n) in [(5, 20), (60, 1000), (321, 16_461usize)] {
+        for (i, n) in [(5, 20), (9, 40), (33, 300), (60, 1000), (321, 16_461usize)] {
             let mut counts = std::collections::BTreeMap::<u32, u32>::new();
             for c in 0..n.div_ceil(CHUNK) {
                 let mut rng = stream(seed, i as u64, version, c as u64);
