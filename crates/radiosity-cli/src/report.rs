@@ -189,6 +189,9 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
         t.form_factors,
         t.solve
     );
+    if t.solve_rays > 0.0 {
+        line += &format!(" (rays {:.3} s)", t.solve_rays);
+    }
     if let Some((r, w)) = render {
         line += &format!(", render {r:.3} s, write {w:.3} s");
     }

@@ -44,6 +44,13 @@ fn parse(summary: &str) -> Row {
             row.iterations = get(0);
         } else if line.starts_with("time ") {
             (row.mesh, row.bvh, row.form_factors, row.solve) = (get(0), get(1), get(2), get(3));
+            // A solver's own rays (stochastic Jacobi's), part of its solve: counted with the
+            // rows, so that `solve s` is everything but rays for every method.
+            if let Some(k) = line.find("(rays ") {
+                let rays = numbers(&line[k..]).first().copied().unwrap_or(f64::NAN);
+                row.form_factors += rays;
+                row.solve -= rays;
+            }
         } else if line.starts_with("memory ") {
             row.resident_mib = get(0);
         } else if line.starts_with("cpu ") {

@@ -2830,6 +2830,80 @@ fn bench_scale_reports_each_solve_and_fits_its_exponents() {
     }
 }
 
+/// Stochastic Jacobi casts its rays inside its solve: `solve` says how much of the solve
+/// stage they took, and `bench --scale` counts them with the rows, so that its `solve s`
+/// column is everything but rays for every method.
+#[test]
+fn stochastic_jacobi_reports_its_rays_apart_from_its_bookkeeping() {
+    let dir = scratch("sj-rays");
+    let args = ["--solver", "stochastic-jacobi", "--tolerance", "0.05"];
+    let solo = run(
+        &[
+            &["solve", "cornell", "--patches", "800", "--out", "s.csv"],
+            &args[..],
+        ]
+        .concat(),
+        &dir,
+    );
+    assert!(solo.status.success());
+    let said = String::from_utf8_lossy(&solo.stdout).to_string();
+    let time = said.lines().find(|l| l.starts_with("time ")).unwrap();
+    let after = |key: &str| -> f64 {
+        let at = time.find(key).unwrap_or_else(|| panic!("{time}")) + key.len();
+        time[at..]
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let (solve, rays) = (after("solve "), after("(rays "));
+    assert!(rays > 0.0 && rays <= solve, "{time}");
+    let out = run(
+        &[
+            &["bench", "--scale", "cornell", "--sizes", "200,800"],
+            &args[..],
+        ]
+        .concat(),
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .filter_map(|l| {
+            let v: Result<Vec<f64>, _> = l.split_whitespace().map(str::parse).collect();
+            v.ok().filter(|v| v.len() == 11)
+        })
+        .collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    for row in &rows {
+        // Every stage fits in the wall time, to the printed values' rounding.
+        assert!(row[7] >= 0.0 && row[8] >= 0.0, "{text}");
+        assert!(
+            row[5] + row[6] + row[7] + row[8] <= row[3] + 0.016 + 1e-9,
+            "{text}"
+        );
+    }
+    // The rows' exponent is fitted (not "—"): their times, unrounded, were not zero.
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("fitted exponents against N:"))
+        .unwrap();
+    let rows_exponent = line
+        .split(" rows ")
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap();
+    assert!(rows_exponent.trim().parse::<f64>().is_ok(), "{line}");
+}
+
 /// `bench --rays SCENE`: the form-factor ray workload on a scene, with its figures.
 #[test]
 fn bench_rays_on_a_scene() {

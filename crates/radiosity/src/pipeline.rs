@@ -95,6 +95,10 @@ pub struct Timings {
     pub form_factors: f64,
     /// Solving, form factors excluded.
     pub solve: f64,
+    /// The part of `solve` spent casting the solver's own rays in parallel (stochastic
+    /// Jacobi's photons and gathering rays, [`crate::solve::Info::ray_seconds`]); 0 for the
+    /// other solvers.
+    pub solve_rays: f64,
 }
 
 /// A solved scene.
@@ -427,6 +431,7 @@ pub fn solve(
             bvh: bvh_s,
             form_factors: form_factors.seconds,
             solve: solve_s,
+            solve_rays: info.ray_seconds.min(solve_s),
         },
         mesh,
         bvh,
@@ -520,6 +525,7 @@ fn solve_hierarchical(
         escaped: left - arrived,
         unshot: unshot_power,
         estimated_error: 0.0,
+        ray_seconds: 0.0,
     };
     Ok(Solution {
         timings: Timings {
@@ -527,6 +533,7 @@ fn solve_hierarchical(
             bvh: bvh_s,
             form_factors: hi.refine_seconds,
             solve: hi.solve_seconds,
+            solve_rays: 0.0,
         },
         mesh,
         bvh,

@@ -131,6 +131,7 @@ pub fn solve(
         escaped,
         unshot: unshot_power,
         estimated_error: 0.0,
+        ray_seconds: 0.0,
     };
     (b, info, sweeps)
 }

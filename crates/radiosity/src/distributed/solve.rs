@@ -226,6 +226,7 @@ pub fn solve(
                 bvh: bvh_s,
                 form_factors: form_factors.seconds,
                 solve: solve_s,
+                solve_rays: info.ray_seconds.min(solve_s),
             },
             mesh,
             bvh,

@@ -165,6 +165,7 @@ impl SolverState for Gauss<'_> {
             escaped,
             unshot,
             estimated_error: 0.0,
+            ray_seconds: 0.0,
         }
     }
 }

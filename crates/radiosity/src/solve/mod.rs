@@ -62,6 +62,10 @@ pub struct Info {
     /// Monte Carlo methods that estimate it: the standard error of B relative to B
     /// (area-weighted RMS over patches); 0 where not estimated.
     pub estimated_error: f64,
+    /// Wall-clock seconds of [`Info::seconds`] that stochastic Jacobi spent in its parallel
+    /// ray casting (drawing and casting its photons and its final gathering's rays); 0 for
+    /// the other solvers, whose rays are the operator's rows.
+    pub ray_seconds: f64,
 }
 
 /// A solver parameter, for errors (the program maps it to its own option name).

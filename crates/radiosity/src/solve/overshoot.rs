@@ -276,6 +276,7 @@ impl SolverState for Overshoot<'_> {
             escaped,
             unshot,
             estimated_error: 0.0,
+            ray_seconds: 0.0,
         }
     }
 }

@@ -561,6 +561,7 @@ impl<'s> Relaxation<'s> {
             escaped: self.escaped,
             unshot: self.signed_unshot,
             estimated_error: 0.0,
+            ray_seconds: 0.0,
         }
     }
 }

@@ -143,6 +143,7 @@ impl SolverState for Stochastic<'_> {
             escaped: self.escaped,
             unshot,
             estimated_error: 0.0,
+            ray_seconds: 0.0,
         }
     }
 }

@@ -93,6 +93,9 @@ pub struct Timing {
     pub exchange: f64,
     /// Reducing the hits into B and ΔB.
     pub reduce: f64,
+    /// The final gathering's parallel part: drawing and casting its rays, and each patch's
+    /// average of what they found.
+    pub gather: f64,
     /// Rays cast by all ranks.
     pub rays: u64,
 }
@@ -366,6 +369,7 @@ impl<'s> StochasticJacobi<'s> {
         // Groups of patches whose draws are cast together ([`PhotonSampler::gather_many`]);
         // patch j draws from its own stream, so B does not depend on the grouping.
         let group = (GATHER_RAYS / per.max(1)).clamp(1, GATHER_RAYS);
+        let t = std::time::Instant::now();
         let mut mine = vec![(Rgb::BLACK, 0.0); range.len()];
         mine.par_chunks_mut(group).enumerate().for_each_init(
             || (Vec::new(), Vec::new(), Vec::new()),
@@ -387,6 +391,7 @@ impl<'s> StochasticJacobi<'s> {
                 }
             },
         );
+        self.timing.gather += t.elapsed().as_secs_f64();
         let gathered = match self.ranks {
             None => mine,
             Some(r) => r.all_gather(&mine),
@@ -463,6 +468,7 @@ impl SolverState for StochasticJacobi<'_> {
             escaped: self.escaped,
             unshot,
             estimated_error: self.estimated_error,
+            ray_seconds: self.timing.trace + self.timing.gather,
         }
     }
 }
