@@ -83,8 +83,9 @@ pub struct StochasticJacobi<'s> {
     timing: Timing,
 }
 
-/// Seconds of the shooting iterations by part: tracing (parallel, shared among ranks),
-/// exchanging the hits (ranks only), reducing them in ray order (serial, on every rank).
+/// Seconds of the iterations by part: the shooting iterations' tracing (parallel, shared
+/// among ranks), exchanging the hits (ranks only) and reducing them in ray order (serial, on
+/// every rank); the final gathering's parallel part.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Timing {
     /// Tracing rays.
