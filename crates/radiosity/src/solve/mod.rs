@@ -63,8 +63,9 @@ pub struct Info {
     /// (area-weighted RMS over patches); 0 where not estimated.
     pub estimated_error: f64,
     /// Wall-clock seconds of [`Info::seconds`] that stochastic Jacobi spent in its parallel
-    /// ray casting (drawing and casting its photons and its final gathering's rays); 0 for
-    /// the other solvers, whose rays are the operator's rows.
+    /// ray casting (drawing and casting its photons and its final gathering's rays). 0 for
+    /// the other solvers: the shooting and sweeping methods' rays are the operator's rows,
+    /// timed as form factors, and the photon method's single photons are not timed apart.
     pub ray_seconds: f64,
 }
 
