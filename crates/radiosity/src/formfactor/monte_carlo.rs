@@ -249,9 +249,9 @@ impl GatherDraw {
 /// [`gather_photon`] `per` times for each patch of `patches`, patch `p` drawing from
 /// `rngs[p]` (so each stream goes on as `per` single calls leave it), into `out[p · per + s]`:
 /// the same answers, with the probes and the gathering rays cast [`PHOTON_BATCH`] at a time
-/// by [`Bvh::closest_hits`]. They are drawn draw by draw across the patches, so that the rays
-/// in flight together leave different patches: rays from one patch share their path through
-/// the tree, and interleaving them overlaps no misses.
+/// by [`Bvh::closest_hits`]. They are drawn draw by draw across the patches (each patch's
+/// draws in its own order), so the rays in flight together mostly leave different patches;
+/// the answers do not depend on that order.
 ///
 /// # Panics
 /// If `rngs` is not one stream a patch, or `out` not `per` answers a patch.
