@@ -383,8 +383,9 @@ impl Solution {
             .unbind()
     }
 
-    /// The solver's report: method, iterations, converged, unshot fraction, seconds per stage,
-    /// rays, and the energy balance (emitted, absorbed, escaped, unshot; summed over channels).
+    /// The solver's report: method, iterations, converged, unshot fraction, seconds per stage
+    /// (`seconds_solve_rays`: the part of `seconds_solve` stochastic Jacobi spent casting its
+    /// rays), rays, and the energy balance (emitted, absorbed, escaped, unshot; summed over channels).
     #[getter]
     fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -400,6 +401,7 @@ impl Solution {
         d.set_item("seconds_bvh", t.bvh)?;
         d.set_item("seconds_form_factors", t.form_factors)?;
         d.set_item("seconds_solve", t.solve)?;
+        d.set_item("seconds_solve_rays", t.solve_rays)?;
         d.set_item("emitted", i.emitted.sum())?;
         d.set_item("absorbed", i.absorbed.sum())?;
         d.set_item("escaped", i.escaped.sum())?;

@@ -113,6 +113,14 @@ def test_from_arrays_round_trip():
     assert np.allclose(np.linalg.norm(s.normals, axis=1), 1.0, atol=1e-6)
 
 
+def test_stochastic_jacobi_times_its_rays_within_its_solve():
+    s = radiosity.solve(radiosity.builtin("cornell"), solver="stochastic-jacobi", patches=2000, tolerance=0.05)
+    info = s.info
+    assert 0.0 < info["seconds_solve_rays"] <= info["seconds_solve"]
+    p = radiosity.solve(radiosity.builtin("cornell"), solver="progressive", patches=500, tolerance=0.05)
+    assert p.info["seconds_solve_rays"] == 0.0
+
+
 def test_bad_input_raises_value_error_naming_the_argument():
     v, faces, rho, e = box()
     with pytest.raises(ValueError, match="vertices"):
