@@ -2734,25 +2734,16 @@ fn bench_hierarchical_makes_and_reads_its_reference() {
     );
 }
 
-/// `bench --scale`: each size is solved by a fresh `radiosity solve`, and the table reports its
-/// patches, rays and iterations exactly as that command, run alone, reports them (they depend
-/// on the seed only); its stages fit inside the wall time measured around the child; the
-/// exponent of the rays is the slope through the table's own two points. Bad sizes are refused
-/// with a one-line error naming the option.
-#[test]
-fn bench_scale_reports_each_solve_and_fits_its_exponents() {
-    let dir = scratch("bench-scale");
+/// Run `bench --scale cornell --sizes 200,800` with `extra` options; its output and the
+/// table's rows (the lines of eleven numbers).
+fn bench_scale_cornell(extra: &[&str], dir: &Path) -> (String, Vec<Vec<f64>>) {
     let out = run(
         &[
-            "bench",
-            "--scale",
-            "cornell",
-            "--sizes",
-            "200,800",
-            "--tolerance",
-            "0.05",
-        ],
-        &dir,
+            &["bench", "--scale", "cornell", "--sizes", "200,800"],
+            extra,
+        ]
+        .concat(),
+        dir,
     );
     assert!(
         out.status.success(),
@@ -2762,12 +2753,34 @@ fn bench_scale_reports_each_solve_and_fits_its_exponents() {
     let text = String::from_utf8_lossy(&out.stdout).to_string();
     let rows: Vec<Vec<f64>> = text
         .lines()
-        .map(|l| l.split_whitespace().map(|t| t.parse::<f64>()).collect())
-        .filter_map(|v: Vec<Result<f64, _>>| {
-            (v.len() == 11).then(|| v.into_iter().collect::<Result<Vec<f64>, _>>().ok())?
+        .filter_map(|l| {
+            let v: Result<Vec<f64>, _> = l.split_whitespace().map(str::parse).collect();
+            v.ok().filter(|v| v.len() == 11)
         })
         .collect();
     assert_eq!(rows.len(), 2, "{text}");
+    (text, rows)
+}
+
+/// The exponent `name` on `bench --scale`'s last line; `None` where it reads "—".
+fn scale_exponent(text: &str, name: &str) -> Option<f64> {
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("fitted exponents against N:"))
+        .unwrap();
+    let at = line.find(&format!(" {name} ")).unwrap() + name.len() + 2;
+    line[at..].split(',').next().unwrap().trim().parse().ok()
+}
+
+/// `bench --scale`: each size is solved by a fresh `radiosity solve`, and the table reports its
+/// patches, rays and iterations exactly as that command, run alone, reports them (they depend
+/// on the seed only); its stages fit inside the wall time measured around the child; the
+/// exponent of the rays is the slope through the table's own two points. Bad sizes are refused
+/// with a one-line error naming the option.
+#[test]
+fn bench_scale_reports_each_solve_and_fits_its_exponents() {
+    let dir = scratch("bench-scale");
+    let (text, rows) = bench_scale_cornell(&["--tolerance", "0.05"], &dir);
     for (row, size) in rows.iter().zip(["200", "800"]) {
         let solo = run(
             &[
@@ -2803,25 +2816,9 @@ fn bench_scale_reports_each_solve_and_fits_its_exponents() {
         assert!(stages <= row[3] + 0.016 + 1e-9, "{text}");
         assert!(row[1] > 0.0 && row[2] > 0.0 && row[9] > 0.0, "{text}");
     }
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("fitted exponents against N:"))
-        .unwrap();
-    let exponent = |name: &str| -> f64 {
-        let at = line.find(&format!(" {name} ")).unwrap() + name.len() + 2;
-        line[at..]
-            .split(',')
-            .next()
-            .unwrap()
-            .trim()
-            .parse()
-            .unwrap()
-    };
     let slope = (rows[1][1] / rows[0][1]).ln() / (rows[1][0] / rows[0][0]).ln();
-    assert!(
-        (exponent("rays") - slope).abs() <= 0.005 + 1e-9,
-        "{line}: {slope}"
-    );
+    let rays = scale_exponent(&text, "rays").unwrap();
+    assert!((rays - slope).abs() <= 0.005 + 1e-9, "{text}: {slope}");
     for bad in ["0", "200,0"] {
         let out = run(&["bench", "--scale", "cornell", "--sizes", bad], &dir);
         let err = String::from_utf8_lossy(&out.stderr).to_string();
@@ -2859,28 +2856,7 @@ fn stochastic_jacobi_reports_its_rays_apart_from_its_bookkeeping() {
     };
     let (solve, rays) = (after("solve "), after("(rays "));
     assert!(rays > 0.0 && rays <= solve, "{time}");
-    let out = run(
-        &[
-            &["bench", "--scale", "cornell", "--sizes", "200,800"],
-            &args[..],
-        ]
-        .concat(),
-        &dir,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout).to_string();
-    let rows: Vec<Vec<f64>> = text
-        .lines()
-        .filter_map(|l| {
-            let v: Result<Vec<f64>, _> = l.split_whitespace().map(str::parse).collect();
-            v.ok().filter(|v| v.len() == 11)
-        })
-        .collect();
-    assert_eq!(rows.len(), 2, "{text}");
+    let (text, rows) = bench_scale_cornell(&args, &dir);
     for row in &rows {
         // Every stage fits in the wall time, to the printed values' rounding.
         assert!(row[7] >= 0.0 && row[8] >= 0.0, "{text}");
@@ -2890,18 +2866,7 @@ fn stochastic_jacobi_reports_its_rays_apart_from_its_bookkeeping() {
         );
     }
     // The rows' exponent is fitted (not "—"): their times, unrounded, were not zero.
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("fitted exponents against N:"))
-        .unwrap();
-    let rows_exponent = line
-        .split(" rows ")
-        .nth(1)
-        .unwrap()
-        .split(',')
-        .next()
-        .unwrap();
-    assert!(rows_exponent.trim().parse::<f64>().is_ok(), "{line}");
+    assert!(scale_exponent(&text, "rows").is_some(), "{text}");
 }
 
 /// `bench --rays SCENE`: the form-factor ray workload on a scene, with its figures.
