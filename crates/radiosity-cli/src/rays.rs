@@ -173,8 +173,10 @@ pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
     );
     let info = bvh.info();
     println!(
-        "hierarchy: {} triangles ({} references after spatial splits); {} nodes of {} children ({:.2} MB), {} leaves of {:.2} references on average ({:.2} MB), depth {}; SAH cost {:.2} (nodes) + {:.2} (leaves)",
+        "hierarchy: {} triangles ({} pieces met whole for {} of the patches; {} references after spatial splits); {} nodes of {} children ({:.2} MB), {} leaves of {:.2} references on average ({:.2} MB), depth {}; SAH cost {:.2} (nodes) + {:.2} (leaves)",
         info.triangles,
+        info.whole_pieces,
+        info.patches_in_whole_pieces,
         info.references,
         info.nodes,
         radiosity::accel::WIDTH,

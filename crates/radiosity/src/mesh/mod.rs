@@ -12,6 +12,10 @@
 //! A patch is planar to within the planarity tolerance of its piece; its normal is that of its
 //! vector area, and its area the length of that vector.
 
+mod grid;
+
+pub use grid::{quad_point, tri_point, Grid, GridShape, Locator};
+
 use crate::geom::Vec3;
 use crate::scene::{vector_area, Scene, SceneError};
 
@@ -90,6 +94,13 @@ pub struct Mesh {
     /// final before it (longest edges first). Empty for uniform meshes; filled by adaptive
     /// meshes (hierarchical radiosity's leaves).
     pub hanging: Vec<[u32; 3]>,
+    /// The regular grids [`Mesh::build`] cut its pieces into, in patch order: which patches and
+    /// vertices each holds and how it is divided. A ray caster may then meet a piece as a whole
+    /// and find the patch from where it met it ([`crate::accel::Bvh`], which checks that the
+    /// patches and vertices still are the grid's before it relies on one). Empty for meshes
+    /// made otherwise (hierarchical radiosity's leaves); a grid may be dropped at no cost but
+    /// speed.
+    pub grids: Vec<Grid>,
 }
 
 /// A piece of an input polygon: a triangle or a convex quad.
@@ -349,18 +360,18 @@ impl Mesh {
 
     fn add_piece(&mut self, piece: &Piece, l: f32, surface: u32, material: u32) {
         let base = self.vertices.len() as u32;
+        let first_patch = self.patches.len() as u32;
         match piece {
             Piece::Quad(q) => {
                 let (nu, nv) = quad_divisions(q, l);
+                self.grids.push(Grid {
+                    first_patch,
+                    first_vertex: base,
+                    shape: GridShape::Quad { nu, nv },
+                });
                 for j in 0..=nv {
-                    let t = j as f32 / nv as f32;
                     for i in 0..=nu {
-                        let s = i as f32 / nu as f32;
-                        let p = q[0] * ((1.0 - s) * (1.0 - t))
-                            + q[1] * (s * (1.0 - t))
-                            + q[2] * (s * t)
-                            + q[3] * ((1.0 - s) * t);
-                        self.vertices.push(p);
+                        self.vertices.push(quad_point(q, nu, nv, i, j));
                     }
                 }
                 let at = |i: u32, j: u32| base + j * (nu + 1) + i;
@@ -374,14 +385,17 @@ impl Mesh {
             }
             Piece::Tri(t) => {
                 let n = tri_divisions(t, l);
+                self.grids.push(Grid {
+                    first_patch,
+                    first_vertex: base,
+                    shape: GridShape::Tri { n },
+                });
                 // Row j holds n + 1 − j vertices; index of (i, j).
                 let mut row_start = Vec::with_capacity(n as usize + 1);
                 for j in 0..=n {
                     row_start.push(self.vertices.len() as u32);
                     for i in 0..=(n - j) {
-                        let (s, r) = (i as f32 / n as f32, j as f32 / n as f32);
-                        self.vertices
-                            .push(t[0] + (t[1] - t[0]) * s + (t[2] - t[0]) * r);
+                        self.vertices.push(tri_point(t, n, i, j));
                     }
                 }
                 let at = |i: u32, j: u32| row_start[j as usize] + i;
