@@ -34,10 +34,8 @@
 //! ([`super::Info::estimated_error`]).
 //!
 //! **Determinism.** Rays are traced in chunks of [`CHUNK`], each with its own random stream keyed
-//! by (seed, iteration, chunk); each patch's arrivals are added in ray order (the threads
-//! reduce disjoint ranges of receivers), and the energy that escapes or is absorbed is summed
-//! in fixed runs of rays added in order, so nothing depends on the number of threads.
-//! Memory: B, ΔB and two ray counters per patch, plus one batch of hits.
+//! by (seed, iteration, chunk); hits are reduced in chunk order, so B does not depend on the
+//! number of threads. Memory: B, ΔB and two ray counters per patch, plus one batch of hits.
 
 use super::{Info, Operator, SolveError, Solver, SolverParams, SolverState, System};
 use crate::color::Rgb;
@@ -49,8 +47,6 @@ use rayon::prelude::*;
 pub const CHUNK: usize = 256;
 /// Rays whose hits are held at once (8 bytes each).
 const BATCH: usize = 1 << 20;
-/// Rays whose escaped and absorbed energy is summed in one run, the runs then summed in order.
-const SUM_RUN: usize = 4096;
 /// Gathering rays a group of patches casts together in the final iteration.
 const GATHER_RAYS: usize = 256;
 /// Stream tag of the final gathering iteration.
@@ -87,29 +83,9 @@ pub struct StochasticJacobi<'s> {
     timing: Timing,
 }
 
-/// A range of receivers that one thread reduces a batch's hits into: from patch `lo` on, their
-/// B, what this iteration delivered to them, and (in the first) the sums of the squares of
-/// their arrivals (empty otherwise).
-struct Receivers<'a> {
-    lo: usize,
-    b: &'a mut [Rgb],
-    received: &'a mut [Rgb],
-    direct_sq: &'a mut [f64],
-}
-
-/// A run of a batch's rays from whole sources, whose counters one thread updates: the rays
-/// (source, hit), and from patch `first` on the sources' rays shot and rays that hit.
-struct Sources<'a> {
-    first: usize,
-    rays: &'a [(u32, u32)],
-    shot: &'a mut [u32],
-    hit: &'a mut [u32],
-}
-
 /// Seconds of the iterations by part: the shooting iterations' tracing (parallel, shared
-/// among ranks), exchanging the hits (ranks only) and reducing them (on every rank, in
-/// parallel by ranges of receivers, each range's hits in ray order); the final gathering's
-/// parallel part.
+/// among ranks), exchanging the hits (ranks only) and reducing them in ray order (serial, on
+/// every rank); the final gathering's parallel part.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Timing {
     /// Tracing rays.
@@ -232,10 +208,10 @@ impl<'s> StochasticJacobi<'s> {
             let count = end[i] - if i == 0 { 0 } else { end[i - 1] };
             self.unshot[i] * (sys.area[i] / count as f64)
         };
+        let mut received = vec![Rgb::BLACK; n];
         if first {
             self.direct_sq = vec![0.0; n];
         }
-        let mut received = vec![Rgb::BLACK; n];
         // (source, hit) of each ray of a batch, filled in parallel, reduced in ray order.
         let mut buf = vec![(0u32, 0u32); (rays as usize).min(BATCH)];
         let mut done = 0u64;
@@ -299,107 +275,25 @@ impl<'s> StochasticJacobi<'s> {
                 self.timing.trace += t.elapsed().as_secs_f64();
             }
             let t = std::time::Instant::now();
-            let hits = &buf[..batch];
-            // The energy that leaves the books, summed in fixed runs of rays (whatever the
-            // threads), each run in ray order, the runs in order.
-            let (escaped, absorbed) = hits
-                .par_chunks(SUM_RUN)
-                .map(|run| {
-                    let (mut escaped, mut absorbed) = (Rgb::BLACK, Rgb::BLACK);
-                    for &(i, j) in run {
-                        let w = weight(i as usize);
-                        if j == u32::MAX {
-                            escaped += w;
-                        } else {
-                            absorbed += (Rgb::splat(1.0) - sys.reflectance[j as usize]) * w;
-                        }
-                    }
-                    (escaped, absorbed)
-                })
-                .collect::<Vec<_>>()
-                .into_iter()
-                .fold((Rgb::BLACK, Rgb::BLACK), |(e, a), (de, da)| {
-                    (e + de, a + da)
-                });
-            self.escaped += escaped;
-            self.absorbed += absorbed;
-            // What arrives, by ranges of receivers: each range's updates in ray order, so that
-            // B is the same bytes as one pass over the rays gives, on any number of threads.
-            let parts = rayon::current_num_threads().clamp(1, 64);
-            let direct_sq = &mut self.direct_sq;
-            let mut ranges: Vec<Receivers> = Vec::with_capacity(parts);
-            let (mut b_rest, mut r_rest) = (&mut self.b[..], &mut received[..]);
-            let mut d_rest: &mut [f64] = if first { &mut direct_sq[..] } else { &mut [] };
-            let mut lo = 0;
-            for p in 1..=parts {
-                let hi = n * p / parts;
-                let (b, more_b) = b_rest.split_at_mut(hi - lo);
-                let (r, more_r) = r_rest.split_at_mut(hi - lo);
-                let take = if first { hi - lo } else { 0 };
-                let (d, more_d) = d_rest.split_at_mut(take);
-                ranges.push(Receivers {
-                    lo,
-                    b,
-                    received: r,
-                    direct_sq: d,
-                });
-                (b_rest, r_rest, d_rest) = (more_b, more_r, more_d);
-                lo = hi;
-            }
-            ranges.par_iter_mut().for_each(|range| {
-                let (lo, hi) = (range.lo, range.lo + range.b.len());
-                for &(i, j) in hits {
+            for &(i, j) in &buf[..batch] {
+                let i = i as usize;
+                let w = weight(i);
+                self.rays[i] = self.rays[i].saturating_add(1);
+                if j == u32::MAX {
+                    self.escaped += w;
+                } else {
                     let j = j as usize;
-                    // (A lost ray's u32::MAX lies beyond every range.)
-                    if j < lo || j >= hi {
-                        continue;
-                    }
-                    let w = weight(i as usize);
-                    let db = sys.reflectance[j] * w * (1.0 / sys.area[j]);
-                    range.received[j - lo] += db;
+                    self.hits[i] = self.hits[i].saturating_add(1);
+                    let rho = sys.reflectance[j];
+                    let db = rho * w * (1.0 / sys.area[j]);
+                    received[j] += db;
                     if first {
-                        range.direct_sq[j - lo] += db.sum() * db.sum();
+                        self.direct_sq[j] += db.sum() * db.sum();
                     }
-                    range.b[j - lo] += db;
+                    self.b[j] += db;
+                    self.absorbed += (Rgb::splat(1.0) - rho) * w;
                 }
-            });
-            // Rays and hits a source shot, by runs of whole sources (the sources of a batch's
-            // rays ascend).
-            let mut runs: Vec<Sources> = Vec::with_capacity(parts);
-            let (mut rays_rest, mut hits_rest) = (&mut self.rays[..], &mut self.hits[..]);
-            let (mut at, mut from) = (0usize, 0usize);
-            for p in 1..=parts {
-                // Up to the first ray of the source of ray `batch · p / parts`.
-                let mut to = (batch * p / parts).max(at);
-                while to > at && to < batch && hits[to - 1].0 == hits[to].0 {
-                    to -= 1;
-                }
-                if p == parts {
-                    to = batch;
-                }
-                if to == at {
-                    continue;
-                }
-                let last = hits[to - 1].0 as usize + 1;
-                let (r, more_r) = std::mem::take(&mut rays_rest).split_at_mut(last - from);
-                let (h, more_h) = std::mem::take(&mut hits_rest).split_at_mut(last - from);
-                runs.push(Sources {
-                    first: from,
-                    rays: &hits[at..to],
-                    shot: r,
-                    hit: h,
-                });
-                (rays_rest, hits_rest, at, from) = (more_r, more_h, to, last);
             }
-            runs.par_iter_mut().for_each(|run| {
-                for &(i, j) in run.rays {
-                    let i = i as usize - run.first;
-                    run.shot[i] = run.shot[i].saturating_add(1);
-                    if j != u32::MAX {
-                        run.hit[i] = run.hit[i].saturating_add(1);
-                    }
-                }
-            });
             self.timing.reduce += t.elapsed().as_secs_f64();
             done += batch as u64;
         }
