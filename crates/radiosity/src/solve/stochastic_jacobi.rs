@@ -49,6 +49,8 @@ pub const CHUNK: usize = 256;
 const BATCH: usize = 1 << 20;
 /// Gathering rays a group of patches casts together in the final iteration.
 const GATHER_RAYS: usize = 256;
+/// How many rays ahead of the one being reduced its receiver is asked for from memory.
+const AHEAD: usize = 16;
 /// Stream tag of the final gathering iteration.
 const GATHER: u64 = u64::MAX;
 
@@ -81,6 +83,18 @@ pub struct StochasticJacobi<'s> {
     ranks: Option<&'s crate::distributed::Ranks<'s>>,
     /// Where the shooting iterations' time went.
     timing: Timing,
+    /// Buffers an iteration fills, kept for the next.
+    scratch: Scratch,
+}
+
+/// What a shooting iteration fills and the next reuses (no allocation, and no fresh pages for
+/// the kernel to clear, per iteration): the cumulative ray counts of the sources, what each
+/// patch received, and a batch's (source, hit) pairs.
+#[derive(Clone, Debug, Default)]
+struct Scratch {
+    end: Vec<u64>,
+    received: Vec<Rgb>,
+    buf: Vec<(u32, u32)>,
 }
 
 /// Seconds of the iterations by part: the shooting iterations' tracing (parallel, shared
@@ -137,6 +151,7 @@ impl<'s> StochasticJacobi<'s> {
             estimated_error: 0.0,
             ranks: None,
             timing: Timing::default(),
+            scratch: Scratch::default(),
             system,
         })
     }
@@ -188,7 +203,14 @@ impl<'s> StochasticJacobi<'s> {
         let mut rng = stream(self.seed, self.iterations, u64::MAX, 0);
         let xi = uniform(&mut rng) as f64;
         let first = self.iterations == 0;
-        let mut end = Vec::with_capacity(n);
+        let Scratch {
+            mut end,
+            mut received,
+            mut buf,
+        } = std::mem::take(&mut self.scratch);
+        end.clear();
+        // All zero: the iteration before set each back once it was read.
+        received.resize(n, Rgb::BLACK);
         let (mut acc, mut before, mut rays) = (0.0f64, 0u64, 0u64);
         for i in 0..n {
             acc += energy(self.unshot[i], sys.area[i]);
@@ -208,12 +230,11 @@ impl<'s> StochasticJacobi<'s> {
             let count = end[i] - if i == 0 { 0 } else { end[i - 1] };
             self.unshot[i] * (sys.area[i] / count as f64)
         };
-        let mut received = vec![Rgb::BLACK; n];
         if first {
             self.direct_sq = vec![0.0; n];
         }
         // (source, hit) of each ray of a batch, filled in parallel, reduced in ray order.
-        let mut buf = vec![(0u32, 0u32); (rays as usize).min(BATCH)];
+        buf.resize((rays as usize).min(BATCH), (0, 0));
         let mut done = 0u64;
         let seed = self.seed;
         let iteration = self.iterations;
@@ -275,12 +296,24 @@ impl<'s> StochasticJacobi<'s> {
                 self.timing.trace += t.elapsed().as_secs_f64();
             }
             let t = std::time::Instant::now();
-            for &(i, j) in &buf[..batch] {
+            // The sums in locals, added in the same order as ever (the same bytes).
+            let (mut escaped, mut absorbed) = (self.escaped, self.absorbed);
+            let hits = &buf[..batch];
+            for (k, &(i, j)) in hits.iter().enumerate() {
+                // The receivers are scattered over arrays that no cache holds at 10⁵–10⁶
+                // patches: ask for the one AHEAD rays on, so that the misses overlap.
+                if let Some(&(_, next)) = hits.get(k + AHEAD) {
+                    let next = next as usize;
+                    crate::hint::prefetch_at(&received, next);
+                    crate::hint::prefetch_at(&self.b, next);
+                    crate::hint::prefetch_at(&sys.reflectance, next);
+                    crate::hint::prefetch_at(&sys.area, next);
+                }
                 let i = i as usize;
                 let w = weight(i);
                 self.rays[i] = self.rays[i].saturating_add(1);
                 if j == u32::MAX {
-                    self.escaped += w;
+                    escaped += w;
                 } else {
                     let j = j as usize;
                     self.hits[i] = self.hits[i].saturating_add(1);
@@ -291,22 +324,24 @@ impl<'s> StochasticJacobi<'s> {
                         self.direct_sq[j] += db.sum() * db.sum();
                     }
                     self.b[j] += db;
-                    self.absorbed += (Rgb::splat(1.0) - rho) * w;
+                    absorbed += (Rgb::splat(1.0) - rho) * w;
                 }
             }
+            (self.escaped, self.absorbed) = (escaped, absorbed);
             self.timing.reduce += t.elapsed().as_secs_f64();
             done += batch as u64;
+        }
+        if first {
+            self.direct = received.clone();
         }
         for i in 0..n {
             let count = end[i] - if i == 0 { 0 } else { end[i - 1] };
             if count > 0 {
                 self.unshot[i] = Rgb::BLACK;
             }
-            self.unshot[i] += received[i];
+            self.unshot[i] += std::mem::replace(&mut received[i], Rgb::BLACK);
         }
-        if first {
-            self.direct = received;
-        }
+        self.scratch = Scratch { end, received, buf };
     }
 
     /// The final regular iteration: direct light as shot in the first iteration (every emitter
