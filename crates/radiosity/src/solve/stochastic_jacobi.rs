@@ -351,6 +351,8 @@ impl<'s> StochasticJacobi<'s> {
     /// exact where a light and another surface coincide and a gathering ray would see the
     /// wrong one of the two (as in RenderPark's hospital).
     fn gather(&mut self, sampler: &dyn PhotonSampler) {
+        // The shooting iterations are over: their buffers go before this one's.
+        self.scratch = Scratch::default();
         let sys = self.system;
         let n = sys.len();
         let total_area = sys.total_area();
