@@ -2341,6 +2341,10 @@ mod tests {
         assert_eq!(info.patches_in_whole_pieces, mesh.len());
         assert!(info.triangles <= 9);
         whole.validate().unwrap();
+        // Grids that overlap are not trusted, none of them.
+        let mut twice = mesh.clone();
+        twice.grids.push(twice.grids[0]);
+        assert_eq!(Bvh::build(&twice).info().whole_pieces, 0);
         let mut plain = mesh.clone();
         plain.grids.clear();
         let each = Bvh::build(&plain);

@@ -46,16 +46,16 @@ impl Grid {
     /// How many patches the grid holds.
     pub fn patches(&self) -> usize {
         match self.shape {
-            GridShape::Quad { nu, nv } => nu as usize * nv as usize,
-            GridShape::Tri { n } => n as usize * n as usize,
+            GridShape::Quad { nu, nv } => (nu as usize).saturating_mul(nv as usize),
+            GridShape::Tri { n } => (n as usize).saturating_mul(n as usize),
         }
     }
 
     /// How many vertices the grid holds.
     pub fn vertices(&self) -> usize {
         match self.shape {
-            GridShape::Quad { nu, nv } => (nu as usize + 1) * (nv as usize + 1),
-            GridShape::Tri { n } => (n as usize + 1) * (n as usize + 2) / 2,
+            GridShape::Quad { nu, nv } => (nu as usize + 1).saturating_mul(nv as usize + 1),
+            GridShape::Tri { n } => (n as usize + 1).saturating_mul(n as usize + 2) / 2,
         }
     }
 }
@@ -462,5 +462,16 @@ mod tests {
         let mut short = mesh.clone();
         short.patches.pop();
         assert!(Locator::new(&short, &g, 1e-6).is_none());
+        // Counts far beyond the mesh: refused without overflow.
+        for shape in [
+            GridShape::Quad {
+                nu: u32::MAX,
+                nv: u32::MAX,
+            },
+            GridShape::Quad { nu: 0, nv: 5 },
+            GridShape::Tri { n: u32::MAX },
+        ] {
+            assert!(Locator::new(&mesh, &Grid { shape, ..g }, 1e-6).is_none());
+        }
     }
 }
