@@ -85,6 +85,9 @@ pub struct StochasticJacobi<'s> {
     timing: Timing,
     /// Buffers an iteration fills, kept for the next.
     scratch: Scratch,
+    /// [`Self::unshot_energy`], kept up to date: one pass over the patches an iteration, where
+    /// the iteration and the driver's status each made their own.
+    unshot_left: f64,
 }
 
 /// What a shooting iteration fills and the next reuses (no allocation, and no fresh pages for
@@ -127,7 +130,7 @@ impl<'s> StochasticJacobi<'s> {
         }
         let n = system.len();
         let emitted = system.emitted_power();
-        Ok(Self {
+        let mut sj = Self {
             b: system.emission.clone(),
             unshot: system.emission.clone(),
             rays: vec![0; n],
@@ -152,8 +155,11 @@ impl<'s> StochasticJacobi<'s> {
             ranks: None,
             timing: Timing::default(),
             scratch: Scratch::default(),
+            unshot_left: 0.0,
             system,
-        })
+        };
+        sj.unshot_left = sj.unshot_energy();
+        Ok(sj)
     }
 
     /// Where the shooting iterations' time went.
@@ -174,14 +180,17 @@ impl<'s> StochasticJacobi<'s> {
         self.rays_per_patch as u64 * self.system.len() as u64
     }
 
-    fn unshot_fraction_now(&self) -> f64 {
-        let total: f64 = self
-            .unshot
+    /// Σ |ΔB_i|₁ A_i, the unshot energy, from the unshot radiosities.
+    fn unshot_energy(&self) -> f64 {
+        self.unshot
             .iter()
             .zip(&self.system.area)
             .map(|(u, a)| (u.r.abs() + u.g.abs() + u.b.abs()) * a)
-            .sum();
-        total / self.emitted_total
+            .sum()
+    }
+
+    fn unshot_fraction_now(&self) -> f64 {
+        self.unshot_left / self.emitted_total
     }
 
     /// One incremental shooting iteration of about R rays.
@@ -189,7 +198,7 @@ impl<'s> StochasticJacobi<'s> {
         let sys = self.system;
         let n = sys.len();
         let energy = |u: Rgb, a: f64| (u.r.abs() + u.g.abs() + u.b.abs()) * a;
-        let total: f64 = (0..n).map(|i| energy(self.unshot[i], sys.area[i])).sum();
+        let total = self.unshot_left;
         if total <= 0.0 {
             return;
         }
@@ -342,6 +351,7 @@ impl<'s> StochasticJacobi<'s> {
             self.unshot[i] += std::mem::replace(&mut received[i], Rgb::BLACK);
         }
         self.scratch = Scratch { end, received, buf };
+        self.unshot_left = self.unshot_energy();
     }
 
     /// The final regular iteration: direct light as shot in the first iteration (every emitter
