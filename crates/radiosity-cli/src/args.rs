@@ -258,7 +258,8 @@ const EXAMPLES_THERMAL: &str = "Examples:
 pub enum BackendArg {
     /// Every backend this binary has.
     All,
-    /// The engine's own BVH.
+    /// The engine's own BVH (and, where it meets pieces whole, its tree over every patch's
+    /// triangles beside it).
     Bvh,
     /// Intel Embree 3 (builds with `--features embree`).
     Embree,

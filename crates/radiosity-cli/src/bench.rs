@@ -202,21 +202,14 @@ fn ff_estimate(scene: &radiosity::scene::Scene, params: FfParams) -> Result<f64>
 }
 
 fn unit_squares() -> Vec<(&'static str, radiosity::scene::Scene, f64)> {
-    use radiosity::scene::{Material, Polygon, Scene};
+    use radiosity::scene::{Material, Scene};
     let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-    let scene = |polys: Vec<Vec<Vec3>>| Scene {
-        name: "squares".into(),
-        materials: vec![Material::diffuse("m", radiosity::Rgb::splat(0.5))],
-        polygons: polys
-            .into_iter()
-            .map(|vertices| Polygon {
-                vertices,
-                material: 0,
-                line: 0,
-                group: 0,
-            })
-            .collect(),
-        ..Default::default()
+    let scene = |polys: Vec<Vec<Vec3>>| {
+        Scene::of_polygons(
+            "squares",
+            Material::diffuse("m", radiosity::Rgb::splat(0.5)),
+            polys,
+        )
     };
     vec![
         (

@@ -2955,13 +2955,16 @@ fn bench_rays_on_a_scene() {
         .lines()
         .find(|l| l.starts_with("BVH of patches / radiosity BVH"))
         .expect("the comparison with every patch's triangles");
-    let differ: usize = cmp
-        .split("differ on ")
+    assert!(hits_differing(cmp) <= 20, "{cmp}");
+}
+
+/// The count of rays in a `bench --rays` comparison line `… hits differ on K of N rays …`.
+fn hits_differing(line: &str) -> usize {
+    line.split("differ on ")
         .nth(1)
         .and_then(|s| s.split_whitespace().next())
         .and_then(|s| s.parse().ok())
-        .unwrap();
-    assert!(differ <= 20, "{cmp}");
+        .unwrap_or_else(|| panic!("no count of differing hits in {line:?}"))
 }
 
 /// With the `embree` feature, Embree casts the same rays and hits the same patches (rounding
@@ -2986,13 +2989,7 @@ fn embree_agrees_with_the_bvh_hit_for_hit() {
         .lines()
         .find(|l| l.starts_with("Embree 3 / radiosity BVH") && l.contains("hits differ on"))
         .expect("a comparison line");
-    let differ: f64 = line
-        .split("differ on ")
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next())
-        .and_then(|s| s.parse().ok())
-        .unwrap();
-    assert!(differ / 200_000.0 < 1e-4, "{line}");
+    assert!(hits_differing(line) as f64 / 200_000.0 < 1e-4, "{line}");
 }
 
 /// Without the `embree` feature, asking for Embree is a one-line error that says how to get it.

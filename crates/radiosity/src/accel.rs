@@ -489,7 +489,12 @@ impl Ray4 {
 /// with `0 < t < t_below`.
 #[inline(always)]
 fn lanes_hit(b: &TriBlock, t: Vec4, u: Vec4, v: Vec4, t_below: f32) -> u32 {
-    let slack = b.slack0 + b.slack1 * t;
+    lanes_within(t, u, v, b.slack0 + b.slack1 * t, t_below)
+}
+
+/// The lanes with `(u, v)` inside the triangle widened by `slack` and `0 < t < t_below`.
+#[inline(always)]
+fn lanes_within(t: Vec4, u: Vec4, v: Vec4, slack: Vec4, t_below: f32) -> u32 {
     (u.cmpge(-slack)
         & v.cmpge(-slack)
         & (u + v).cmple(Vec4::ONE + slack)
@@ -508,12 +513,7 @@ fn lanes_hit(b: &TriBlock, t: Vec4, u: Vec4, v: Vec4, t_below: f32) -> u32 {
 #[inline(always)]
 fn lanes_hit_front_slack(b: &TriBlock, t: Vec4, u: Vec4, v: Vec4, det: Vec4, t_below: f32) -> u32 {
     let slack = Vec4::select(det.cmpgt(Vec4::ZERO), b.slack0 + b.slack1 * t, Vec4::ZERO);
-    (u.cmpge(-slack)
-        & v.cmpge(-slack)
-        & (u + v).cmple(Vec4::ONE + slack)
-        & t.cmpgt(Vec4::ZERO)
-        & t.cmplt(Vec4::splat(t_below)))
-    .bitmask()
+    lanes_within(t, u, v, slack, t_below)
 }
 
 /// Sorting networks for three and four keys: the fewest compare-exchanges (Knuth, TAOCP
@@ -2288,19 +2288,12 @@ mod tests {
     /// put the point where the ray met it, in the patch's own triangle.
     #[test]
     fn grids_met_whole_find_the_patch_met() {
-        use crate::color::Rgb;
-        use crate::scene::{Material, Polygon, Scene};
         let at = |p: [f32; 3]| Vec3::from_array(p) + Vec3::new(40.0, -25.0, 60.0);
-        let polygon = |v: Vec<[f32; 3]>| Polygon {
-            vertices: v.into_iter().map(at).collect(),
-            material: 0,
-            line: 0,
-            group: 0,
-        };
-        let scene = Scene {
-            name: "grids".into(),
-            materials: vec![Material::diffuse("grey", Rgb::splat(0.5))],
-            polygons: vec![
+        let polygon = |v: Vec<[f32; 3]>| v.into_iter().map(at).collect::<Vec<_>>();
+        let scene = crate::scene::Scene::of_polygons(
+            "grids",
+            crate::scene::Material::diffuse("grey", crate::color::Rgb::splat(0.5)),
+            vec![
                 // Floor square, facing up.
                 polygon(vec![
                     [0.0, 0.0, 0.0],
@@ -2332,8 +2325,7 @@ mod tests {
                 // A triangle, facing down.
                 polygon(vec![[0.5, 5.0, 0.5], [3.5, 5.0, 1.0], [1.0, 5.0, 3.5]]),
             ],
-            ..Scene::default()
-        };
+        );
         let mesh = Mesh::build(&scene, MeshParams::Patches(3000)).unwrap();
         let whole = Bvh::build(&mesh);
         let info = whole.info();

@@ -6,7 +6,7 @@ use radiosity::color::Rgb;
 use radiosity::formfactor::{aggregate, Estimator, FormFactorMethod, Params, Storage};
 use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
-use radiosity::scene::{builtin, Material, Polygon, Scene};
+use radiosity::scene::{builtin, Material, Scene};
 use std::f64::consts::PI;
 
 pub use radiosity::formfactor::closed_form::{
@@ -14,20 +14,11 @@ pub use radiosity::formfactor::closed_form::{
 };
 
 fn scene_of(polys: Vec<Vec<Vec3>>) -> Scene {
-    Scene {
-        name: "pair".into(),
-        materials: vec![Material::emitter("m", Rgb::splat(0.5), Rgb::splat(1.0))],
-        polygons: polys
-            .into_iter()
-            .map(|vertices| Polygon {
-                vertices,
-                material: 0,
-                line: 0,
-                group: 0,
-            })
-            .collect(),
-        ..Default::default()
-    }
+    Scene::of_polygons(
+        "pair",
+        Material::emitter("m", Rgb::splat(0.5), Rgb::splat(1.0)),
+        polys,
+    )
 }
 
 fn v(x: f32, y: f32, z: f32) -> Vec3 {

@@ -336,9 +336,7 @@ impl Locator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::color::Rgb;
     use crate::mesh::MeshParams;
-    use crate::scene::{Material, Polygon, Scene};
 
     /// Barycentric coordinates of `p` in triangle `t` (in its plane).
     fn barycentric(t: &[Vec3; 3], p: Vec3) -> (f32, f32) {
@@ -361,35 +359,25 @@ mod tests {
             [[0.0, 0.0], [1.0, 0.2], [1.4, 1.9], [-0.3, 0.8]],
             [[0.0, 0.0], [4.0, 0.0], [4.0, 0.3], [0.0, 3.0]],
         ];
-        let mut polygons: Vec<Polygon> = quads
+        let mut polygons: Vec<Vec<Vec3>> = quads
             .iter()
             .enumerate()
-            .map(|(k, q)| Polygon {
-                vertices: q
-                    .iter()
+            .map(|(k, q)| {
+                q.iter()
                     .map(|&[x, y]| Vec3::new(x + 5.0 * k as f32, y, 0.5 * x - 3.0))
-                    .collect(),
-                material: 0,
-                line: 0,
-                group: 0,
+                    .collect()
             })
             .collect();
-        polygons.push(Polygon {
-            vertices: vec![
-                Vec3::new(0.0, 5.0, 1.0),
-                Vec3::new(3.0, 6.0, 1.0),
-                Vec3::new(1.0, 8.0, 2.0),
-            ],
-            material: 0,
-            line: 0,
-            group: 0,
-        });
-        let scene = Scene {
-            name: "grids".into(),
-            materials: vec![Material::diffuse("grey", Rgb::splat(0.5))],
+        polygons.push(vec![
+            Vec3::new(0.0, 5.0, 1.0),
+            Vec3::new(3.0, 6.0, 1.0),
+            Vec3::new(1.0, 8.0, 2.0),
+        ]);
+        let scene = crate::scene::Scene::of_polygons(
+            "grids",
+            crate::scene::Material::diffuse("grey", crate::color::Rgb::splat(0.5)),
             polygons,
-            ..Scene::default()
-        };
+        );
         let mesh = Mesh::build(&scene, MeshParams::MaxEdge(0.23)).unwrap();
         assert_eq!(mesh.grids.len(), 6);
         let mut checked = 0;
@@ -429,23 +417,16 @@ mod tests {
     /// renumbered, or a quad bent out of its plane.
     #[test]
     fn a_grid_the_mesh_contradicts_is_refused() {
-        let square = Polygon {
-            vertices: vec![
+        let scene = crate::scene::Scene::of_polygons(
+            "grids",
+            crate::scene::Material::diffuse("grey", crate::color::Rgb::splat(0.5)),
+            vec![vec![
                 Vec3::new(0.0, 0.0, 0.0),
                 Vec3::new(1.0, 0.0, 0.0),
                 Vec3::new(1.0, 1.0, 0.0),
                 Vec3::new(0.0, 1.0, 0.0),
-            ],
-            material: 0,
-            line: 0,
-            group: 0,
-        };
-        let scene = Scene {
-            name: "square".into(),
-            materials: vec![Material::diffuse("grey", Rgb::splat(0.5))],
-            polygons: vec![square],
-            ..Scene::default()
-        };
+            ]],
+        );
         let mesh = Mesh::build(&scene, MeshParams::Patches(16)).unwrap();
         let g = mesh.grids[0];
         assert!(Locator::new(&mesh, &g, 1e-6).is_some());

@@ -183,6 +183,25 @@ pub enum SceneError {
 }
 
 impl Scene {
+    /// A scene named `name` of `polygons` (vertex lists, counter-clockwise seen from the
+    /// front), all of `material`: for tests, benchmarks and programs that build geometry.
+    pub fn of_polygons(name: &str, material: Material, polygons: Vec<Vec<Vec3>>) -> Scene {
+        Scene {
+            name: name.into(),
+            materials: vec![material],
+            polygons: polygons
+                .into_iter()
+                .map(|vertices| Polygon {
+                    vertices,
+                    material: 0,
+                    line: 0,
+                    group: 0,
+                })
+                .collect(),
+            ..Scene::default()
+        }
+    }
+
     /// Where polygon `i` came from, for messages: `file:line` or `scene 'name' polygon i`.
     pub fn place_of(&self, i: usize) -> FileLoc {
         let run = self.origins.partition_point(|(start, _)| *start <= i);
