@@ -12,7 +12,7 @@
 //! and `1 − ρ_j` is absorbed; the rest escapes. Then emitted = absorbed + escaped + Σ r_i A_i
 //! holds exactly at every step (the terms cancel in pairs), also for negative δ.
 
-use super::select::{AmbientTree, Blocks, Keyed, MaxTree, Nodes};
+use super::select::{AmbientTree, Blocks, Keyed, MaxTree, Nodes, Pending};
 use super::{Info, Operator, System};
 use crate::color::Rgb;
 use crate::hint;
@@ -234,6 +234,7 @@ fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<
         cells, mut nodes, ..
     } = span;
     let mut sums = Sums::default();
+    let mut pending = Pending::new();
     for (n, &(j, f)) in column.iter().enumerate() {
         // The receivers are scattered over an array that no cache holds at 10⁵–10⁶ patches:
         // ask for the one AHEAD places on, so that the misses overlap.
@@ -261,13 +262,13 @@ fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<
         sums.add(f, a, rho, old, e);
         c.r = rj;
         if let Some(l) = &mut nodes {
-            l.set(cells, j, if RESIDUAL { e / a } else { e });
+            l.set(cells, j, if RESIDUAL { e / a } else { e }, &mut pending);
         }
     }
     // The max-tree above this span's blocks, while they are in the cache and in parallel
     // with the other spans.
     if let Some(l) = &mut nodes {
-        l.settle(column.iter().map(|&(j, _)| j as usize / MaxTree::BLOCK));
+        l.settle(&mut pending);
     }
     sums
 }

@@ -46,8 +46,6 @@ impl Keyed for f64 {
 pub struct Blocks {
     size: usize,
     node: Vec<(f64, u32)>,
-    /// Blocks whose node [`Nodes::set`] changed and no settle has yet carried up.
-    dirty: Vec<bool>,
 }
 
 /// Levels a tree over `u32` key indices can have: 2³² keys in blocks of 8 are 2²⁹ blocks.
@@ -61,7 +59,6 @@ impl Blocks {
         let mut tree = Self {
             size,
             node: vec![(f64::NEG_INFINITY, 0u32); 2 * size],
-            dirty: vec![false; blocks],
         };
         for b in 0..blocks {
             tree.node[size + b] = block_max(&keys[b * BLOCK..], b * BLOCK);
@@ -77,7 +74,6 @@ impl Blocks {
     /// [`Nodes::settle_across`]); [`Self::max`] is stale until the span this returns (or one it
     /// was split into, for the nodes it owns) is settled.
     pub fn nodes(&mut self) -> Nodes<'_> {
-        let blocks = self.dirty.len();
         let mut levels: [&mut [(f64, u32)]; LEVELS] = Default::default();
         // The heap's levels from the blocks (node[size..2 size]) up to the root (node[1..2]).
         let mut rest = &mut self.node[1..];
@@ -96,7 +92,6 @@ impl Blocks {
             hi: self.size,
             height: top,
             levels,
-            dirty: &mut self.dirty[..blocks],
         }
     }
 
@@ -240,7 +235,32 @@ pub struct Nodes<'a> {
     /// `levels[h]`: the nodes of height h whose 2^h blocks lie in `lo..hi`, from the first,
     /// node `lo.div_ceil(2^h)` of its level.
     levels: [&'a mut [(f64, u32)]; LEVELS],
-    dirty: &'a mut [bool],
+}
+
+/// The parents of the block nodes that [`Nodes::set`] changed and no [`Nodes::settle`] has yet
+/// carried up, ascending and distinct (keys are set in ascending order), in a fixed array: no
+/// allocation, and no second pass over the keys set to find the changed blocks. Carried up
+/// whenever it fills.
+#[derive(Debug)]
+pub struct Pending {
+    queue: [u32; Nodes::CHUNK],
+    n: usize,
+}
+
+impl Pending {
+    /// Nothing pending.
+    pub fn new() -> Self {
+        Self {
+            queue: [0; Nodes::CHUNK],
+            n: 0,
+        }
+    }
+}
+
+impl Default for Pending {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 /// The nodes of height `h` inside blocks `lo..hi`: from `lo.div_ceil(2^h)` to `hi >> h`.
@@ -273,8 +293,6 @@ impl<'a> Nodes<'a> {
             let skip = (right_start - left_end).min(rest.len());
             right[h] = &mut rest[skip..];
         }
-        let d = (m - self.lo).min(self.dirty.len());
-        let (d0, d1) = self.dirty.split_at_mut(d);
         (
             Nodes {
                 first: self.first,
@@ -282,7 +300,6 @@ impl<'a> Nodes<'a> {
                 hi: m,
                 height: self.height,
                 levels: left,
-                dirty: d0,
             },
             Nodes {
                 first: at,
@@ -290,7 +307,6 @@ impl<'a> Nodes<'a> {
                 hi: self.hi,
                 height: self.height,
                 levels: right,
-                dirty: d1,
             },
         )
     }
@@ -317,33 +333,16 @@ impl<'a> Nodes<'a> {
         }
     }
 
-    /// Carry the changes of the nodes of `blocks` (in ascending order, repeats allowed, all in
-    /// the span) up to the span's highest nodes, a level at a time, the parents of one level's
-    /// changed nodes recomputed together, each once, in ascending order: their reads do not
-    /// wait on one another as a walk from each block to the root would (at 10⁶ patches the
-    /// tree's lower levels are not in the cache). Up to [`Nodes::CHUNK`] blocks are carried at
-    /// once, with no allocation.
-    pub fn settle(&mut self, blocks: impl Iterator<Item = usize>) {
-        let mut queue = [0u32; Self::CHUNK];
-        let mut n = 0;
-        for b in blocks {
-            let d = b - self.lo;
-            if std::mem::take(&mut self.dirty[d]) {
-                if n > 0 && queue[n - 1] == (b / 2) as u32 {
-                    continue;
-                }
-                if n == Self::CHUNK {
-                    self.carry(&mut queue, n);
-                    n = 0;
-                }
-                queue[n] = (b / 2) as u32;
-                n += 1;
-            }
-        }
-        self.carry(&mut queue, n);
+    /// Carry the changes `pending` holds up to the span's highest nodes, a level at a time,
+    /// the parents of one level's changed nodes recomputed together, each once, in ascending
+    /// order: their reads do not wait on one another as a walk from each block to the root
+    /// would (at 10⁶ patches the tree's lower levels are not in the cache).
+    pub fn settle(&mut self, pending: &mut Pending) {
+        self.carry(&mut pending.queue, pending.n);
+        pending.n = 0;
     }
 
-    /// Blocks [`Self::settle`] carries up at once.
+    /// Changed blocks' parents [`Pending`] holds before they are carried up.
     pub const CHUNK: usize = 512;
 
     /// Recompute the nodes of height 1 in `queue[..n]` (ascending, distinct) and those above
@@ -384,15 +383,25 @@ impl<'a> Nodes<'a> {
         crate::hint::prefetch_at(self.levels[0], i.wrapping_sub(self.first) / BLOCK);
     }
 
-    /// Set key `i` (an index of the whole tree, inside the span) to `key` in `keys`, the keys
-    /// of the span (`keys[0]` is key `first`), and its block's node; the block is marked for
-    /// [`Self::settle`] if its node changed.
+    /// Set key `i` (an index of the whole tree, inside the span, at or past every key set
+    /// since `pending` was last settled) to `key` in `keys`, the keys of the span (`keys[0]` is
+    /// key `first`), and its block's node; if the node changed, its parent is added to
+    /// `pending` for [`Self::settle`] (and `pending` carried up first if it is full).
     #[inline(always)]
-    pub fn set<K: Keyed>(&mut self, keys: &mut [K], i: usize, key: f64) {
+    pub fn set<K: Keyed>(&mut self, keys: &mut [K], i: usize, key: f64, pending: &mut Pending) {
         let d = (i - self.first) / BLOCK;
         let node = &mut self.levels[0][d];
         if set_in_block(node, &mut keys[d * BLOCK..], self.first + d * BLOCK, i, key) {
-            self.dirty[d] = true;
+            let parent = ((self.lo + d) / 2) as u32;
+            if pending.n > 0 && pending.queue[pending.n - 1] == parent {
+                return;
+            }
+            debug_assert!(pending.n == 0 || pending.queue[pending.n - 1] < parent);
+            if pending.n == Self::CHUNK {
+                self.settle(pending);
+            }
+            pending.queue[pending.n] = parent;
+            pending.n += 1;
         }
     }
 }
@@ -524,11 +533,12 @@ mod tests {
         rng: &mut crate::sampling::Rng64,
     ) {
         if changes.len() <= 2 || uniform(rng) < 0.15 {
+            let mut pending = Pending::new();
             for &(i, key) in changes {
-                n.set(keys, i, key);
+                n.set(keys, i, key, &mut pending);
                 assert_eq!(keys[i - n.first()], key);
             }
-            n.settle(changes.iter().map(|&(i, _)| i / BLOCK));
+            n.settle(&mut pending);
             return;
         }
         let first = n.first();
@@ -568,7 +578,6 @@ mod tests {
                 set_in_spans(&mut blocks.nodes(), &mut keys, &changes, &mut rng);
                 let fresh = Blocks::new(&keys);
                 assert_eq!(blocks.node[1..], fresh.node[1..], "n = {n}");
-                assert!(blocks.dirty.iter().all(|d| !d));
                 let (k, j) = blocks.max();
                 assert_eq!((j, k), scan(&keys));
             }
