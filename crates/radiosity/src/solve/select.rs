@@ -558,11 +558,11 @@ mod tests {
     /// Keys set through spans split at random and settled apart (as [`super::super::relaxation`]
     /// does over threads) leave every node of the tree as a tree built afresh over the keys
     /// has it, so the arg-max is the linear scan's: keys that rise and fall, ties common, blocks
-    /// repeated, and more changed blocks than [`Nodes::settle`] carries at once.
+    /// repeated, and more changed blocks' parents than a [`Pending`] holds at once.
     #[test]
     fn nodes_set_and_settled_in_spans_are_the_tree_built_afresh() {
         let mut rng = stream(4, 0, 0, 0);
-        for n in [1usize, 8, 9, 64, 100, 1000, 5000] {
+        for n in [1usize, 8, 9, 64, 100, 1000, 5000, 20_000] {
             let mut keys: Vec<f64> = (0..n)
                 .map(|_| (uniform(&mut rng) * 8.0).floor() as f64)
                 .collect();
