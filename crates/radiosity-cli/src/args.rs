@@ -805,6 +805,11 @@ pub struct BenchArgs {
     /// `--scale`: keep every surface one-sided (see `solve --help`).
     #[arg(long, help_heading = SCENE)]
     pub one_sided: bool,
+    /// `--scale`: time the method's bookkeeping alone, in this process: solve each size once to
+    /// fill the row cache, then `--runs` more times on the cached rows (no rays), and print the
+    /// shots, the receivers updated and the median time of those solves.
+    #[arg(long, requires = "scale", help_heading = RUN)]
+    pub bookkeeping: bool,
     /// `--scale`: the solution method.
     #[arg(long, value_name = "M", value_enum, default_value = "progressive", help_heading = SOLVER)]
     pub solver: SolverArg,

@@ -4,6 +4,7 @@ mod accuracy;
 mod alloc;
 mod args;
 mod bench;
+mod bookkeeping;
 #[cfg(feature = "embree")]
 mod embree;
 mod experiment;

@@ -69,6 +69,9 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
     if sizes.is_empty() || sizes.contains(&0) {
         bail!("--sizes: patch counts must be positive");
     }
+    if a.bookkeeping {
+        return crate::bookkeeping::run(a, scene, sizes);
+    }
     let exe = std::env::current_exe().context("cannot find the radiosity executable")?;
     let dir = std::env::temp_dir().join(format!("radiosity-scale-{}", std::process::id()));
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;

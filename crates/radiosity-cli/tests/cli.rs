@@ -2762,6 +2762,24 @@ fn bench_scale_cornell(extra: &[&str], dir: &Path) -> (String, Vec<Vec<f64>>) {
     (text, rows)
 }
 
+/// What `solve cornell --patches SIZE --tolerance 0.05` prints.
+fn cornell_alone(size: &str, dir: &Path) -> String {
+    let solo = run(
+        &[
+            "solve",
+            "cornell",
+            "--patches",
+            size,
+            "--tolerance",
+            "0.05",
+            "--out",
+            "s.csv",
+        ],
+        dir,
+    );
+    succeed(&solo)
+}
+
 /// The exponent `name` on `bench --scale`'s last line; `None` where it reads "—".
 fn scale_exponent(text: &str, name: &str) -> Option<f64> {
     let line = text
@@ -2782,21 +2800,7 @@ fn bench_scale_reports_each_solve_and_fits_its_exponents() {
     let dir = scratch("bench-scale");
     let (text, rows) = bench_scale_cornell(&["--tolerance", "0.05"], &dir);
     for (row, size) in rows.iter().zip(["200", "800"]) {
-        let solo = run(
-            &[
-                "solve",
-                "cornell",
-                "--patches",
-                size,
-                "--tolerance",
-                "0.05",
-                "--out",
-                "s.csv",
-            ],
-            &dir,
-        );
-        assert!(solo.status.success());
-        let said = String::from_utf8_lossy(&solo.stdout).to_string();
+        let said = cornell_alone(size, &dir);
         let first = |key: &str| -> f64 {
             let line = said.lines().find(|l| l.starts_with(key)).unwrap();
             line[key.len()..]
@@ -2825,6 +2829,81 @@ fn bench_scale_reports_each_solve_and_fits_its_exponents() {
         assert!(!out.status.success() && err.contains("--sizes"), "{err}");
         assert_eq!(err.trim().lines().count(), 1, "{err}");
     }
+}
+
+/// `bench --scale … --bookkeeping`: each size is solved once, which fills the row cache, and
+/// then again on the cached rows. On the Cornell box at 5 % no row is estimated twice, so the
+/// solves on the cached rows take exactly the shots of `solve` run alone, and the rows counted
+/// are the rows it reports; every shot updates at least one receiver. A method that does not
+/// use rows is refused with a one-line error naming the option.
+#[test]
+fn bench_bookkeeping_replays_the_solve_on_cached_rows() {
+    let dir = scratch("bench-bookkeeping");
+    let out = run(
+        &[
+            "bench",
+            "--scale",
+            "cornell",
+            "--sizes",
+            "800",
+            "--bookkeeping",
+            "--runs",
+            "2",
+            "--tolerance",
+            "0.05",
+        ],
+        &dir,
+    );
+    let text = succeed(&out);
+    let row: Vec<f64> = text
+        .lines()
+        .filter_map(|l| {
+            let v: Result<Vec<f64>, _> = l.split_whitespace().map(str::parse).collect();
+            v.ok().filter(|v| v.len() == 7)
+        })
+        .next()
+        .unwrap_or_else(|| panic!("{text}"));
+    let said = cornell_alone("800", &dir);
+    let words = |key: &str| -> Vec<String> {
+        let line = said.lines().find(|l| l.starts_with(key)).unwrap();
+        line.split_whitespace().map(String::from).collect()
+    };
+    assert_eq!(
+        row[0],
+        words("patches ")[1].parse::<f64>().unwrap(),
+        "{text}\n{said}"
+    );
+    assert_eq!(
+        row[1],
+        words("iterations ")[1].parse::<f64>().unwrap(),
+        "{text}\n{said}"
+    );
+    // "rays        409726 in 729 form-factor rows"
+    assert_eq!(
+        row[3],
+        words("rays ")[3].parse::<f64>().unwrap(),
+        "{text}\n{said}"
+    );
+    assert!(row[2] >= row[1] && row[6] > 0.0, "{text}");
+    let out = run(
+        &[
+            "bench",
+            "--scale",
+            "cornell",
+            "--sizes",
+            "200",
+            "--bookkeeping",
+            "--solver",
+            "stochastic-jacobi",
+        ],
+        &dir,
+    );
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(
+        !out.status.success() && err.contains("--bookkeeping"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
 }
 
 /// Stochastic Jacobi casts its rays inside its solve: `solve` says how much of the solve

@@ -535,8 +535,10 @@ fn a_diagonal_handed_beside_the_row_is_the_one_searched_for() {
 /// a shooting method and for a sweeping one, and the pool is free for other work afterwards.
 #[test]
 fn solves_on_a_worker_match_solves_off_the_pool() {
-    // Rows of about 200 entries: shots update their receivers in parallel spans.
-    let mut r = section6(2000, 0.1, 0.8, 20, 11);
+    // Rows of about 800 entries: a shot halves its receivers (spans of over 512) and, with a
+    // second thread free, updates the halves at once; the energy sums are added by the same
+    // halving either way.
+    let mut r = section6(2000, 0.4, 0.8, 20, 11);
     let (sys, f) = r.parts();
     for method in [Solver::Progressive, Solver::GaussSeidel] {
         let params = SolverParams {
@@ -552,6 +554,14 @@ fn solves_on_a_worker_match_solves_off_the_pool() {
             let on = pool.install(|| solve(method, sys, f, &params).unwrap());
             assert_eq!(on.0, off.0, "{method:?} on {threads} threads");
             assert_eq!(on.1.iterations, off.1.iterations);
+            let books = |i: &radiosity::solve::Info| {
+                (i.absorbed, i.escaped, i.unshot, i.unshot_fraction.to_bits())
+            };
+            assert_eq!(
+                books(&on.1),
+                books(&off.1),
+                "{method:?} on {threads} threads"
+            );
             let sum: u64 = pool.install(|| {
                 use rayon::prelude::*;
                 (0..10_000u64).into_par_iter().sum()

@@ -9,6 +9,7 @@
 //! [`relaxation`] holds what the relaxation methods share. [`run`] drives any of them to a
 //! tolerance on the unshot (residual) energy.
 
+mod awake;
 pub mod gauss;
 pub mod gauss_seidel;
 pub mod jacobi;
@@ -394,8 +395,8 @@ pub fn run(
 ) -> Info {
     // Not for the methods whose steps are long parallel sweeps, where a spinning worker would
     // only add CPU time to their short serial parts.
-    let _awake =
-        (!matches!(solver.method(), Solver::StochasticJacobi | Solver::Gauss)).then(KeepAwake::new);
+    let _awake = (!matches!(solver.method(), Solver::StochasticJacobi | Solver::Gauss))
+        .then(awake::KeepAwake::new);
     let mut seconds = 0.0;
     let cap =
         params
@@ -448,53 +449,6 @@ pub fn run(
             );
             return info;
         }
-    }
-}
-
-/// While it lives, the other workers of the caller's thread pool look for work without ever
-/// going to sleep: each runs a job that takes whatever work the pool has
-/// (`rayon::yield_now`) and, when there is none, yields the core to the operating system
-/// (which hands it straight back unless another thread is waiting for it), until the guard is
-/// dropped.
-///
-/// Shooting methods alternate 10⁵–10⁶ times between a short parallel step (a row's rays, a
-/// shot's receivers) and a short serial one (choosing the next shooter). An idle rayon worker
-/// yields for a few tens of microseconds and then sleeps, so most parallel steps found the
-/// other worker asleep: its half of a shot's receivers waited for the kernel to wake it, and
-/// the caller had often finished both halves by then. Kept awake, it takes its half at once.
-/// Hospital, 400k patches, progressive: bookkeeping 8.9–10.5 → 7.9–9.3 s (three runs each,
-/// alternating), the same output. Only on a worker of a pool of two or more threads (the CLI
-/// runs its command on one); elsewhere nothing is started. The spinning shows as CPU time:
-/// CPU over wall time rises from about 1.84 to 1.96 on two threads.
-struct KeepAwake {
-    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
-}
-
-impl KeepAwake {
-    fn new() -> Self {
-        use std::sync::atomic::{AtomicBool, Ordering};
-        let stop = std::sync::Arc::new(AtomicBool::new(false));
-        if rayon::current_thread_index().is_some() {
-            for _ in 1..rayon::current_num_threads() {
-                let stop = stop.clone();
-                rayon::spawn(move || {
-                    while !stop.load(Ordering::Relaxed) {
-                        if rayon::yield_now() != Some(rayon::Yield::Executed) {
-                            // Give the core away if another thread wants it: with more
-                            // workers than cores, a pure spin would starve the solve.
-                            std::thread::yield_now();
-                        }
-                    }
-                });
-            }
-        }
-        Self { stop }
-    }
-}
-
-impl Drop for KeepAwake {
-    fn drop(&mut self) {
-        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
     }
 }
 

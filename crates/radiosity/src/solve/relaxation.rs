@@ -161,11 +161,12 @@ struct Span<'a> {
     nodes: Option<Nodes<'a>>,
 }
 
-/// A span of at most this many receivers is updated by one thread (and the max-tree above its
-/// blocks settled by it): 3–5 µs of work at 10⁵–10⁶ patches. Shorter spans hand more of a
-/// shot to the other thread but wait on it more often: on the hospital at 400k patches the
-/// receivers' update and settling took 3.2 s with spans of 512, 3.4 with 1,024, 3.8–5.1 with
-/// 128 and 3.8 s on one thread (docs/benchmarks.md).
+/// A span of more receivers than this is halved ([`halve`]), and the halves are updated by two
+/// threads at once when a second one is free: 3–5 µs of work at 10⁵–10⁶ patches. On the
+/// hospital at 400k patches the bookkeeping alone (`radiosity bench --scale … --bookkeeping`,
+/// two threads, alternating) took 1.59–1.62 s with spans of 512, 1.65–1.70 with 256 and
+/// 1.65–1.68 with 128; before the halves went through [`super::awake::join`], spans of 128
+/// were much slower than 512 (docs/benchmarks.md).
 const SPAN: usize = 512;
 
 /// How many receivers ahead of the one being updated [`update`] asks the cache for: enough
@@ -174,31 +175,40 @@ const SPAN: usize = 512;
 /// rounds: 3.5–4.4 s with 32 ahead, 3.9–5.5 s with 8; 64 no better than 32).
 const AHEAD: usize = 32;
 
+/// Where a span of receivers (its column entries, its first patch `first`) is halved: at the
+/// block boundary at or below its middle receiver, or the next one up if that is the span's
+/// start, so that both halves keep at least a quarter of the receivers. Returns the first entry
+/// of the right half and that block's first patch.
+fn halve(column: &[Entry], first: usize) -> (usize, usize) {
+    let middle = column[column.len() / 2].0 as usize;
+    let mut at = MaxTree::block_start(middle);
+    if at <= first {
+        at = MaxTree::block_start(middle + MaxTree::BLOCK);
+    }
+    // The first entry at or past `at`: a few steps from the middle (the column is sorted and a
+    // block holds few receivers), where a binary search would wait on a chain of cache misses
+    // in a column read from memory.
+    let mut k = column.len() / 2;
+    while k > 0 && column[k - 1].0 as usize >= at {
+        k -= 1;
+    }
+    while k < column.len() && (column[k].0 as usize) < at {
+        k += 1;
+    }
+    (k, at)
+}
+
 /// Update the receivers of `span` for a shot of `delta`: `r_j += ρ_j δ F_ji` and everything
-/// that follows from it. Spans longer than [`SPAN`] are halved at a block boundary near their
-/// middle receiver and the halves updated by `rayon::join`, so that the receivers' cache misses
-/// (arrays of 10⁶ patches do not fit in any cache) are shared by the threads; the sums of the
-/// halves are added left to right, so the result depends on the column only.
+/// that follows from it. Spans longer than [`SPAN`] are halved ([`halve`]), and while another
+/// thread is free ([`super::awake::can_split`]) the halves are updated at once
+/// ([`super::awake::join`]), so that the receivers' cache misses (arrays of 10⁶ patches do not
+/// fit in any cache) are shared by the threads. The sums are added by the same halving
+/// whether the halves ran at once or one after the other ([`Receivers::sums`]), so that they
+/// depend on the column only, never on the threads.
 fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<'_>) -> Sums {
     let (first, column) = (span.first, span.column);
-    if column.len() > SPAN {
-        // The block boundary at or below the middle receiver, or the next one up if that is
-        // the span's start: both halves keep at least a quarter of the receivers.
-        let middle = column[column.len() / 2].0 as usize;
-        let mut at = MaxTree::block_start(middle);
-        if at <= first {
-            at = MaxTree::block_start(middle + MaxTree::BLOCK);
-        }
-        // The first entry at or past `at`: a few steps from the middle (the column is sorted
-        // and a block holds few receivers), where a binary search would wait on a chain of
-        // cache misses in a column read from memory.
-        let mut k = column.len() / 2;
-        while k > 0 && column[k - 1].0 as usize >= at {
-            k -= 1;
-        }
-        while k < column.len() && (column[k].0 as usize) < at {
-            k += 1;
-        }
+    if column.len() > SPAN && super::awake::can_split() {
+        let (k, at) = halve(column, first);
         let (c0, c1) = span.cells.split_at_mut(at - first);
         let mut nodes = span.nodes;
         let (n0, n1) = match &mut nodes {
@@ -220,7 +230,7 @@ fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<
             cells: c1,
             nodes: n1,
         };
-        let (a, b) = rayon::join(
+        let (a, b) = super::awake::join(
             || update::<RESIDUAL>(delta, reciprocal, left),
             || update::<RESIDUAL>(delta, reciprocal, right),
         );
@@ -233,44 +243,96 @@ fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<
     let Span {
         cells, mut nodes, ..
     } = span;
-    let mut sums = Sums::default();
-    let mut pending = Pending::new();
-    for (n, &(j, f)) in column.iter().enumerate() {
-        // The receivers are scattered over an array that no cache holds at 10⁵–10⁶ patches:
-        // ask for the one AHEAD places on, so that the misses overlap.
-        if let Some(&(next, _)) = column.get(n + AHEAD) {
-            let next = next as usize;
-            hint::prefetch_at(cells, next - first);
-            if let Some(l) = &nodes {
-                l.prefetch(next);
-            }
-        }
-        let j = j as usize;
-        let c = &mut cells[j - first];
-        let (r, rho, a) = (c.r, c.rho, c.area);
-        let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
-        let rj = r + rho * delta * f;
-        let e = abs_sum(rj) * a;
-        // Progressive refinement's key is the receiver's unshot energy before the shot, set
-        // from its residual by this very expression.
-        let old = if !RESIDUAL && nodes.is_some() {
-            debug_assert_eq!(c.key, abs_sum(r) * a);
-            c.key
-        } else {
-            abs_sum(r) * a
-        };
-        sums.add(f, a, rho, old, e);
-        c.r = rj;
-        if let Some(l) = &mut nodes {
-            l.set(cells, j, if RESIDUAL { e / a } else { e }, &mut pending);
-        }
+    // The first receivers and lines of the column, which the loop's look-ahead does not
+    // cover: asked for here, by the thread that will use them (a line another core fetched
+    // sits in that core's cache, not in the shared one).
+    hint::prefetch(column.as_ptr(), column.len().div_ceil(8).min(4 * AHEAD / 8));
+    for &(j, _) in &column[..column.len().min(AHEAD)] {
+        hint::prefetch_at(cells, j as usize - first);
     }
+    let mut pending = Pending::new();
+    let mut receivers = Receivers::<RESIDUAL> {
+        delta,
+        reciprocal,
+        first,
+        column,
+        cells,
+        nodes: nodes.as_mut(),
+        pending: &mut pending,
+    };
+    let sums = receivers.sums(0, column.len(), first);
     // The max-tree above this span's blocks, while they are in the cache and in parallel
     // with the other spans.
     if let Some(l) = &mut nodes {
         l.settle(&mut pending);
     }
     sums
+}
+
+/// The receivers of a span that one thread updates, in order.
+struct Receivers<'a, 'b, const RESIDUAL: bool> {
+    delta: Rgb,
+    reciprocal: Option<f32>,
+    /// The first patch of `cells`.
+    first: usize,
+    column: &'a [Entry],
+    cells: &'a mut [Cell],
+    nodes: Option<&'b mut Nodes<'a>>,
+    pending: &'b mut Pending,
+}
+
+impl<const RESIDUAL: bool> Receivers<'_, '_, RESIDUAL> {
+    /// Update entries `lo..hi` of the column, a span whose first patch is `first`; their sums
+    /// added as [`update`] would add them if it ran the halves at once.
+    fn sums(&mut self, lo: usize, hi: usize, first: usize) -> Sums {
+        if hi - lo > SPAN {
+            let (k, at) = halve(&self.column[lo..hi], first);
+            let a = self.sums(lo, lo + k, first);
+            return a + self.sums(lo + k, hi, at);
+        }
+        self.update(lo, hi)
+    }
+
+    /// Update entries `lo..hi` of the column.
+    #[inline(always)]
+    fn update(&mut self, lo: usize, hi: usize) -> Sums {
+        let (delta, reciprocal, first) = (self.delta, self.reciprocal, self.first);
+        let (column, cells) = (self.column, &mut *self.cells);
+        let mut sums = Sums::default();
+        for n in lo..hi {
+            // The receivers are scattered over an array that no cache holds at 10⁵–10⁶
+            // patches: ask for the one AHEAD places on, so that the misses overlap. The column
+            // itself streams from memory (a row cached long ago): ask for it further ahead
+            // still, a line at a time.
+            if n % 8 == 0 {
+                hint::prefetch_at(column, n + 4 * AHEAD);
+            }
+            if let Some(&(next, _)) = column.get(n + AHEAD) {
+                hint::prefetch_at(cells, next as usize - first);
+            }
+            let (j, f) = column[n];
+            let j = j as usize;
+            let c = &mut cells[j - first];
+            let (r, rho, a) = (c.r, c.rho, c.area);
+            let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
+            let rj = r + rho * delta * f;
+            let e = abs_sum(rj) * a;
+            // Progressive refinement's key is the receiver's unshot energy before the shot,
+            // set from its residual by this very expression.
+            let old = if !RESIDUAL && self.nodes.is_some() {
+                debug_assert_eq!(c.key, abs_sum(r) * a);
+                c.key
+            } else {
+                abs_sum(r) * a
+            };
+            sums.add(f, a, rho, old, e);
+            c.r = rj;
+            if let Some(l) = &mut self.nodes {
+                l.set(cells, j, if RESIDUAL { e / a } else { e }, self.pending);
+            }
+        }
+        sums
+    }
 }
 
 fn abs_sum(c: Rgb) -> f64 {
@@ -438,6 +500,10 @@ impl<'s> Relaxation<'s> {
             Column::Reciprocal { .. } => Some(sys.area[i] as f32),
         };
         let column = column.entries();
+        // Ask for the column's first lines and its middle (where a split starts) while the
+        // shooter's own update below waits on its own misses.
+        hint::prefetch(column.as_ptr(), column.len().div_ceil(8).min(2 * AHEAD / 8));
+        hint::prefetch_at(column, column.len() / 2);
         self.x[i] += delta;
         let ri = self.cells[i].r - delta;
         self.set_r(i, ri);
