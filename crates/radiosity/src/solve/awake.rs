@@ -12,9 +12,9 @@
 //! spins until the helper is done. Each half is done by exactly one thread and the results are
 //! returned in the same order, so nothing computed depends on who did what.
 //!
-//! The only unsafe code of the library beside [`crate::hint`]: a posted half borrows from the
-//! poster's stack, which the helper may use only while [`join`] waits for it, as `rayon::join`
-//! does inside rayon.
+//! Besides the ray caster's and [`crate::hint`]'s, the library's only unsafe code: a posted
+//! half borrows from the poster's stack, which the helper may use only while [`join`] waits
+//! for it, as `rayon::join` does inside rayon.
 #![allow(unsafe_code)]
 
 use std::cell::{Cell, UnsafeCell};
@@ -179,8 +179,8 @@ fn run_posted(slot: &Slot) -> bool {
 }
 
 /// How long the helper polls its slot without finding work before it offers its core to the
-/// operating system once: long against the 1–10 µs between two shots, so that a posted half
-/// waits for a system call about once in a hundred.
+/// operating system once: long against the 1–10 µs between two shots, so that while shots
+/// follow one another the helper seldom sits in a system call when a half is posted.
 const SPIN: Duration = Duration::from_micros(40);
 
 /// While it lives, the other workers of the caller's thread pool look for work without ever
