@@ -66,13 +66,22 @@ enum Helper {
 }
 
 fn helper() -> Helper {
-    // SAFETY: HELPER is written only by `KeepAwake::new` and `drop` on this same thread,
-    // never while this reference is alive (it is cloned and dropped here).
-    match HELPER.with(|h| unsafe { (*h.get()).clone() }) {
-        None => Helper::None,
-        Some(_) if POSTING.with(Cell::get) => Helper::Busy,
-        Some(slot) => Helper::Free(slot),
-    }
+    HELPER.with(|h| {
+        // SAFETY: HELPER is written only by `KeepAwake::new` and `drop` on this same thread,
+        // never while this reference is alive (it ends inside this closure).
+        match unsafe { &*h.get() } {
+            None => Helper::None,
+            Some(_) if POSTING.with(Cell::get) => Helper::Busy,
+            Some(slot) => Helper::Free(slot.clone()),
+        }
+    })
+}
+
+/// Whether a [`KeepAwake`] created on this thread keeps a helper for it (without taking a
+/// reference to its slot, as [`helper`] does).
+fn has_helper() -> bool {
+    // SAFETY: see `helper`.
+    HELPER.with(|h| unsafe { (*h.get()).is_some() })
 }
 
 /// Whether a [`join`] from this thread could run its halves at once: false on one thread, and
@@ -81,11 +90,8 @@ fn helper() -> Helper {
 pub(crate) fn can_split() -> bool {
     match rayon::current_num_threads() {
         1 => false,
-        2 => match helper() {
-            Helper::Free(_) => true,
-            Helper::Busy => false,
-            Helper::None => !HELPING.with(Cell::get),
-        },
+        2 if has_helper() => !POSTING.with(Cell::get),
+        2 => !HELPING.with(Cell::get),
         _ => true,
     }
 }
