@@ -139,6 +139,7 @@ impl<'a> Estimator<'a> {
         }
         scratch.touched.sort_unstable();
         out.clear();
+        out.reserve_exact(scratch.touched.len());
         for &j in &scratch.touched {
             let v = std::mem::take(&mut scratch.accum[j as usize]);
             if v > 0.0 {

@@ -44,7 +44,8 @@ pub struct FormFactorStats {
     pub rows: u64,
     /// Rays cast.
     pub rays: u64,
-    /// Wall-clock seconds spent estimating rows.
+    /// Wall-clock seconds spent estimating rows and keeping them (a row on demand is stored
+    /// in the cache as part of its estimate).
     pub seconds: f64,
     /// Rows currently held in the cache.
     pub cached_rows: u64,

@@ -117,15 +117,19 @@ pub fn estimate_row(
         scratch.hit.resize(n_patches.div_ceil(64), 0);
         scratch.words.resize(n_patches.div_ceil(64 * 64), 0);
     }
+    let mut distinct = 0;
     for &h in &scratch.hits {
         if h != MISS {
             let h = h as usize;
             scratch.hit[h / 64] |= 1 << (h % 64);
             scratch.words[h / 4096] |= 1 << (h / 64 % 64);
+            distinct += (scratch.counts[h] == 0) as usize;
             scratch.counts[h] += 1;
         }
     }
     out.clear();
+    // Exactly the row's length, so that a caller can keep `out` itself as the row.
+    out.reserve_exact(distinct);
     let inv_n = 1.0 / n as f64;
     for (w, word) in scratch.words.iter_mut().enumerate() {
         let mut high = std::mem::take(word);
