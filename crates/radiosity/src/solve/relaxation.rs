@@ -293,45 +293,75 @@ impl<const RESIDUAL: bool> Receivers<'_, '_, RESIDUAL> {
         self.update(lo, hi)
     }
 
-    /// Update entries `lo..hi` of the column.
+    /// Update entries `lo..hi` of the column: one copy of the loop for each of the four
+    /// cases, so that the loop itself tests neither.
     #[inline(always)]
     fn update(&mut self, lo: usize, hi: usize) -> Sums {
-        let (delta, reciprocal, first) = (self.delta, self.reciprocal, self.first);
-        let (column, cells) = (self.column, &mut *self.cells);
+        match (self.reciprocal.is_some(), self.nodes.is_some()) {
+            (true, true) => self.run::<true, true>(lo, hi),
+            (true, false) => self.run::<true, false>(lo, hi),
+            (false, true) => self.run::<false, true>(lo, hi),
+            (false, false) => self.run::<false, false>(lo, hi),
+        }
+    }
+
+    /// [`Self::update`] where `RECIPROCAL` is whether the column is a row read by reciprocity
+    /// and `TREE` whether a shooter's tree is kept. The receivers are scattered over an array
+    /// that no cache holds at 10⁵–10⁶ patches: the loop asks for the one [`AHEAD`] places on,
+    /// so that the misses overlap, and for the column itself (a row cached long ago, read
+    /// from memory) further ahead still, a line at a time; the last [`AHEAD`] receivers,
+    /// already asked for, go without.
+    #[inline(always)]
+    fn run<const RECIPROCAL: bool, const TREE: bool>(&mut self, lo: usize, hi: usize) -> Sums {
         let mut sums = Sums::default();
-        for n in lo..hi {
-            // The receivers are scattered over an array that no cache holds at 10⁵–10⁶
-            // patches: ask for the one AHEAD places on, so that the misses overlap. The column
-            // itself streams from memory (a row cached long ago): ask for it further ahead
-            // still, a line at a time.
+        let asked = hi.saturating_sub(AHEAD).max(lo);
+        for n in lo..asked {
             if n % 8 == 0 {
-                hint::prefetch_at(column, n + 4 * AHEAD);
+                hint::prefetch_at(self.column, n + 4 * AHEAD);
             }
-            if let Some(&(next, _)) = column.get(n + AHEAD) {
-                hint::prefetch_at(cells, next as usize - first);
-            }
-            let (j, f) = column[n];
-            let j = j as usize;
-            let c = &mut cells[j - first];
-            let (r, rho, a) = (c.r, c.rho, c.area);
-            let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
-            let rj = r + rho * delta * f;
-            let e = abs_sum(rj) * a;
-            // Progressive refinement's key is the receiver's unshot energy before the shot,
-            // set from its residual by this very expression.
-            let old = if !RESIDUAL && self.nodes.is_some() {
-                debug_assert_eq!(c.key, abs_sum(r) * a);
-                c.key
-            } else {
-                abs_sum(r) * a
-            };
-            sums.add(f, a, rho, old, e);
-            c.r = rj;
-            if let Some(l) = &mut self.nodes {
-                l.set(cells, j, if RESIDUAL { e / a } else { e }, self.pending);
-            }
+            // A prefetch never faults: the receiver's index is checked where it is read.
+            let next = (self.column[n + AHEAD].0 as usize).wrapping_sub(self.first);
+            hint::prefetch(self.cells.as_ptr().wrapping_add(next), 1);
+            self.receiver::<RECIPROCAL, TREE>(n, &mut sums);
+        }
+        for n in asked..hi {
+            self.receiver::<RECIPROCAL, TREE>(n, &mut sums);
         }
         sums
+    }
+
+    /// Update receiver `column[n]`: `r_j += ρ_j δ F_ji`, its key, and `sums`.
+    #[inline(always)]
+    fn receiver<const RECIPROCAL: bool, const TREE: bool>(&mut self, n: usize, sums: &mut Sums) {
+        let (j, f) = self.column[n];
+        let j = j as usize;
+        let c = &mut self.cells[j - self.first];
+        let (r, rho, a) = (c.r, c.rho, c.area);
+        let f = if RECIPROCAL {
+            // `reciprocal` is Some whenever RECIPROCAL is true (`update`).
+            f * self.reciprocal.unwrap_or(0.0) / a as f32
+        } else {
+            f
+        } as f64;
+        let rj = r + rho * self.delta * f;
+        let e = abs_sum(rj) * a;
+        // Progressive refinement's key is the receiver's unshot energy before the shot,
+        // set from its residual by this very expression.
+        let key = c.key;
+        let old = if !RESIDUAL && TREE {
+            debug_assert_eq!(key, abs_sum(r) * a);
+            key
+        } else {
+            abs_sum(r) * a
+        };
+        sums.add(f, a, rho, old, e);
+        c.r = rj;
+        if TREE {
+            if let Some(l) = &mut self.nodes {
+                let new = if RESIDUAL { e / a } else { e };
+                l.set_from(self.cells, j, key, new, self.pending);
+            }
+        }
     }
 }
 

@@ -393,17 +393,57 @@ impl<'a> Nodes<'a> {
         let d = (i - self.first) / BLOCK;
         let node = &mut self.levels[0][d];
         if set_in_block(node, &mut keys[d * BLOCK..], self.first + d * BLOCK, i, key) {
-            let parent = ((self.lo + d) / 2) as u32;
-            if pending.n > 0 && pending.queue[pending.n - 1] == parent {
-                return;
-            }
-            debug_assert!(pending.n == 0 || pending.queue[pending.n - 1] < parent);
-            if pending.n == Self::CHUNK {
-                self.settle(pending);
-            }
-            pending.queue[pending.n] = parent;
-            pending.n += 1;
+            self.changed(d, pending);
         }
+    }
+
+    /// [`Self::set`] where the caller knows the key's value before, `old`: a key that rises
+    /// (a receiver's, in progressive refinement always) changes its block's node only if it
+    /// beats it, which is decided without the block's other keys and the checks that a
+    /// falling key needs. Hospital at 10⁵ patches, progressive refinement's bookkeeping
+    /// alone (`radiosity bench --scale … --bookkeeping`, one thread, five rounds alternating):
+    /// a median of 6.06 ns an update with this and one loop per case in
+    /// [`super::relaxation`], 6.29 ns before.
+    #[inline(always)]
+    pub fn set_from<K: Keyed>(
+        &mut self,
+        keys: &mut [K],
+        i: usize,
+        old: f64,
+        key: f64,
+        pending: &mut Pending,
+    ) {
+        let k = i - self.first;
+        debug_assert_eq!(keys[k].key(), old);
+        if key.partial_cmp(&old) != Some(std::cmp::Ordering::Greater) {
+            return self.set(keys, i, key, pending);
+        }
+        keys[k].set_key(key);
+        let d = k / BLOCK;
+        let node = &mut self.levels[0][d];
+        // The node held this key (then `old`, now beaten) or a larger one; ties go to the
+        // lower index, as in `set_in_block`.
+        let me = i as u32;
+        if key > node.0 || (key == node.0 && me < node.1) {
+            *node = (key, me);
+            self.changed(d, pending);
+        }
+    }
+
+    /// Block `d` of the span changed its node: its parent is added to `pending` (carried up
+    /// first if it is full).
+    #[inline(always)]
+    fn changed(&mut self, d: usize, pending: &mut Pending) {
+        let parent = ((self.lo + d) / 2) as u32;
+        if pending.n > 0 && pending.queue[pending.n - 1] == parent {
+            return;
+        }
+        debug_assert!(pending.n == 0 || pending.queue[pending.n - 1] < parent);
+        if pending.n == Self::CHUNK {
+            self.settle(pending);
+        }
+        pending.queue[pending.n] = parent;
+        pending.n += 1;
     }
 }
 
@@ -536,7 +576,13 @@ mod tests {
         if changes.len() <= 2 || uniform(rng) < 0.15 {
             let mut pending = Pending::new();
             for &(i, key) in changes {
-                n.set(keys, i, key, &mut pending);
+                // Either way of setting a key, `set_from` with the key it replaces.
+                if uniform(rng) < 0.5 {
+                    n.set(keys, i, key, &mut pending);
+                } else {
+                    let old = keys[i - n.first()];
+                    n.set_from(keys, i, old, key, &mut pending);
+                }
                 assert_eq!(keys[i - n.first()], key);
             }
             n.settle(&mut pending);
@@ -559,7 +605,8 @@ mod tests {
     /// Keys set through spans split at random and settled apart (as [`super::super::relaxation`]
     /// does over threads) leave every node of the tree as a tree built afresh over the keys
     /// has it, so the arg-max is the linear scan's: keys that rise and fall, ties common, blocks
-    /// repeated, and more changed blocks' parents than a [`Pending`] holds at once.
+    /// repeated, and more changed blocks' parents than a [`Pending`] holds at once; keys set
+    /// by [`Nodes::set`] and by [`Nodes::set_from`] mixed.
     #[test]
     fn nodes_set_and_settled_in_spans_are_the_tree_built_afresh() {
         let mut rng = stream(4, 0, 0, 0);
