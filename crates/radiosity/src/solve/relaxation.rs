@@ -608,6 +608,15 @@ impl<'s> Relaxation<'s> {
 
     /// Relax `x_i` with factor ω: `x_i += ω r_i / M_ii`. Returns false if `r_i` was zero.
     pub fn relax(&mut self, i: usize, omega: f64, source: &mut dyn Operator) -> bool {
+        if matches!(self.select, Select::Energy(_) | Select::Residual(_)) {
+            // The shooter's key falls, and its block of the max-tree is scanned again
+            // ([`Self::set_r`]): its 64 records are asked for now, while the row is found
+            // (hospital, 400,555 patches, bookkeeping alone on two threads: a median of
+            // 1.51 s in five alternating runs, 1.65 s without).
+            let first = MaxTree::block_start(i);
+            let lines = (self.cells.len() - first).min(MaxTree::BLOCK);
+            hint::prefetch(self.cells[first..].as_ptr(), lines);
+        }
         let r = self.cells[i].r;
         if r == Rgb::BLACK {
             self.iterations += 1;
