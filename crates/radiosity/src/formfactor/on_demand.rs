@@ -184,6 +184,8 @@ impl Operator for OnDemandRows<'_> {
         crate::system::Column::Reciprocal {
             row: self.row_slice(i, cached),
             diagonal: Some(diagonal),
+            // Every estimate of row i has a version of its own, the last one the row in hand.
+            id: Some(self.versions[i] as u64),
         }
     }
 

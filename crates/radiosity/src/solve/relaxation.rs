@@ -12,7 +12,7 @@
 //! and `1 − ρ_j` is absorbed; the rest escapes. Then emitted = absorbed + escaped + Σ r_i A_i
 //! holds exactly at every step (the terms cancel in pairs), also for negative δ.
 
-use super::select::{AmbientTree, Blocks, Keyed, MaxTree, Nodes, Pending};
+use super::select::{AmbientTree, Blocks, Keyed, MaxTree, Nodes, Pending, Setter};
 use super::{Info, Operator, System};
 use crate::color::Rgb;
 use crate::hint;
@@ -62,32 +62,73 @@ pub struct Relaxation<'s> {
     pub iterations: u64,
     updates: u64,
     select: Select,
+    row_sums: RowSums,
 }
 
-/// One patch as a shot's update reads and writes it: its residual, reflectance, area and key
-/// in the shooter's max-tree, in one cache line. At 10⁵–10⁶ patches no cache holds the
-/// patches, and a receiver scattered over four arrays cost four cache misses where this costs
-/// one; the memory is the same (64 bytes a patch).
+/// One patch as a shot's update reads and writes it: its reflectance and area, its residual
+/// and its key in the shooter's max-tree, in one cache line. At 10⁵–10⁶ patches no cache
+/// holds the patches, and a receiver scattered over four arrays cost four cache misses where
+/// this costs one; the memory is the same (64 bytes a patch).
+///
+/// The halves are what a receiver reads, `(ρ, A)`, and what it writes, `(r, key)`, one
+/// store of 32 bytes.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 struct Cell {
-    r: Rgb,
-    rho: Rgb,
-    area: f64,
-    /// The shooter's key ([`SelectKind::Energy`] or [`SelectKind::Residual`]), else unused.
-    key: f64,
+    /// ρ per channel, then the area.
+    rho_area: [f64; 4],
+    /// The residual per channel, then the shooter's key ([`SelectKind::Energy`] or
+    /// [`SelectKind::Residual`]; else unused).
+    r_key: [f64; 4],
 }
 
 const _: () = assert!(std::mem::size_of::<Cell>() == 64);
 
+impl Cell {
+    fn new(r: Rgb, rho: Rgb, area: f64) -> Self {
+        Self {
+            rho_area: [rho.r, rho.g, rho.b, area],
+            r_key: [r.r, r.g, r.b, 0.0],
+        }
+    }
+
+    #[inline(always)]
+    fn r(&self) -> Rgb {
+        let [r, g, b, _] = self.r_key;
+        Rgb::new(r, g, b)
+    }
+
+    #[inline(always)]
+    fn set_r(&mut self, r: Rgb) {
+        self.r_key[..3].copy_from_slice(&[r.r, r.g, r.b]);
+    }
+
+    #[inline(always)]
+    fn rho(&self) -> Rgb {
+        let [r, g, b, _] = self.rho_area;
+        Rgb::new(r, g, b)
+    }
+
+    #[inline(always)]
+    fn area(&self) -> f64 {
+        self.rho_area[3]
+    }
+
+    /// `|r|₁ A`, the unshot energy.
+    #[inline(always)]
+    fn energy(&self) -> f64 {
+        abs_sum(self.r()) * self.area()
+    }
+}
+
 impl Keyed for Cell {
     #[inline]
     fn key(&self) -> f64 {
-        self.key
+        self.r_key[3]
     }
     #[inline]
     fn set_key(&mut self, key: f64) {
-        self.key = key;
+        self.r_key[3] = key;
     }
 }
 
@@ -119,36 +160,102 @@ enum Select {
 /// of δ, the power arriving is `δ Σ F_ji A_j`, the part of it reflected (which stays unshot,
 /// the change of Σ r_j A_j) `δ Σ ρ_j F_ji A_j`, and the rest is absorbed, so that two sums
 /// serve all three.
+///
+/// The first two are kept as one 4-vector, `Σ (ρ_j, 1) F_ji A_j`, which a receiver adds with
+/// one multiply and one add of four lanes: hospital at 10⁵ patches, progressive refinement's
+/// bookkeeping alone on one thread took 15 % less time without the two sums at all, and their
+/// shuffling into vectors was most of that.
 #[derive(Clone, Copy, Debug, Default)]
 struct Sums {
-    /// Σ F_ji A_j.
-    fa: f64,
-    /// Σ ρ_j F_ji A_j.
-    rho_fa: Rgb,
+    /// Σ ρ_j F_ji A_j per channel, then Σ F_ji A_j.
+    fa: [f64; 4],
     /// Change of Σ |r_j| A_j.
     abs: f64,
 }
 
 impl Sums {
-    /// Receiver j with column entry `f` = F_ji, area `a`, reflectance `rho`, and unshot energy
-    /// `|r_j|₁ A_j` from `old` to `new`.
+    /// Receiver j with column entry `f` = F_ji, reflectance and area `(ρ_j, A_j)` = `rho_area`,
+    /// and unshot energy `|r_j|₁ A_j` from `old` to `new`.
+    /// `FA`: whether to add to [`Self::fa`] (not when the row's are known already).
     #[inline(always)]
-    fn add(&mut self, f: f64, a: f64, rho: Rgb, old: f64, new: f64) {
-        let fa = f * a;
-        self.fa += fa;
-        self.rho_fa += rho * fa;
+    fn add<const FA: bool>(&mut self, f: f64, rho_area: [f64; 4], old: f64, new: f64) {
+        if FA {
+            let fa = f * rho_area[3];
+            let w = [rho_area[0], rho_area[1], rho_area[2], 1.0];
+            for (s, w) in self.fa.iter_mut().zip(w) {
+                *s += w * fa;
+            }
+        }
         self.abs += new - old;
+    }
+
+    /// Σ F_ji A_j.
+    fn arrived(&self) -> f64 {
+        self.fa[3]
+    }
+
+    /// Σ ρ_j F_ji A_j.
+    fn reflected(&self) -> Rgb {
+        Rgb::new(self.fa[0], self.fa[1], self.fa[2])
     }
 }
 
 impl std::ops::Add for Sums {
     type Output = Sums;
     fn add(self, o: Sums) -> Sums {
+        let mut fa = self.fa;
+        for (s, o) in fa.iter_mut().zip(o.fa) {
+            *s += o;
+        }
         Sums {
-            fa: self.fa + o.fa,
-            rho_fa: self.rho_fa + o.rho_fa,
+            fa,
             abs: self.abs + o.abs,
         }
+    }
+}
+
+/// Per patch, the [`Sums::fa`] of the last row it shot with an id ([`Column::id`]), under
+/// that id: a row shot again (most shots reuse a cached row: 64 % on the hospital at 10⁵
+/// patches) gives the same sums, added in the same order, so they are kept rather than added
+/// again by every receiver. Hospital, 10⁵ patches, progressive refinement's bookkeeping alone
+/// on one thread: 14 % less time with no receiver adding them (4.4 against 5.2 ns an update,
+/// four alternating runs). 40 bytes a patch, from the first row with an id on.
+#[derive(Clone, Debug, Default)]
+struct RowSums {
+    /// `(id, fa)`, `u64::MAX` for none.
+    rows: Vec<(u64, [f64; 4])>,
+}
+
+impl RowSums {
+    /// Row i's sums, if its row `id` is the one kept.
+    fn get(&self, i: usize, id: Option<u64>) -> Option<[f64; 4]> {
+        let id = id?;
+        match self.rows.get(i) {
+            Some(&(kept, fa)) if kept == id && id != u64::MAX => Some(fa),
+            _ => None,
+        }
+    }
+
+    /// The shot's sums: the `known` ones in place of the receivers' (which did not add
+    /// them), or the receivers', kept under `id` for patch i of `n`.
+    fn keep(
+        &mut self,
+        (i, n): (usize, usize),
+        id: Option<u64>,
+        known: Option<[f64; 4]>,
+        mut sums: Sums,
+    ) -> Sums {
+        match (known, id) {
+            (Some(fa), _) => sums.fa = fa,
+            (None, Some(id)) => {
+                if self.rows.len() != n {
+                    self.rows = vec![(u64::MAX, [0.0; 4]); n];
+                }
+                self.rows[i] = (id, sums.fa);
+            }
+            (None, None) => {}
+        }
+        sums
     }
 }
 
@@ -168,6 +275,9 @@ struct Span<'a> {
 /// 1.65–1.68 with 128; before the halves went through [`super::awake::join`], spans of 128
 /// were much slower than 512 (docs/benchmarks.md).
 const SPAN: usize = 512;
+
+// A span short enough to update is one [`Setter`] can take.
+const _: () = assert!(SPAN <= Nodes::CHUNK);
 
 /// How many receivers ahead of the one being updated [`update`] asks the cache for: enough
 /// misses in flight to cover a trip to memory, where at 4 × 10⁵ patches and more the records do
@@ -205,7 +315,11 @@ fn halve(column: &[Entry], first: usize) -> (usize, usize) {
 /// fit in any cache) are shared by the threads. The sums are added by the same halving
 /// whether the halves ran at once or one after the other ([`Receivers::sums`]), so that they
 /// depend on the column only, never on the threads.
-fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<'_>) -> Sums {
+fn update<const RESIDUAL: bool, const FA: bool>(
+    delta: Rgb,
+    reciprocal: Option<f32>,
+    span: Span<'_>,
+) -> Sums {
     let (first, column) = (span.first, span.column);
     if column.len() > SPAN && super::awake::can_split() {
         let (k, at) = halve(column, first);
@@ -231,8 +345,8 @@ fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<
             nodes: n1,
         };
         let (a, b) = super::awake::join(
-            || update::<RESIDUAL>(delta, reciprocal, left),
-            || update::<RESIDUAL>(delta, reciprocal, right),
+            || update::<RESIDUAL, FA>(delta, reciprocal, left),
+            || update::<RESIDUAL, FA>(delta, reciprocal, right),
         );
         // The halves settled the tree above their own blocks; what straddles them is ours.
         if let Some(n) = &mut nodes {
@@ -251,7 +365,7 @@ fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<
         hint::prefetch_at(cells, j as usize - first);
     }
     let mut pending = Pending::new();
-    let mut receivers = Receivers::<RESIDUAL> {
+    let mut receivers = Receivers::<RESIDUAL, FA> {
         delta,
         reciprocal,
         first,
@@ -270,7 +384,7 @@ fn update<const RESIDUAL: bool>(delta: Rgb, reciprocal: Option<f32>, span: Span<
 }
 
 /// The receivers of a span that one thread updates, in order.
-struct Receivers<'a, 'b, const RESIDUAL: bool> {
+struct Receivers<'a, 'b, const RESIDUAL: bool, const FA: bool> {
     delta: Rgb,
     reciprocal: Option<f32>,
     /// The first patch of `cells`.
@@ -281,7 +395,7 @@ struct Receivers<'a, 'b, const RESIDUAL: bool> {
     pending: &'b mut Pending,
 }
 
-impl<const RESIDUAL: bool> Receivers<'_, '_, RESIDUAL> {
+impl<const RESIDUAL: bool, const FA: bool> Receivers<'_, '_, RESIDUAL, FA> {
     /// Update entries `lo..hi` of the column, a span whose first patch is `first`; their sums
     /// added as [`update`] would add them if it ran the halves at once.
     fn sums(&mut self, lo: usize, hi: usize, first: usize) -> Sums {
@@ -293,75 +407,143 @@ impl<const RESIDUAL: bool> Receivers<'_, '_, RESIDUAL> {
         self.update(lo, hi)
     }
 
-    /// Update entries `lo..hi` of the column: one copy of the loop for each of the four
-    /// cases, so that the loop itself tests neither.
+    /// Update entries `lo..hi` of the column ([`SPAN`] at most): one copy of the loop for each
+    /// of the four cases, so that the loop itself tests neither.
     #[inline(always)]
     fn update(&mut self, lo: usize, hi: usize) -> Sums {
-        match (self.reciprocal.is_some(), self.nodes.is_some()) {
-            (true, true) => self.run::<true, true>(lo, hi),
-            (true, false) => self.run::<true, false>(lo, hi),
-            (false, true) => self.run::<false, true>(lo, hi),
-            (false, false) => self.run::<false, false>(lo, hi),
+        let column = &self.column[lo..hi];
+        let cells = &mut *self.cells;
+        let (delta, first) = (self.delta, self.first);
+        match (self.reciprocal, &mut self.nodes) {
+            (Some(ai), Some(n)) => {
+                let tree = n.setter(self.pending, column.len());
+                run::<RESIDUAL, FA, true, true>(delta, ai, first, column, cells, tree)
+            }
+            (Some(ai), None) => {
+                run::<RESIDUAL, FA, true, false>(delta, ai, first, column, cells, ())
+            }
+            (None, Some(n)) => {
+                let tree = n.setter(self.pending, column.len());
+                run::<RESIDUAL, FA, false, true>(delta, 0.0, first, column, cells, tree)
+            }
+            (None, None) => run::<RESIDUAL, FA, false, false>(delta, 0.0, first, column, cells, ()),
         }
     }
+}
 
-    /// [`Self::update`] where `RECIPROCAL` is whether the column is a row read by reciprocity
-    /// and `TREE` whether a shooter's tree is kept. The receivers are scattered over an array
-    /// that no cache holds at 10⁵–10⁶ patches: the loop asks for the one [`AHEAD`] places on,
-    /// so that the misses overlap, and for the column itself (a row cached long ago, read
-    /// from memory) further ahead still, a line at a time; the last [`AHEAD`] receivers,
-    /// already asked for, go without.
+/// Where a receiver's new key goes: a span's block nodes ([`Setter`]), or nowhere when no
+/// shooter's tree is kept.
+trait Tree {
+    /// Key `i`, stored in `cells`, is now `key`, larger than before ([`Setter::rose`]).
+    fn rose(&mut self, i: usize, key: f64);
+    /// Set key `i` of `cells` to `key` ([`Setter::set`]).
+    fn set(&mut self, cells: &mut [Cell], i: usize, key: f64);
+}
+
+impl Tree for Setter<'_> {
     #[inline(always)]
-    fn run<const RECIPROCAL: bool, const TREE: bool>(&mut self, lo: usize, hi: usize) -> Sums {
-        let mut sums = Sums::default();
-        let asked = hi.saturating_sub(AHEAD).max(lo);
-        for n in lo..asked {
-            if n % 8 == 0 {
-                hint::prefetch_at(self.column, n + 4 * AHEAD);
-            }
-            // A prefetch never faults: the receiver's index is checked where it is read.
-            let next = (self.column[n + AHEAD].0 as usize).wrapping_sub(self.first);
-            hint::prefetch(self.cells.as_ptr().wrapping_add(next), 1);
-            self.receiver::<RECIPROCAL, TREE>(n, &mut sums);
-        }
-        for n in asked..hi {
-            self.receiver::<RECIPROCAL, TREE>(n, &mut sums);
-        }
-        sums
+    fn rose(&mut self, i: usize, key: f64) {
+        Setter::rose(self, i, key);
     }
-
-    /// Update receiver `column[n]`: `r_j += ρ_j δ F_ji`, its key, and `sums`.
     #[inline(always)]
-    fn receiver<const RECIPROCAL: bool, const TREE: bool>(&mut self, n: usize, sums: &mut Sums) {
-        let (j, f) = self.column[n];
-        let j = j as usize;
-        let c = &mut self.cells[j - self.first];
-        let (r, rho, a) = (c.r, c.rho, c.area);
-        let f = if RECIPROCAL {
-            // `reciprocal` is Some whenever RECIPROCAL is true (`update`).
-            f * self.reciprocal.unwrap_or(0.0) / a as f32
-        } else {
-            f
-        } as f64;
-        let rj = r + rho * self.delta * f;
-        let e = abs_sum(rj) * a;
-        // Progressive refinement's key is the receiver's unshot energy before the shot,
-        // set from its residual by this very expression.
-        let key = c.key;
-        let old = if !RESIDUAL && TREE {
-            debug_assert_eq!(key, abs_sum(r) * a);
-            key
-        } else {
-            abs_sum(r) * a
-        };
-        sums.add(f, a, rho, old, e);
-        c.r = rj;
-        if TREE {
-            if let Some(l) = &mut self.nodes {
-                let new = if RESIDUAL { e / a } else { e };
-                l.set_from(self.cells, j, key, new, self.pending);
-            }
+    fn set(&mut self, cells: &mut [Cell], i: usize, key: f64) {
+        Setter::set(self, cells, i, key);
+    }
+}
+
+impl Tree for () {
+    #[inline(always)]
+    fn rose(&mut self, _: usize, _: f64) {}
+    #[inline(always)]
+    fn set(&mut self, _: &mut [Cell], _: usize, _: f64) {}
+}
+
+/// The receivers `column` of a shot of `delta`, their records `cells` from patch `first` on,
+/// where `RECIPROCAL` says whether the column is a row read by reciprocity (then `ai` is the
+/// shooter's area) and `TREE` whether a shooter's tree is kept (`tree`). The receivers are
+/// scattered over an array that no cache holds at 10⁵–10⁶ patches: the loop asks for the one
+/// [`AHEAD`] places on, so that the misses overlap, and for the column itself (a row cached
+/// long ago, read from memory) further ahead still, a line at a time; the last [`AHEAD`]
+/// receivers, already asked for, go without.
+///
+/// Everything the loop reads besides the column and the records is in locals, and the look-
+/// ahead zips the column with itself, so that the compiler keeps bases and bounds in
+/// registers. The loop is bound by its instructions more than by memory: a 32-byte record of
+/// `f32`s, half the lines, was slower for its conversions; 16, 32 or 64 receivers ahead
+/// made no difference at 10⁵ patches; and a receiver that did not add the row's sums
+/// ([`RowSums`]) took 14 % less time.
+#[inline(always)]
+fn run<const RESIDUAL: bool, const FA: bool, const RECIPROCAL: bool, const TREE: bool>(
+    delta: Rgb,
+    ai: f32,
+    first: usize,
+    column: &[Entry],
+    cells: &mut [Cell],
+    mut tree: impl Tree,
+) -> Sums {
+    let mut sums = Sums::default();
+    let ahead = column.get(AHEAD..).unwrap_or(&[]);
+    for (n, (&now, next)) in column.iter().zip(ahead).enumerate() {
+        if n % 8 == 0 {
+            hint::prefetch(column.as_ptr().wrapping_add(n + 4 * AHEAD), 1);
         }
+        // A prefetch never faults: the receiver's index is checked where it is read.
+        let next = (next.0 as usize).wrapping_sub(first);
+        hint::prefetch(cells.as_ptr().wrapping_add(next), 1);
+        receiver::<RESIDUAL, FA, RECIPROCAL, TREE>(
+            delta, ai, first, now, cells, &mut tree, &mut sums,
+        );
+    }
+    for &now in &column[ahead.len()..] {
+        receiver::<RESIDUAL, FA, RECIPROCAL, TREE>(
+            delta, ai, first, now, cells, &mut tree, &mut sums,
+        );
+    }
+    sums
+}
+
+/// Update receiver `(j, f)` of [`run`]: `r_j += ρ_j δ F_ji`, its key, and `sums` (the
+/// row's [`Sums::fa`] only if `FA`).
+#[inline(always)]
+fn receiver<const RESIDUAL: bool, const FA: bool, const RECIPROCAL: bool, const TREE: bool>(
+    delta: Rgb,
+    ai: f32,
+    first: usize,
+    (j, f): Entry,
+    cells: &mut [Cell],
+    tree: &mut impl Tree,
+    sums: &mut Sums,
+) {
+    let j = j as usize;
+    let c = &mut cells[j - first];
+    let (r, rho, a, key) = (c.r(), c.rho(), c.area(), c.key());
+    let f = if RECIPROCAL { f * ai / a as f32 } else { f } as f64;
+    let rj = r + rho * delta * f;
+    let e = abs_sum(rj) * a;
+    // Progressive refinement's key is the receiver's unshot energy before the shot,
+    // set from its residual by this very expression.
+    let old = if !RESIDUAL && TREE {
+        debug_assert_eq!(key, abs_sum(r) * a);
+        key
+    } else {
+        abs_sum(r) * a
+    };
+    sums.add::<FA>(f, c.rho_area, old, e);
+    let mut nv = [rj.r, rj.g, rj.b, key];
+    if TREE {
+        let new = if RESIDUAL { e / a } else { e };
+        // A key that rises (a receiver's, in progressive refinement always) is stored with
+        // the residual, and its block's node compared with it alone (`Setter::set_from`).
+        if new.partial_cmp(&key) == Some(std::cmp::Ordering::Greater) {
+            nv[3] = new;
+            c.r_key = nv;
+            tree.rose(j, new);
+        } else {
+            c.r_key = nv;
+            tree.set(cells, j, new);
+        }
+    } else {
+        c.r_key = nv;
     }
 }
 
@@ -375,14 +557,9 @@ impl<'s> Relaxation<'s> {
         let n = system.len();
         let emitted = system.emitted_power();
         let cells: Vec<Cell> = (0..n)
-            .map(|i| Cell {
-                r: system.emission[i],
-                rho: system.reflectance[i],
-                area: system.area[i],
-                key: 0.0,
-            })
+            .map(|i| Cell::new(system.emission[i], system.reflectance[i], system.area[i]))
             .collect();
-        let energy = cells.iter().map(|c| abs_sum(c.r) * c.area);
+        let energy = cells.iter().map(Cell::energy);
         Self {
             x: vec![Rgb::BLACK; n],
             signed_unshot: emitted,
@@ -395,6 +572,7 @@ impl<'s> Relaxation<'s> {
             iterations: 0,
             updates: 0,
             select: Select::None,
+            row_sums: RowSums::default(),
             system,
         }
     }
@@ -406,7 +584,7 @@ impl<'s> Relaxation<'s> {
         let (absorbed, escaped, _, _) = crate::system::balance(system, source, &s.x);
         let r = crate::system::residual(system, source, &s.x);
         for (c, r) in s.cells.iter_mut().zip(r) {
-            c.r = r;
+            c.set_r(r);
         }
         s.absorbed = absorbed;
         s.escaped = escaped;
@@ -431,19 +609,19 @@ impl<'s> Relaxation<'s> {
             Select::None => {}
             Select::Energy(t) => {
                 for c in cells.iter_mut() {
-                    c.key = abs_sum(c.r) * c.area;
+                    c.set_key(c.energy());
                 }
                 *t = Blocks::new(cells);
             }
             Select::Residual(t) => {
                 // `e / a` as a shot computes it, so that keys compare bit for bit.
                 for c in cells.iter_mut() {
-                    c.key = abs_sum(c.r) * c.area / c.area;
+                    c.set_key(c.energy() / c.area());
                 }
                 *t = Blocks::new(cells);
             }
             Select::Ambient(t) => {
-                let r: Vec<Rgb> = cells.iter().map(|c| c.r).collect();
+                let r: Vec<Rgb> = cells.iter().map(Cell::r).collect();
                 *t = AmbientTree::new(&r, &sys.reflectance, &sys.area);
             }
         }
@@ -461,8 +639,8 @@ impl<'s> Relaxation<'s> {
             Select::Ambient(t) => {
                 let cells = &self.cells;
                 t.argmax(ambient, |i| {
-                    let a = cells[i].r + cells[i].rho * ambient;
-                    (a.r.abs() + a.g.abs() + a.b.abs()) * cells[i].area
+                    let a = cells[i].r() + cells[i].rho() * ambient;
+                    (a.r.abs() + a.g.abs() + a.b.abs()) * cells[i].area()
                 })
             }
         }
@@ -472,18 +650,18 @@ impl<'s> Relaxation<'s> {
     /// array fewer to keep and to miss in the cache).
     #[inline]
     pub fn energy(&self, i: usize) -> f64 {
-        abs_sum(self.cells[i].r) * self.cells[i].area
+        self.cells[i].energy()
     }
 
     /// Patch i's residual `r_i`.
     #[inline]
     pub fn r(&self, i: usize) -> Rgb {
-        self.cells[i].r
+        self.cells[i].r()
     }
 
     /// The residuals, in patch order.
     pub fn residuals(&self) -> impl ExactSizeIterator<Item = Rgb> + '_ {
-        self.cells.iter().map(|c| c.r)
+        self.cells.iter().map(Cell::r)
     }
 
     /// Recompute the sums from the residuals (against rounding drift). The shooter's trees
@@ -491,17 +669,17 @@ impl<'s> Relaxation<'s> {
     /// rebuild would use, and carried up exactly.
     pub fn resum(&mut self) {
         self.abs_unshot = (0..self.cells.len()).map(|i| self.energy(i)).sum();
-        self.signed_unshot = self.cells.iter().map(|c| c.r * c.area).sum();
+        self.signed_unshot = self.cells.iter().map(|c| c.r() * c.area()).sum();
         self.updates = 0;
     }
 
     fn set_r(&mut self, j: usize, v: Rgb) {
-        let a = self.cells[j].area;
-        let old = self.cells[j].r;
+        let a = self.cells[j].area();
+        let old = self.cells[j].r();
         self.signed_unshot += (v - old) * a;
         let e = abs_sum(v) * a;
         self.abs_unshot += e - abs_sum(old) * a;
-        self.cells[j].r = v;
+        self.cells[j].set_r(v);
         let cells = &mut self.cells;
         match &mut self.select {
             Select::None => {}
@@ -529,15 +707,21 @@ impl<'s> Relaxation<'s> {
             Column::Entries(_) => None,
             Column::Reciprocal { .. } => Some(sys.area[i] as f32),
         };
+        let id = column.id();
         let column = column.entries();
         // Ask for the column's first lines and its middle (where a split starts) while the
         // shooter's own update below waits on its own misses.
         hint::prefetch(column.as_ptr(), column.len().div_ceil(8).min(2 * AHEAD / 8));
         hint::prefetch_at(column, column.len() / 2);
         self.x[i] += delta;
-        let ri = self.cells[i].r - delta;
+        let ri = self.cells[i].r() - delta;
         self.set_r(i, ri);
         let residual = matches!(self.select, Select::Residual(_));
+        // The row's `Σ (ρ_j, 1) F_ji A_j`, if this row was shot before.
+        let known = match &self.select {
+            Select::Ambient(_) => None,
+            _ => self.row_sums.get(i, id),
+        };
         let cells = &mut self.cells;
         let sums = match &mut self.select {
             Select::Ambient(tree) => {
@@ -545,11 +729,11 @@ impl<'s> Relaxation<'s> {
                 for &(j, f) in column {
                     let j = j as usize;
                     let c = &mut cells[j];
-                    let (r, rho, a) = (c.r, c.rho, c.area);
+                    let (r, rho, a) = (c.r(), c.rho(), c.area());
                     let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
                     let rj = r + rho * delta * f;
-                    sums.add(f, a, rho, abs_sum(r) * a, abs_sum(rj) * a);
-                    c.r = rj;
+                    sums.add::<true>(f, c.rho_area, abs_sum(r) * a, abs_sum(rj) * a);
+                    c.set_r(rj);
                     tree.set(j, rj, a);
                 }
                 sums
@@ -562,10 +746,11 @@ impl<'s> Relaxation<'s> {
                     nodes: Some(t.nodes()),
                 };
                 // Two copies, so that progressive refinement's has no division by the area.
-                if residual {
-                    update::<true>(delta, reciprocal, span)
-                } else {
-                    update::<false>(delta, reciprocal, span)
+                match (residual, known.is_some()) {
+                    (true, false) => update::<true, true>(delta, reciprocal, span),
+                    (true, true) => update::<true, false>(delta, reciprocal, span),
+                    (false, false) => update::<false, true>(delta, reciprocal, span),
+                    (false, true) => update::<false, false>(delta, reciprocal, span),
                 }
             }
             Select::None => {
@@ -575,11 +760,15 @@ impl<'s> Relaxation<'s> {
                     cells,
                     nodes: None,
                 };
-                update::<false>(delta, reciprocal, span)
+                match known {
+                    None => update::<false, true>(delta, reciprocal, span),
+                    Some(_) => update::<false, false>(delta, reciprocal, span),
+                }
             }
         };
-        let arrived = delta * sums.fa;
-        let reflected = delta * sums.rho_fa;
+        let sums = self.row_sums.keep((i, self.cells.len()), id, known, sums);
+        let arrived = delta * sums.arrived();
+        let reflected = delta * sums.reflected();
         self.signed_unshot += reflected;
         self.abs_unshot += sums.abs;
         self.absorbed += arrived - reflected;
@@ -617,7 +806,7 @@ impl<'s> Relaxation<'s> {
             let lines = (self.cells.len() - first).min(MaxTree::BLOCK);
             hint::prefetch(self.cells[first..].as_ptr(), lines);
         }
-        let r = self.cells[i].r;
+        let r = self.cells[i].r();
         if r == Rgb::BLACK {
             self.iterations += 1;
             return false;
@@ -626,7 +815,7 @@ impl<'s> Relaxation<'s> {
         let column = source.shot_column(i, share);
         let m = match column {
             Column::Entries(c) => self.diagonal(i, c),
-            Column::Reciprocal { row, diagonal } => {
+            Column::Reciprocal { row, diagonal, .. } => {
                 // F_ii by reciprocity from itself, rounded as every other entry.
                 let ai = self.system.area[i] as f32;
                 let f_ii = diagonal.unwrap_or_else(|| {
@@ -657,7 +846,7 @@ impl<'s> Relaxation<'s> {
     pub fn output(&self, plus_residual: bool, out: &mut Vec<Rgb>) {
         out.clear();
         if plus_residual {
-            out.extend(self.x.iter().zip(&self.cells).map(|(x, c)| *x + c.r));
+            out.extend(self.x.iter().zip(&self.cells).map(|(x, c)| *x + c.r()));
         } else {
             out.extend_from_slice(&self.x);
         }
@@ -677,5 +866,66 @@ impl<'s> Relaxation<'s> {
             estimated_error: 0.0,
             ray_seconds: 0.0,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row shot again under its id brings the sums kept from its last shot; a row with a new
+    /// id (re-estimated, other entries) has its receivers add them again: the books are then
+    /// bit for bit those of a solver that never keeps them, row after row for the same
+    /// shooter, and they move as the rows differ.
+    #[test]
+    fn kept_row_sums_are_those_the_receivers_would_add() {
+        let n = 2000;
+        let system = System {
+            area: (0..n).map(|j| 0.5 + (j % 7) as f64 * 0.25).collect(),
+            reflectance: (0..n)
+                .map(|j| Rgb::new(0.2, 0.5, 0.8) * (0.5 + (j % 3) as f64 * 0.2))
+                .collect(),
+            emission: (0..n)
+                .map(|j| Rgb::splat(if j % 97 == 0 { 3.0 } else { 0.0 }))
+                .collect(),
+        };
+        // Two versions of every row (as two Monte Carlo estimates would give), more than a
+        // span long so that the receivers are halved.
+        let row = |i: usize, version: u64| -> Vec<Entry> {
+            (0..n as u32)
+                .filter(|j| (*j as usize + i + version as usize) % 3 != 0)
+                .map(|j| (j, 1e-4 * (1 + (j as u64 + version) % 5) as f32))
+                .collect()
+        };
+        let rows: Vec<[Vec<Entry>; 2]> = (0..8).map(|i| [row(i, 0), row(i, 1)]).collect();
+        // Shooter, version and id: a version shot again keeps its id; a new one a new id.
+        let shots = [
+            (0, 0, 1),
+            (1, 0, 1),
+            (0, 0, 1),
+            (0, 1, 2),
+            (0, 1, 2),
+            (1, 1, 9),
+        ];
+        let books = |ids: bool| {
+            let mut s = Relaxation::from_zero(&system);
+            s.select_by(SelectKind::Energy);
+            let mut after = Vec::new();
+            for &(i, version, id) in &shots {
+                let column = Column::Reciprocal {
+                    row: &rows[i][version],
+                    diagonal: None,
+                    id: ids.then_some(id),
+                };
+                s.add_column(i, Rgb::new(0.3, 0.2, 0.1), column);
+                let info = s.info();
+                after.push([info.absorbed, info.escaped, info.unshot]);
+            }
+            after
+        };
+        let kept = books(true);
+        assert_eq!(kept, books(false));
+        // The second version differs from the first, and so do its books.
+        assert_ne!(kept[3][0] - kept[2][0], kept[2][0] - kept[1][0]);
     }
 }

@@ -229,7 +229,7 @@ fn set_in_block<K: Keyed>(
 /// The nodes of a span of blocks `lo..hi` (keys from `first = lo · BLOCK` on): at each level,
 /// the nodes all of whose blocks lie in the span, which no other span owns, so that disjoint
 /// spans can be set and settled by several threads at once. A span's blocks' nodes are set
-/// by [`Nodes::set`], the nodes above them settled by [`Nodes::settle`]; the nodes that straddle
+/// through [`Nodes::setter`], the nodes above them settled by [`Nodes::settle`]; the nodes that straddle
 /// two spans split from one belong to that one, and are settled by
 /// [`Nodes::settle_across`] once both halves are.
 #[derive(Debug)]
@@ -244,7 +244,7 @@ pub struct Nodes<'a> {
     levels: [&'a mut [(f64, u32)]; LEVELS],
 }
 
-/// The parents of the block nodes that [`Nodes::set`] changed and no [`Nodes::settle`] has yet
+/// The parents of the block nodes that a [`Setter`] changed and no [`Nodes::settle`] has yet
 /// carried up, ascending and distinct (keys are set in ascending order), in a fixed array: no
 /// allocation, and no second pass over the keys set to find the changed blocks. Carried up
 /// whenever it fills.
@@ -384,16 +384,49 @@ impl<'a> Nodes<'a> {
         }
     }
 
-    /// Set key `i` (an index of the whole tree, inside the span, at or past every key set
-    /// since `pending` was last settled) to `key` in `keys`, the keys of the span (`keys[0]` is
-    /// key `first`), and its block's node; if the node changed, its parent is added to
-    /// `pending` for [`Self::settle`] (and `pending` carried up first if it is full).
+    /// The span's block nodes and `pending`, to set up to `count` ([`Self::CHUNK`] at most)
+    /// keys in ascending order: `pending` is carried up first if it lacks room for `count`
+    /// more changed blocks, so that a [`Setter`] never needs the levels above the blocks.
+    pub fn setter<'n>(&'n mut self, pending: &'n mut Pending, count: usize) -> Setter<'n> {
+        assert!(
+            count <= Self::CHUNK,
+            "{count} keys to set, a Pending holds {}",
+            Self::CHUNK
+        );
+        if pending.n + count > Self::CHUNK {
+            self.settle(pending);
+        }
+        Setter {
+            first: self.first,
+            lo: self.lo,
+            blocks: &mut *self.levels[0],
+            pending,
+        }
+    }
+}
+
+/// A span's block nodes, borrowed from [`Nodes::setter`] with room in its [`Pending`] for the
+/// keys it is to set: what a receiver's update reads besides its own record, held in locals
+/// rather than reached through the whole span each time.
+#[derive(Debug)]
+pub struct Setter<'n> {
+    first: usize,
+    lo: usize,
+    blocks: &'n mut [(f64, u32)],
+    pending: &'n mut Pending,
+}
+
+impl Setter<'_> {
+    /// Set key `i` (an index of the whole tree, inside the span, past every key set since
+    /// the `Pending` was last settled) to `key` in `keys`, the keys of the span (`keys[0]` is
+    /// key `first`), and its block's node; if the node changed, its parent is added to the
+    /// `Pending` for [`Nodes::settle`].
     #[inline(always)]
-    pub fn set<K: Keyed>(&mut self, keys: &mut [K], i: usize, key: f64, pending: &mut Pending) {
+    pub fn set<K: Keyed>(&mut self, keys: &mut [K], i: usize, key: f64) {
         let d = (i - self.first) / BLOCK;
-        let node = &mut self.levels[0][d];
+        let node = &mut self.blocks[d];
         if set_in_block(node, &mut keys[d * BLOCK..], self.first + d * BLOCK, i, key) {
-            self.changed(d, pending);
+            self.changed(d);
         }
     }
 
@@ -405,45 +438,43 @@ impl<'a> Nodes<'a> {
     /// a median of 6.06 ns an update with this and one loop per case in
     /// [`super::relaxation`], 6.29 ns before.
     #[inline(always)]
-    pub fn set_from<K: Keyed>(
-        &mut self,
-        keys: &mut [K],
-        i: usize,
-        old: f64,
-        key: f64,
-        pending: &mut Pending,
-    ) {
+    pub fn set_from<K: Keyed>(&mut self, keys: &mut [K], i: usize, old: f64, key: f64) {
         let k = i - self.first;
         debug_assert_eq!(keys[k].key(), old);
         if key.partial_cmp(&old) != Some(std::cmp::Ordering::Greater) {
-            return self.set(keys, i, key, pending);
+            return self.set(keys, i, key);
         }
         keys[k].set_key(key);
-        let d = k / BLOCK;
-        let node = &mut self.levels[0][d];
-        // The node held this key (then `old`, now beaten) or a larger one; ties go to the
+        self.rose(i, key);
+    }
+
+    /// The block node's part of [`Self::set_from`] for a key that rose, once the caller has
+    /// stored it: key `i` (of the whole tree) is now `key`, larger than it was.
+    #[inline(always)]
+    pub fn rose(&mut self, i: usize, key: f64) {
+        let d = (i - self.first) / BLOCK;
+        let node = &mut self.blocks[d];
+        // The node held this key (then smaller, now beaten) or a larger one; ties go to the
         // lower index, as in `set_in_block`.
         let me = i as u32;
         if key > node.0 || (key == node.0 && me < node.1) {
             *node = (key, me);
-            self.changed(d, pending);
+            self.changed(d);
         }
     }
 
-    /// Block `d` of the span changed its node: its parent is added to `pending` (carried up
-    /// first if it is full).
+    /// Block `d` of the span changed its node: its parent is added to the `Pending`, which
+    /// [`Nodes::setter`] left room in.
     #[inline(always)]
-    fn changed(&mut self, d: usize, pending: &mut Pending) {
+    fn changed(&mut self, d: usize) {
         let parent = ((self.lo + d) / 2) as u32;
-        if pending.n > 0 && pending.queue[pending.n - 1] == parent {
+        let p = &mut *self.pending;
+        if p.n > 0 && p.queue[p.n - 1] == parent {
             return;
         }
-        debug_assert!(pending.n == 0 || pending.queue[pending.n - 1] < parent);
-        if pending.n == Self::CHUNK {
-            self.settle(pending);
-        }
-        pending.queue[pending.n] = parent;
-        pending.n += 1;
+        debug_assert!(p.n == 0 || p.queue[p.n - 1] < parent);
+        p.queue[p.n] = parent;
+        p.n += 1;
     }
 }
 
@@ -577,11 +608,12 @@ mod tests {
             let mut pending = Pending::new();
             for &(i, key) in changes {
                 // Either way of setting a key, `set_from` with the key it replaces.
+                let old = keys[i - n.first()];
+                let mut setter = n.setter(&mut pending, 1);
                 if uniform(rng) < 0.5 {
-                    n.set(keys, i, key, &mut pending);
+                    setter.set(keys, i, key);
                 } else {
-                    let old = keys[i - n.first()];
-                    n.set_from(keys, i, old, key, &mut pending);
+                    setter.set_from(keys, i, old, key);
                 }
                 assert_eq!(keys[i - n.first()], key);
             }
@@ -606,7 +638,7 @@ mod tests {
     /// does over threads) leave every node of the tree as a tree built afresh over the keys
     /// has it, so the arg-max is the linear scan's: keys that rise and fall, ties common, blocks
     /// repeated, and more changed blocks' parents than a [`Pending`] holds at once; keys set
-    /// by [`Nodes::set`] and by [`Nodes::set_from`] mixed.
+    /// by [`Setter::set`] and by [`Setter::set_from`] mixed.
     #[test]
     fn nodes_set_and_settled_in_spans_are_the_tree_built_afresh() {
         let mut rng = stream(4, 0, 0, 0);

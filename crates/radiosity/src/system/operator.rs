@@ -85,6 +85,11 @@ pub enum Column<'a> {
         /// `F_ii` (0 where the row has no entry `i`) if the operator kept it aside, so that a
         /// solver need not search a row that is not in the cache for it; `None`: search.
         diagonal: Option<f32>,
+        /// What tells this row apart from the other rows this operator hands out for patch
+        /// `i`: the same id for the same entries whenever the row is handed out again (a
+        /// cached row; a stored matrix can give one id for all), so that a solver may keep
+        /// what it derives from the row under it. `None`: nothing is to be kept.
+        id: Option<u64>,
     },
 }
 
@@ -93,6 +98,14 @@ impl<'a> Column<'a> {
     pub fn entries(&self) -> &'a [Entry] {
         match *self {
             Column::Entries(e) | Column::Reciprocal { row: e, .. } => e,
+        }
+    }
+
+    /// The row's id ([`Column::Reciprocal`]), if it has one.
+    pub fn id(&self) -> Option<u64> {
+        match *self {
+            Column::Entries(_) => None,
+            Column::Reciprocal { id, .. } => id,
         }
     }
 }
