@@ -702,10 +702,9 @@ impl<'s> Relaxation<'s> {
     /// [`Self::add`] with the column as [`Operator::shot_column`] gives it: by reciprocity
     /// from row i, `F_ji = F_ij A_i / A_j`, applied per receiver.
     pub fn add_column(&mut self, i: usize, delta: Rgb, column: Column<'_>) {
-        let sys = self.system;
         let reciprocal = match column {
             Column::Entries(_) => None,
-            Column::Reciprocal { .. } => Some(sys.area[i] as f32),
+            Column::Reciprocal { .. } => Some(self.cells[i].area() as f32),
         };
         let id = column.id();
         let column = column.entries();
@@ -772,7 +771,7 @@ impl<'s> Relaxation<'s> {
         self.signed_unshot += reflected;
         self.abs_unshot += sums.abs;
         self.absorbed += arrived - reflected;
-        self.escaped += delta * sys.area[i] - arrived;
+        self.escaped += delta * self.cells[i].area() - arrived;
         self.updates += column.len() as u64 + 1;
         // Each receiver's update rounds the running sums by at most ε of the energy they hold
         // (never more than the emitted): they are recomputed, an O(N) pass, once that bound
@@ -792,7 +791,7 @@ impl<'s> Relaxation<'s> {
         let f_ii = column
             .binary_search_by_key(&(i as u32), |e| e.0)
             .map_or(0.0, |k| column[k].1 as f64);
-        Rgb::splat(1.0) - self.system.reflectance[i] * f_ii
+        Rgb::splat(1.0) - self.cells[i].rho() * f_ii
     }
 
     /// Relax `x_i` with factor ω: `x_i += ω r_i / M_ii`. Returns false if `r_i` was zero.
@@ -806,6 +805,11 @@ impl<'s> Relaxation<'s> {
             let lines = (self.cells.len() - first).min(MaxTree::BLOCK);
             hint::prefetch(self.cells[first..].as_ptr(), lines);
         }
+        // The shot's other reads of patch i, each a miss at 10⁵–10⁶ patches, asked for
+        // together (its reflectance and area are read from its record, not the system's
+        // arrays).
+        hint::prefetch_at(&self.x, i);
+        hint::prefetch_at(&self.row_sums.rows, i);
         let r = self.cells[i].r();
         if r == Rgb::BLACK {
             self.iterations += 1;
@@ -817,13 +821,13 @@ impl<'s> Relaxation<'s> {
             Column::Entries(c) => self.diagonal(i, c),
             Column::Reciprocal { row, diagonal, .. } => {
                 // F_ii by reciprocity from itself, rounded as every other entry.
-                let ai = self.system.area[i] as f32;
+                let ai = self.cells[i].area() as f32;
                 let f_ii = diagonal.unwrap_or_else(|| {
                     row.binary_search_by_key(&(i as u32), |e| e.0)
                         .map_or(0.0, |k| row[k].1)
                 });
                 let f_ii = (f_ii * ai / ai) as f64;
-                Rgb::splat(1.0) - self.system.reflectance[i] * f_ii
+                Rgb::splat(1.0) - self.cells[i].rho() * f_ii
             }
         };
         let delta = Rgb::new(r.r / m.r, r.g / m.g, r.b / m.b) * omega;
