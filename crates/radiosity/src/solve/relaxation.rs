@@ -218,8 +218,9 @@ impl std::ops::Add for Sums {
 /// that id: a row shot again (most shots reuse a cached row: 64 % on the hospital at 10⁵
 /// patches) gives the same sums, added in the same order, so they are kept rather than added
 /// again by every receiver. Hospital, 10⁵ patches, progressive refinement's bookkeeping alone
-/// on one thread: 14 % less time with no receiver adding them (4.4 against 5.2 ns an update,
-/// four alternating runs). 40 bytes a patch, from the first row with an id on.
+/// on one thread: 15 % less time with no receiver adding them (4.24–4.50 against 5.09–5.27 ns
+/// an update, four alternating runs); keeping them, 4.74–4.97 against 5.37–5.71 ns. 40 bytes a
+/// patch, from the first row with an id on.
 #[derive(Clone, Debug, Default)]
 struct RowSums {
     /// `(id, fa)`, `u64::MAX` for none.
@@ -471,7 +472,7 @@ impl Tree for () {
 /// registers. The loop is bound by its instructions more than by memory: a 32-byte record of
 /// `f32`s, half the lines, was slower for its conversions; 16, 32 or 64 receivers ahead
 /// made no difference at 10⁵ patches; and a receiver that did not add the row's sums
-/// ([`RowSums`]) took 14 % less time.
+/// ([`RowSums`]) took 15 % less time.
 #[inline(always)]
 fn run<const RESIDUAL: bool, const FA: bool, const RECIPROCAL: bool, const TREE: bool>(
     delta: Rgb,
