@@ -637,8 +637,8 @@ mod tests {
     /// Keys set through spans split at random and settled apart (as [`super::super::relaxation`]
     /// does over threads) leave every node of the tree as a tree built afresh over the keys
     /// has it, so the arg-max is the linear scan's: keys that rise and fall, ties common, blocks
-    /// repeated, and more changed blocks' parents than a [`Pending`] holds at once; keys set
-    /// by [`Setter::set`] and by [`Setter::set_from`] mixed.
+    /// repeated; keys set by [`Setter::set`] and by [`Setter::set_from`] mixed. (Its spans
+    /// change too few blocks to fill a [`Pending`]: the next test does.)
     #[test]
     fn nodes_set_and_settled_in_spans_are_the_tree_built_afresh() {
         let mut rng = stream(4, 0, 0, 0);
@@ -661,6 +661,41 @@ mod tests {
                 let (k, j) = blocks.max();
                 assert_eq!((j, k), scan(&keys));
             }
+        }
+    }
+
+    /// One span whose every block's node changes, by keys that rise above their block's and
+    /// then fall below it: 1,563 changed parents, more than a [`Pending`] holds, set through
+    /// setters of up to [`Nodes::CHUNK`] keys as the relaxation methods' spans are, so that
+    /// [`Nodes::setter`] carries the queue up before it would overflow; every node is then a
+    /// tree built afresh's.
+    #[test]
+    fn a_span_changing_more_blocks_than_a_pending_holds_is_carried_up_in_time() {
+        let n = 200_000;
+        let mut keys: Vec<f64> = (0..n).map(|i| (i % 97) as f64).collect();
+        let mut blocks = Blocks::new(&keys);
+        for (round, rise) in [(0, true), (1, false)] {
+            let changes: Vec<(usize, f64)> = (round..n)
+                .step_by(BLOCK)
+                .map(|i| (i, if rise { 1000.0 + i as f64 } else { -1.0 }))
+                .collect();
+            let mut nodes = blocks.nodes();
+            let mut pending = Pending::new();
+            for chunk in changes.chunks(Nodes::CHUNK) {
+                let mut setter = nodes.setter(&mut pending, chunk.len());
+                for &(i, key) in chunk {
+                    let old = keys[i];
+                    setter.set_from(&mut keys, i, old, key);
+                }
+            }
+            nodes.settle(&mut pending);
+            assert_eq!(
+                blocks.node[1..],
+                Blocks::new(&keys).node[1..],
+                "round {round}"
+            );
+            let (k, j) = blocks.max();
+            assert_eq!((j, k), scan(&keys));
         }
     }
 
