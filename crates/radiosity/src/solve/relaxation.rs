@@ -65,70 +65,38 @@ pub struct Relaxation<'s> {
     row_sums: RowSums,
 }
 
-/// One patch as a shot's update reads and writes it: its reflectance and area, its residual
-/// and its key in the shooter's max-tree, in one cache line. At 10⁵–10⁶ patches no cache
-/// holds the patches, and a receiver scattered over four arrays cost four cache misses where
-/// this costs one; the memory is the same (64 bytes a patch).
-///
-/// The halves are what a receiver reads, `(ρ, A)`, and what it writes, `(r, key)`, one
-/// store of 32 bytes.
+/// One patch as a shot's update reads and writes it: its residual, reflectance, area and key
+/// in the shooter's max-tree, in one cache line. At 10⁵–10⁶ patches no cache holds the
+/// patches, and a receiver scattered over four arrays cost four cache misses where this costs
+/// one; the memory is the same (64 bytes a patch).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 struct Cell {
-    /// ρ per channel, then the area.
-    rho_area: [f64; 4],
-    /// The residual per channel, then the shooter's key ([`SelectKind::Energy`] or
-    /// [`SelectKind::Residual`]; else unused).
-    r_key: [f64; 4],
+    r: Rgb,
+    rho: Rgb,
+    area: f64,
+    /// The shooter's key ([`SelectKind::Energy`] or [`SelectKind::Residual`]), else unused.
+    key: f64,
 }
 
 const _: () = assert!(std::mem::size_of::<Cell>() == 64);
 
 impl Cell {
-    fn new(r: Rgb, rho: Rgb, area: f64) -> Self {
-        Self {
-            rho_area: [rho.r, rho.g, rho.b, area],
-            r_key: [r.r, r.g, r.b, 0.0],
-        }
-    }
-
-    #[inline(always)]
-    fn r(&self) -> Rgb {
-        let [r, g, b, _] = self.r_key;
-        Rgb::new(r, g, b)
-    }
-
-    #[inline(always)]
-    fn set_r(&mut self, r: Rgb) {
-        self.r_key[..3].copy_from_slice(&[r.r, r.g, r.b]);
-    }
-
-    #[inline(always)]
-    fn rho(&self) -> Rgb {
-        let [r, g, b, _] = self.rho_area;
-        Rgb::new(r, g, b)
-    }
-
-    #[inline(always)]
-    fn area(&self) -> f64 {
-        self.rho_area[3]
-    }
-
     /// `|r|₁ A`, the unshot energy.
     #[inline(always)]
     fn energy(&self) -> f64 {
-        abs_sum(self.r()) * self.area()
+        abs_sum(self.r) * self.area
     }
 }
 
 impl Keyed for Cell {
     #[inline]
     fn key(&self) -> f64 {
-        self.r_key[3]
+        self.key
     }
     #[inline]
     fn set_key(&mut self, key: f64) {
-        self.r_key[3] = key;
+        self.key = key;
     }
 }
 
@@ -174,14 +142,14 @@ struct Sums {
 }
 
 impl Sums {
-    /// Receiver j with column entry `f` = F_ji, reflectance and area `(ρ_j, A_j)` = `rho_area`,
-    /// and unshot energy `|r_j|₁ A_j` from `old` to `new`.
-    /// `FA`: whether to add to [`Self::fa`] (not when the row's are known already).
+    /// Receiver j with column entry `f` = F_ji, area `a`, reflectance `rho`, and unshot energy
+    /// `|r_j|₁ A_j` from `old` to `new`. `FA`: whether to add to [`Self::fa`] (not when the
+    /// row's are known already).
     #[inline(always)]
-    fn add<const FA: bool>(&mut self, f: f64, rho_area: [f64; 4], old: f64, new: f64) {
+    fn add<const FA: bool>(&mut self, f: f64, a: f64, rho: Rgb, old: f64, new: f64) {
         if FA {
-            let fa = f * rho_area[3];
-            let w = [rho_area[0], rho_area[1], rho_area[2], 1.0];
+            let fa = f * a;
+            let w = [rho.r, rho.g, rho.b, 1.0];
             for (s, w) in self.fa.iter_mut().zip(w) {
                 *s += w * fa;
             }
@@ -517,7 +485,7 @@ fn receiver<const RESIDUAL: bool, const FA: bool, const RECIPROCAL: bool, const 
 ) {
     let j = j as usize;
     let c = &mut cells[j - first];
-    let (r, rho, a, key) = (c.r(), c.rho(), c.area(), c.key());
+    let (r, rho, a, key) = (c.r, c.rho, c.area, c.key);
     let f = if RECIPROCAL { f * ai / a as f32 } else { f } as f64;
     let rj = r + rho * delta * f;
     let e = abs_sum(rj) * a;
@@ -529,22 +497,18 @@ fn receiver<const RESIDUAL: bool, const FA: bool, const RECIPROCAL: bool, const 
     } else {
         abs_sum(r) * a
     };
-    sums.add::<FA>(f, c.rho_area, old, e);
-    let mut nv = [rj.r, rj.g, rj.b, key];
+    sums.add::<FA>(f, a, rho, old, e);
+    c.r = rj;
     if TREE {
         let new = if RESIDUAL { e / a } else { e };
-        // A key that rises (a receiver's, in progressive refinement always) is stored with
-        // the residual, and its block's node compared with it alone (`Setter::set_from`).
+        // A key that rises (a receiver's, in progressive refinement always) is stored here,
+        // and its block's node compared with it alone (`Setter::set_from`).
         if new.partial_cmp(&key) == Some(std::cmp::Ordering::Greater) {
-            nv[3] = new;
-            c.r_key = nv;
+            c.key = new;
             tree.rose(j, new);
         } else {
-            c.r_key = nv;
             tree.set(cells, j, new);
         }
-    } else {
-        c.r_key = nv;
     }
 }
 
@@ -558,7 +522,12 @@ impl<'s> Relaxation<'s> {
         let n = system.len();
         let emitted = system.emitted_power();
         let cells: Vec<Cell> = (0..n)
-            .map(|i| Cell::new(system.emission[i], system.reflectance[i], system.area[i]))
+            .map(|i| Cell {
+                r: system.emission[i],
+                rho: system.reflectance[i],
+                area: system.area[i],
+                key: 0.0,
+            })
             .collect();
         let energy = cells.iter().map(Cell::energy);
         Self {
@@ -585,7 +554,7 @@ impl<'s> Relaxation<'s> {
         let (absorbed, escaped, _, _) = crate::system::balance(system, source, &s.x);
         let r = crate::system::residual(system, source, &s.x);
         for (c, r) in s.cells.iter_mut().zip(r) {
-            c.set_r(r);
+            c.r = r;
         }
         s.absorbed = absorbed;
         s.escaped = escaped;
@@ -610,19 +579,19 @@ impl<'s> Relaxation<'s> {
             Select::None => {}
             Select::Energy(t) => {
                 for c in cells.iter_mut() {
-                    c.set_key(c.energy());
+                    c.key = c.energy();
                 }
                 *t = Blocks::new(cells);
             }
             Select::Residual(t) => {
                 // `e / a` as a shot computes it, so that keys compare bit for bit.
                 for c in cells.iter_mut() {
-                    c.set_key(c.energy() / c.area());
+                    c.key = c.energy() / c.area;
                 }
                 *t = Blocks::new(cells);
             }
             Select::Ambient(t) => {
-                let r: Vec<Rgb> = cells.iter().map(Cell::r).collect();
+                let r: Vec<Rgb> = cells.iter().map(|c| c.r).collect();
                 *t = AmbientTree::new(&r, &sys.reflectance, &sys.area);
             }
         }
@@ -640,8 +609,8 @@ impl<'s> Relaxation<'s> {
             Select::Ambient(t) => {
                 let cells = &self.cells;
                 t.argmax(ambient, |i| {
-                    let a = cells[i].r() + cells[i].rho() * ambient;
-                    (a.r.abs() + a.g.abs() + a.b.abs()) * cells[i].area()
+                    let a = cells[i].r + cells[i].rho * ambient;
+                    (a.r.abs() + a.g.abs() + a.b.abs()) * cells[i].area
                 })
             }
         }
@@ -657,12 +626,12 @@ impl<'s> Relaxation<'s> {
     /// Patch i's residual `r_i`.
     #[inline]
     pub fn r(&self, i: usize) -> Rgb {
-        self.cells[i].r()
+        self.cells[i].r
     }
 
     /// The residuals, in patch order.
     pub fn residuals(&self) -> impl ExactSizeIterator<Item = Rgb> + '_ {
-        self.cells.iter().map(Cell::r)
+        self.cells.iter().map(|c| c.r)
     }
 
     /// Recompute the sums from the residuals (against rounding drift). The shooter's trees
@@ -670,17 +639,17 @@ impl<'s> Relaxation<'s> {
     /// rebuild would use, and carried up exactly.
     pub fn resum(&mut self) {
         self.abs_unshot = (0..self.cells.len()).map(|i| self.energy(i)).sum();
-        self.signed_unshot = self.cells.iter().map(|c| c.r() * c.area()).sum();
+        self.signed_unshot = self.cells.iter().map(|c| c.r * c.area).sum();
         self.updates = 0;
     }
 
     fn set_r(&mut self, j: usize, v: Rgb) {
-        let a = self.cells[j].area();
-        let old = self.cells[j].r();
+        let a = self.cells[j].area;
+        let old = self.cells[j].r;
         self.signed_unshot += (v - old) * a;
         let e = abs_sum(v) * a;
         self.abs_unshot += e - abs_sum(old) * a;
-        self.cells[j].set_r(v);
+        self.cells[j].r = v;
         let cells = &mut self.cells;
         match &mut self.select {
             Select::None => {}
@@ -705,7 +674,7 @@ impl<'s> Relaxation<'s> {
     pub fn add_column(&mut self, i: usize, delta: Rgb, column: Column<'_>) {
         let reciprocal = match column {
             Column::Entries(_) => None,
-            Column::Reciprocal { .. } => Some(self.cells[i].area() as f32),
+            Column::Reciprocal { .. } => Some(self.cells[i].area as f32),
         };
         let id = column.id();
         let column = column.entries();
@@ -714,7 +683,7 @@ impl<'s> Relaxation<'s> {
         hint::prefetch(column.as_ptr(), column.len().div_ceil(8).min(2 * AHEAD / 8));
         hint::prefetch_at(column, column.len() / 2);
         self.x[i] += delta;
-        let ri = self.cells[i].r() - delta;
+        let ri = self.cells[i].r - delta;
         self.set_r(i, ri);
         let residual = matches!(self.select, Select::Residual(_));
         // The row's `Σ (ρ_j, 1) F_ji A_j`, if this row was shot before.
@@ -729,11 +698,11 @@ impl<'s> Relaxation<'s> {
                 for &(j, f) in column {
                     let j = j as usize;
                     let c = &mut cells[j];
-                    let (r, rho, a) = (c.r(), c.rho(), c.area());
+                    let (r, rho, a) = (c.r, c.rho, c.area);
                     let f = reciprocal.map_or(f, |ai| f * ai / a as f32) as f64;
                     let rj = r + rho * delta * f;
-                    sums.add::<true>(f, c.rho_area, abs_sum(r) * a, abs_sum(rj) * a);
-                    c.set_r(rj);
+                    sums.add::<true>(f, a, rho, abs_sum(r) * a, abs_sum(rj) * a);
+                    c.r = rj;
                     tree.set(j, rj, a);
                 }
                 sums
@@ -772,7 +741,7 @@ impl<'s> Relaxation<'s> {
         self.signed_unshot += reflected;
         self.abs_unshot += sums.abs;
         self.absorbed += arrived - reflected;
-        self.escaped += delta * self.cells[i].area() - arrived;
+        self.escaped += delta * self.cells[i].area - arrived;
         self.updates += column.len() as u64 + 1;
         // Each receiver's update rounds the running sums by at most ε of the energy they hold
         // (never more than the emitted): they are recomputed, an O(N) pass, once that bound
@@ -792,7 +761,7 @@ impl<'s> Relaxation<'s> {
         let f_ii = column
             .binary_search_by_key(&(i as u32), |e| e.0)
             .map_or(0.0, |k| column[k].1 as f64);
-        Rgb::splat(1.0) - self.cells[i].rho() * f_ii
+        Rgb::splat(1.0) - self.cells[i].rho * f_ii
     }
 
     /// Relax `x_i` with factor ω: `x_i += ω r_i / M_ii`. Returns false if `r_i` was zero.
@@ -811,7 +780,7 @@ impl<'s> Relaxation<'s> {
         // arrays).
         hint::prefetch_at(&self.x, i);
         hint::prefetch_at(&self.row_sums.rows, i);
-        let r = self.cells[i].r();
+        let r = self.cells[i].r;
         if r == Rgb::BLACK {
             self.iterations += 1;
             return false;
@@ -822,13 +791,13 @@ impl<'s> Relaxation<'s> {
             Column::Entries(c) => self.diagonal(i, c),
             Column::Reciprocal { row, diagonal, .. } => {
                 // F_ii by reciprocity from itself, rounded as every other entry.
-                let ai = self.cells[i].area() as f32;
+                let ai = self.cells[i].area as f32;
                 let f_ii = diagonal.unwrap_or_else(|| {
                     row.binary_search_by_key(&(i as u32), |e| e.0)
                         .map_or(0.0, |k| row[k].1)
                 });
                 let f_ii = (f_ii * ai / ai) as f64;
-                Rgb::splat(1.0) - self.cells[i].rho() * f_ii
+                Rgb::splat(1.0) - self.cells[i].rho * f_ii
             }
         };
         let delta = Rgb::new(r.r / m.r, r.g / m.g, r.b / m.b) * omega;
@@ -851,7 +820,7 @@ impl<'s> Relaxation<'s> {
     pub fn output(&self, plus_residual: bool, out: &mut Vec<Rgb>) {
         out.clear();
         if plus_residual {
-            out.extend(self.x.iter().zip(&self.cells).map(|(x, c)| *x + c.r()));
+            out.extend(self.x.iter().zip(&self.cells).map(|(x, c)| *x + c.r));
         } else {
             out.extend_from_slice(&self.x);
         }
