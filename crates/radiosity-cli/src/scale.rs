@@ -1,13 +1,88 @@
 //! `radiosity bench --scale SCENE --sizes N,N,…`: solve a scene at each size with one method,
 //! each size in a fresh child process (`radiosity solve`), so that its CPU time and peak
 //! resident memory are its own; print patches, rays, wall and CPU seconds, the time of each
-//! stage, peak resident memory, and the fitted exponents of time against N.
+//! stage, peak resident memory, and the fitted exponents of time against N; and, so that a
+//! run's bookkeeping can be read against the machine it met, the share of the wall time it took
+//! and how long a value took to go between two cores and back just before and just after it.
 
 use crate::args::BenchArgs;
 use anyhow::{bail, Context, Result};
 use radiosity::experiment::fit_exponent;
 use std::process::Command;
-use std::time::Instant;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+/// Batches of round trips that [`cross_core_round_trip`] times, their size, and the most time
+/// it spends.
+const BATCHES: usize = 11;
+const TRIPS: u64 = 2_000;
+const TRIPS_BUDGET: Duration = Duration::from_millis(200);
+
+/// Nanoseconds for a value written by one thread to be seen by another and answered: between
+/// two threads that spin (so that each holds a core), the median over [`BATCHES`] batches of
+/// each batch's mean of [`TRIPS`] round trips (the first trips also wait for the new thread to
+/// find its core); batches that the [`TRIPS_BUDGET`] cuts short count their mean so far.
+/// `None` on a machine of one core.
+///
+/// Shooting methods hand half of a shot's receivers to the other core and read back what it
+/// wrote, so that their bookkeeping depends on this latency as no other stage does. On the
+/// 2-core virtual machine of docs/benchmarks.md it is 80–140 ns at some times and 400–460 ns
+/// at others (the host places the two virtual cores near each other or not, and moves them),
+/// and the bookkeeping of the same solve took up to 45 % longer at the high value.
+fn cross_core_round_trip() -> Option<f64> {
+    if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
+        return None;
+    }
+    // Odd: asked, even: answered; each on a line of its own.
+    #[repr(align(128))]
+    struct Line<T>(T);
+    let value = Line(AtomicU64::new(0));
+    let stop = Line(AtomicBool::new(false));
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            let mut next = 1;
+            let mut spins = 0u32;
+            while next < 2 * TRIPS * BATCHES as u64 {
+                if value.0.load(Ordering::Acquire) == next {
+                    value.0.store(next + 1, Ordering::Release);
+                    next += 2;
+                } else {
+                    spins = spins.wrapping_add(1);
+                    if spins % 1024 == 0 && stop.0.load(Ordering::Relaxed) {
+                        return;
+                    }
+                    std::hint::spin_loop();
+                }
+            }
+        });
+        let start = Instant::now();
+        let mut means = Vec::with_capacity(BATCHES);
+        let mut k = 0;
+        'batches: for _ in 0..BATCHES {
+            let batch = Instant::now();
+            let mut done = 0;
+            for _ in 0..TRIPS {
+                value.0.store(2 * k + 1, Ordering::Release);
+                let mut spins = 0u32;
+                while value.0.load(Ordering::Acquire) != 2 * k + 2 {
+                    spins = spins.wrapping_add(1);
+                    if spins % 1024 == 0 && start.elapsed() > TRIPS_BUDGET {
+                        // A trip that did not come back counts as one.
+                        means.push(batch.elapsed().as_secs_f64() / (done + 1) as f64);
+                        break 'batches;
+                    }
+                    std::hint::spin_loop();
+                }
+                k += 1;
+                done += 1;
+            }
+            means.push(batch.elapsed().as_secs_f64() / done as f64);
+        }
+        stop.0.store(true, Ordering::Relaxed);
+        means.sort_by(f64::total_cmp);
+        Some(means[means.len() / 2] * 1e9)
+    })
+}
 
 /// One solve's figures, read from the child's summary.
 #[derive(Debug, Default)]
@@ -22,6 +97,8 @@ struct Row {
     form_factors: f64,
     solve: f64,
     resident_mib: f64,
+    /// [`cross_core_round_trip`] just before and just after the solve.
+    round_trips: [Option<f64>; 2],
 }
 
 /// The numbers of a summary line, in order (commas inside numbers are not used).
@@ -82,7 +159,7 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
         a.threads.unwrap_or_else(rayon::current_num_threads)
     );
     println!(
-        "{:>9} {:>11} {:>8} {:>9} {:>9} {:>8} {:>8} {:>9} {:>9} {:>10} {:>7}",
+        "{:>9} {:>11} {:>8} {:>9} {:>9} {:>8} {:>8} {:>9} {:>9} {:>10} {:>8} {:>7} {:>9} {:>9}",
         "patches",
         "rays",
         "iters",
@@ -93,7 +170,10 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
         "rows s",
         "solve s",
         "peak MiB",
-        "cpu/wall"
+        "cpu/wall",
+        "solve %",
+        "xcore0 ns",
+        "xcore1 ns"
     );
     let mut rows = Vec::new();
     for &n in sizes {
@@ -113,9 +193,11 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
         if let Some(t) = a.threads {
             cmd.args(["--threads", &t.to_string()]);
         }
+        let before = cross_core_round_trip();
         let t = Instant::now();
         let result = cmd.output().context("cannot run radiosity solve")?;
         let wall = t.elapsed().as_secs_f64();
+        let after = cross_core_round_trip();
         let _ = std::fs::remove_file(&out);
         if !result.status.success() {
             let _ = std::fs::remove_dir_all(&dir);
@@ -126,8 +208,12 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
         }
         let mut row = parse(&String::from_utf8_lossy(&result.stdout));
         row.wall = wall;
+        row.round_trips = [before, after];
+        let [xcore0, xcore1] = row
+            .round_trips
+            .map(|t| t.map_or("—".to_string(), |t| format!("{t:.0}")));
         println!(
-            "{:>9} {:>11} {:>8} {:>9.2} {:>9.2} {:>8.3} {:>8.3} {:>9.2} {:>9.2} {:>10.0} {:>7.2}",
+            "{:>9} {:>11} {:>8} {:>9.2} {:>9.2} {:>8.3} {:>8.3} {:>9.2} {:>9.2} {:>10.0} {:>8.2} {:>7.1} {:>9} {:>9}",
             row.patches,
             row.rays,
             row.iterations,
@@ -138,7 +224,10 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
             row.form_factors,
             row.solve,
             row.resident_mib,
-            row.cpu / row.wall
+            row.cpu / row.wall,
+            100.0 * row.solve / row.wall,
+            xcore0,
+            xcore1
         );
         rows.push(row);
     }

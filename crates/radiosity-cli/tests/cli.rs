@@ -2735,7 +2735,7 @@ fn bench_hierarchical_makes_and_reads_its_reference() {
 }
 
 /// Run `bench --scale cornell --sizes 200,800` with `extra` options; its output and the
-/// table's rows (the lines of eleven numbers).
+/// table's rows (the lines of fourteen numbers, "—" read as NaN).
 fn bench_scale_cornell(extra: &[&str], dir: &Path) -> (String, Vec<Vec<f64>>) {
     let out = run(
         &[
@@ -2754,8 +2754,11 @@ fn bench_scale_cornell(extra: &[&str], dir: &Path) -> (String, Vec<Vec<f64>>) {
     let rows: Vec<Vec<f64>> = text
         .lines()
         .filter_map(|l| {
-            let v: Result<Vec<f64>, _> = l.split_whitespace().map(str::parse).collect();
-            v.ok().filter(|v| v.len() == 11)
+            let v: Result<Vec<f64>, _> = l
+                .split_whitespace()
+                .map(|t| if t == "—" { Ok(f64::NAN) } else { t.parse() })
+                .collect();
+            v.ok().filter(|v| v.len() == 14 && !v[0].is_nan())
         })
         .collect();
     assert_eq!(rows.len(), 2, "{text}");
@@ -2819,6 +2822,22 @@ fn bench_scale_reports_each_solve_and_fits_its_exponents() {
         let stages = row[5] + row[6] + row[7] + row[8];
         assert!(stages <= row[3] + 0.016 + 1e-9, "{text}");
         assert!(row[1] > 0.0 && row[2] > 0.0 && row[9] > 0.0, "{text}");
+        // `solve %` is the solve's share of the wall time, both printed to ±0.005 s and the
+        // share to ±0.05.
+        let (solve, wall, share) = (row[8], row[3], row[11]);
+        let low = 100.0 * (solve - 0.005).max(0.0) / (wall + 0.005) - 0.05;
+        let high = 100.0 * (solve + 0.005) / (wall - 0.005) + 0.05;
+        assert!(low - 1e-9 <= share && share <= high + 1e-9, "{text}");
+        // The cross-core round trips before and after: a time on a machine of two cores or
+        // more (under the 200 ms that the probe may take), "—" on one.
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        for t in [row[12], row[13]] {
+            if cores > 1 {
+                assert!(t > 0.0 && t < 2e8, "{text}");
+            } else {
+                assert!(t.is_nan(), "{text}");
+            }
+        }
     }
     let slope = (rows[1][1] / rows[0][1]).ln() / (rows[1][0] / rows[0][0]).ln();
     let rays = scale_exponent(&text, "rays").unwrap();
