@@ -26,9 +26,10 @@ const TRIPS_BUDGET: Duration = Duration::from_millis(200);
 ///
 /// Shooting methods hand half of a shot's receivers to the other core and read back what it
 /// wrote, so that their bookkeeping depends on this latency as no other stage does. On the
-/// 2-core virtual machine of docs/benchmarks.md it is 80–140 ns at some times and 400–460 ns
-/// at others (the host places the two virtual cores near each other or not, and moves them),
-/// and the bookkeeping of the same solve took up to 45 % longer at the high value.
+/// 2-core virtual machine of docs/benchmarks.md it is 45–140 ns at some times and 350–460 ns
+/// at others (the host places the two virtual cores on cores that share a cache or not, and
+/// moves them), and the bookkeeping of the same solve took up to 50 % longer at the high
+/// value (hospital, 400,555 patches: 1.35 s against 2.01 s).
 fn cross_core_round_trip() -> Option<f64> {
     if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
         return None;
