@@ -795,8 +795,10 @@ pub struct BenchArgs {
     #[arg(long, value_name = "SCENE", help_heading = SCENE)]
     pub ranks: Option<String>,
     /// Instead: solve this scene at each of `--sizes` (patch counts), each in a fresh process,
-    /// and print rays, wall and CPU time, the time of each stage, peak resident memory and the
-    /// fitted exponents against N.
+    /// and print rays, wall and CPU time, the time of each stage, peak resident memory, the
+    /// bookkeeping's share of the wall time (`solve %`), the round trip of a value between two
+    /// cores just before and after the solve (`xcore0 ns`, `xcore1 ns`), and the fitted
+    /// exponents against N.
     #[arg(long, value_name = "SCENE", requires = "sizes", help_heading = SCENE)]
     pub scale: Option<String>,
     /// `--scale`: the patch counts.

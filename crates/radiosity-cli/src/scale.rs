@@ -98,8 +98,6 @@ struct Row {
     form_factors: f64,
     solve: f64,
     resident_mib: f64,
-    /// [`cross_core_round_trip`] just before and just after the solve.
-    round_trips: [Option<f64>; 2],
 }
 
 /// The numbers of a summary line, in order (commas inside numbers are not used).
@@ -209,10 +207,8 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
         }
         let mut row = parse(&String::from_utf8_lossy(&result.stdout));
         row.wall = wall;
-        row.round_trips = [before, after];
-        let [xcore0, xcore1] = row
-            .round_trips
-            .map(|t| t.map_or("—".to_string(), |t| format!("{t:.0}")));
+        let [xcore0, xcore1] =
+            [before, after].map(|t| t.map_or("—".to_string(), |t| format!("{t:.0}")));
         println!(
             "{:>9} {:>11} {:>8} {:>9.2} {:>9.2} {:>8.3} {:>8.3} {:>9.2} {:>9.2} {:>10.0} {:>8.2} {:>7.1} {:>9} {:>9}",
             row.patches,
