@@ -251,8 +251,11 @@ const _: () = assert!(SPAN <= Nodes::CHUNK);
 /// How many receivers ahead of the one being updated [`update`] asks the cache for: enough
 /// misses in flight to cover a trip to memory, where at 4 × 10⁵ patches and more the records do
 /// not fit in the last-level cache (hospital, 400k patches, bookkeeping in four alternating
-/// rounds: 3.5–4.4 s with 32 ahead, 3.9–5.5 s with 8; 64 no better than 32).
-const AHEAD: usize = 32;
+/// rounds: 3.5–4.4 s with 32 ahead, 3.9–5.5 s with 8). At 10⁶ patches (64 MB of records) one
+/// thread's updates wait on memory even 32 ahead: bookkeeping alone on one thread, five
+/// alternating runs, 5.54–5.81 s with 64 against 5.90–7.07 s with 32 (128: 7.03 s); at 10⁵
+/// patches, where the records stay in the cache, 8 to 64 ahead are alike.
+const AHEAD: usize = 64;
 
 /// Where a span of receivers (its column entries, its first patch `first`) is halved: at the
 /// block boundary at or below its middle receiver, or the next one up if that is the span's
