@@ -249,9 +249,9 @@ const SPAN: usize = 512;
 const _: () = assert!(SPAN <= Nodes::CHUNK);
 
 /// How many receivers ahead of the one being updated [`update`] asks the cache for: enough
-/// misses in flight to cover a trip to memory, where at 4 × 10⁵ patches and more the records do
-/// not fit in the last-level cache (hospital, 400k patches, bookkeeping in four alternating
-/// rounds: 3.5–4.4 s with 32 ahead, 3.9–5.5 s with 8). At 10⁶ patches (64 MB of records) one
+/// misses in flight to cover a trip to memory, where the records outgrow the last-level cache
+/// (hospital, 400k patches, whole solves in four alternating rounds on 2026-11-26: bookkeeping
+/// 3.5–4.4 s with 32 ahead, 3.9–5.5 s with 8). At 10⁶ patches (64 MB of records) one
 /// thread's updates wait on memory even 32 ahead: bookkeeping alone on one thread, five
 /// alternating runs, 5.54–5.81 s with 64 against 5.90–7.07 s with 32 (128: 7.03 s); at 10⁵
 /// patches, where the records stay in the cache, 8 to 64 ahead are alike.
@@ -440,7 +440,8 @@ impl Tree for () {
 ///
 /// Everything the loop reads besides the column and the records is in locals, and the look-
 /// ahead zips the column with itself, so that the compiler keeps bases and bounds in
-/// registers. The loop is bound by its instructions more than by memory: a 32-byte record of
+/// registers. At 10⁵ patches the loop is bound by the core more than by memory (at 10⁶, on one
+/// thread, by memory: [`AHEAD`]): a 32-byte record of
 /// `f32`s, half the lines, was slower for its conversions; 16, 32 or 64 receivers ahead
 /// made no difference at 10⁵ patches; and a receiver that did not add the row's sums
 /// ([`RowSums`]) took 15 % less time.
