@@ -252,9 +252,10 @@ const _: () = assert!(SPAN <= Nodes::CHUNK);
 /// misses in flight to cover a trip to memory, where the records outgrow the last-level cache
 /// (hospital, 400k patches, whole solves in four alternating rounds on 2026-11-26: bookkeeping
 /// 3.5–4.4 s with 32 ahead, 3.9–5.5 s with 8). At 10⁶ patches (64 MB of records) one
-/// thread's updates wait on memory even 32 ahead: bookkeeping alone on one thread, five
-/// alternating runs, 5.54–5.81 s with 64 against 5.90–7.07 s with 32 (128: 7.03 s); at 10⁵
-/// patches, where the records stay in the cache, 8 to 64 ahead are alike.
+/// thread's updates wait on memory even 32 ahead: bookkeeping alone on one thread,
+/// alternating, 5.54–5.81 s with 64 (three runs) against 5.90–7.07 s with 32 (five; 128:
+/// 7.03 s, 96 alike with 64); at 10⁵ patches, where the records stay in the cache, 8 to 64
+/// ahead are alike.
 const AHEAD: usize = 64;
 
 /// Where a span of receivers (its column entries, its first patch `first`) is halved: at the
