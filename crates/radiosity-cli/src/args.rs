@@ -555,10 +555,14 @@ pub struct SolveSystemArgs {
     #[arg(long, value_name = "N", default_value_t = 1000, help_heading = SOLVER)]
     pub photons: u32,
     /// `stochastic-jacobi`: rays per patch in each iteration (all patches shoot N × this many
-    /// rays, each patch's share in proportion to its unshot power) and in the final gathering
-    /// iteration.
+    /// rays, each patch's share in proportion to its unshot power).
     #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
     pub iteration_rays: u32,
+    /// `stochastic-jacobi`: rays per patch of a final regular gathering iteration (Bekaert's,
+    /// with the constant control variate); 0, the default, for none: on RenderPark's hospital
+    /// it made the result noisier per patch and per surface at any count tried.
+    #[arg(long, value_name = "N", default_value_t = 0, help_heading = SOLVER)]
+    pub gather_rays: u32,
     /// Seed of `stochastic`.
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = SOLVER)]
     pub seed: u64,
@@ -619,10 +623,14 @@ pub struct SolveArgs {
     #[arg(long, value_name = "N", default_value_t = 1000, help_heading = SOLVER)]
     pub photons: u32,
     /// `stochastic-jacobi`: rays per patch in each iteration (all patches shoot N × this many
-    /// rays, each patch's share in proportion to its unshot power) and in the final gathering
-    /// iteration.
+    /// rays, each patch's share in proportion to its unshot power).
     #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
     pub iteration_rays: u32,
+    /// `stochastic-jacobi`: rays per patch of a final regular gathering iteration (Bekaert's,
+    /// with the constant control variate); 0, the default, for none: on RenderPark's hospital
+    /// it made the result noisier per patch and per surface at any count tried.
+    #[arg(long, value_name = "N", default_value_t = 0, help_heading = SOLVER)]
+    pub gather_rays: u32,
     /// `hierarchical`: refine a link when the power it may misplace exceeds this fraction of
     /// the emitted power.
     #[arg(long, value_name = "E", default_value_t = radiosity::hierarchical::Params::default().link_error, help_heading = SOLVER)]
@@ -821,6 +829,10 @@ pub struct BenchArgs {
     /// `--scale`, `stochastic-jacobi`: rays per patch and iteration.
     #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
     pub iteration_rays: u32,
+    /// `--scale`, `stochastic-jacobi`: rays per patch of the final gathering iteration (0:
+    /// none).
+    #[arg(long, value_name = "N", default_value_t = 0, help_heading = SOLVER)]
+    pub gather_rays: u32,
     /// Time against error of the three ways to make a picture (radiosity shown directly, the
     /// final gather, the path tracer) on SCENE, against a path-traced reference; writes
     /// pictures.csv, pictures.svg/.png and the images to --out.

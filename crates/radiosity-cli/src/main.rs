@@ -196,6 +196,7 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
         a.omega,
         a.photons,
         a.iteration_rays,
+        a.gather_rays,
         a.seed,
     )?;
     if FileFormat::from_path(&a.out) != Some(FileFormat::Csv) {

@@ -83,6 +83,7 @@ pub fn run(a: &BenchArgs, scene_name: &str) -> Result<()> {
             params: SolverParams {
                 tolerance: a.tolerance,
                 iteration_rays: a.iteration_rays,
+                gather_rays: a.gather_rays,
                 ..SolverParams::default()
             },
             ..Settings::default()

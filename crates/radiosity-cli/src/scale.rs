@@ -184,6 +184,7 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
             .args(["--solver", a.solver.0.name()])
             .args(["--tolerance", &a.tolerance.to_string()])
             .args(["--iteration-rays", &a.iteration_rays.to_string()])
+            .args(["--gather-rays", &a.gather_rays.to_string()])
             .arg("--out")
             .arg(&out);
         if a.one_sided {

@@ -118,6 +118,7 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
             a.omega,
             a.photons,
             a.iteration_rays,
+            a.gather_rays,
             a.seed,
         )?,
         memory_limit: 0,
@@ -180,6 +181,7 @@ pub fn solver_params(
     omega: f64,
     photons: u32,
     iteration_rays: u32,
+    gather_rays: u32,
     seed: u64,
 ) -> Result<SolverParams> {
     if !(0.0..1.0).contains(&tolerance) {
@@ -200,6 +202,7 @@ pub fn solver_params(
         omega,
         photons,
         iteration_rays,
+        gather_rays,
         seed,
         ..Default::default()
     })

@@ -545,7 +545,7 @@ fn trace_dict<'py>(py: Python<'py>, csv: &str) -> PyResult<Bound<'py, PyDict>> {
 
 /// Solve a scene (the CLI's `solve`): mesh, form factors, the solver.
 #[pyfunction]
-#[pyo3(signature = (scene, solver = "progressive", patches = 10000, tolerance = 0.01, seed = 1, threads = None, form_factor_method = "monte-carlo", rays = 256, max_iterations = None, trace = false, progress = None, omega = 1.1, photons = 1000, iteration_rays = 16, resolution = 128, samples = 16, link_error = 2e-5))]
+#[pyo3(signature = (scene, solver = "progressive", patches = 10000, tolerance = 0.01, seed = 1, threads = None, form_factor_method = "monte-carlo", rays = 256, max_iterations = None, trace = false, progress = None, omega = 1.1, photons = 1000, iteration_rays = 16, gather_rays = 0, resolution = 128, samples = 16, link_error = 2e-5))]
 #[allow(clippy::too_many_arguments)]
 fn solve(
     py: Python<'_>,
@@ -563,6 +563,7 @@ fn solve(
     omega: f64,
     photons: u32,
     iteration_rays: u32,
+    gather_rays: u32,
     resolution: u32,
     samples: u32,
     link_error: f64,
@@ -615,6 +616,7 @@ fn solve(
             omega,
             photons,
             iteration_rays,
+            gather_rays,
             ..SolverParams::default()
         },
         trace,

@@ -119,6 +119,12 @@ def test_stochastic_jacobi_times_its_rays_within_its_solve():
     assert 0.0 < info["seconds_solve_rays"] <= info["seconds_solve"]
     p = radiosity.solve(radiosity.builtin("cornell"), solver="progressive", patches=500, tolerance=0.05)
     assert p.info["seconds_solve_rays"] == 0.0
+    # The final gathering iteration only when asked for: it gathers every patch's B again.
+    g = radiosity.solve(
+        radiosity.builtin("cornell"), solver="stochastic-jacobi", patches=2000, tolerance=0.05, gather_rays=16
+    )
+    assert not np.array_equal(g.radiosity, s.radiosity)
+    assert g.info["seconds_solve_rays"] > 0.0
 
 
 def test_bad_input_raises_value_error_naming_the_argument():

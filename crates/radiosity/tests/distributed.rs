@@ -68,29 +68,33 @@ fn jacobi_is_the_same_bytes_on_any_number_of_ranks_and_agrees_with_lu() {
     assert!(worst < 1e-5, "Jacobi over ranks against LU: {worst}");
 }
 
+/// With the final gathering iteration (its patches shared among the ranks) and without.
 #[test]
 fn stochastic_jacobi_over_ranks_is_the_serial_run_byte_for_byte() {
     let scene = builtin::cornell();
-    let s = Settings {
-        params: SolverParams {
-            tolerance: 0.01,
-            ..settings(Solver::StochasticJacobi, 400).params
-        },
-        ..settings(Solver::StochasticJacobi, 400)
-    };
-    let serial = pipeline::solve(&scene, &s, &Silent).unwrap();
-    for k in [1, 2, 4] {
-        let runs = Local::run(k, |c| {
-            let ranks = Ranks::new(c);
-            let (sol, report) = distributed::solve::solve(&scene, &s, &ranks, &Silent).unwrap();
-            // Every rank sent its share of the hits.
-            assert!(report.traffic.iter().all(|t| t.bytes_sent > 0));
-            (sol.radiosity, sol.info.absorbed, sol.info.escaped)
-        });
-        for r in &runs {
-            assert_eq!(r.0, serial.radiosity, "{k} ranks");
-            assert_eq!(r.1, serial.info.absorbed);
-            assert_eq!(r.2, serial.info.escaped);
+    for gather_rays in [0, 16] {
+        let s = Settings {
+            params: SolverParams {
+                tolerance: 0.01,
+                gather_rays,
+                ..settings(Solver::StochasticJacobi, 400).params
+            },
+            ..settings(Solver::StochasticJacobi, 400)
+        };
+        let serial = pipeline::solve(&scene, &s, &Silent).unwrap();
+        for k in [1, 2, 4] {
+            let runs = Local::run(k, |c| {
+                let ranks = Ranks::new(c);
+                let (sol, report) = distributed::solve::solve(&scene, &s, &ranks, &Silent).unwrap();
+                // Every rank sent its share of the hits.
+                assert!(report.traffic.iter().all(|t| t.bytes_sent > 0));
+                (sol.radiosity, sol.info.absorbed, sol.info.escaped)
+            });
+            for r in &runs {
+                assert_eq!(r.0, serial.radiosity, "{k} ranks, gather {gather_rays}");
+                assert_eq!(r.1, serial.info.absorbed);
+                assert_eq!(r.2, serial.info.escaped);
+            }
         }
     }
 }

@@ -311,48 +311,52 @@ fn results_do_not_depend_on_the_thread_count() {
 /// floor's own. The twin that the final gathering finds covered sees nothing, including the
 /// control variate's term (which its shooting rays, launched above the cover, would claim):
 /// before, it kept ρβ and the pair was 15.6 % too bright. Same seed, 3,000 patches, 64 rays an
-/// iteration; the two runs differ by their Monte Carlo noise, held to 4 %.
+/// iteration; the two runs differ by their Monte Carlo noise, held to 4 %. With the final
+/// gathering (64 rays a patch) and without it (the shooting iterations alone).
 #[test]
 fn stochastic_jacobi_twins_add_up_to_the_surface() {
     let single = builtin::cornell();
     let mut doubled = single.clone();
     doubled.polygons.push(single.polygons[0].clone());
-    let floor = |scene: &radiosity::scene::Scene, surfaces: &[usize]| {
-        let s = pipeline::solve(
-            scene,
-            &Settings {
-                mesh: MeshParams::Patches(3000),
-                solver: radiosity::solve::Solver::StochasticJacobi,
-                params: SolverParams {
-                    iteration_rays: 64,
-                    ..SolverParams::default()
+    for gather_rays in [64, 0] {
+        let floor = |scene: &radiosity::scene::Scene, surfaces: &[usize]| {
+            let s = pipeline::solve(
+                scene,
+                &Settings {
+                    mesh: MeshParams::Patches(3000),
+                    solver: radiosity::solve::Solver::StochasticJacobi,
+                    params: SolverParams {
+                        iteration_rays: 64,
+                        gather_rays,
+                        ..SolverParams::default()
+                    },
+                    ..Settings::default()
                 },
-                ..Settings::default()
-            },
-            &radiosity::observe::Silent,
-        )
-        .unwrap();
-        surfaces
-            .iter()
-            .map(|&k| {
-                let (mut a, mut b) = (0.0, 0.0);
-                for (i, p) in s.mesh.patches.iter().enumerate() {
-                    if p.surface as usize == k {
-                        a += p.area as f64;
-                        b += s.radiosity[i].sum() * p.area as f64;
+                &radiosity::observe::Silent,
+            )
+            .unwrap();
+            surfaces
+                .iter()
+                .map(|&k| {
+                    let (mut a, mut b) = (0.0, 0.0);
+                    for (i, p) in s.mesh.patches.iter().enumerate() {
+                        if p.surface as usize == k {
+                            a += p.area as f64;
+                            b += s.radiosity[i].sum() * p.area as f64;
+                        }
                     }
-                }
-                b / a
-            })
-            .sum::<f64>()
-    };
-    let one = floor(&single, &[0]);
-    let two = floor(&doubled, &[0, single.polygons.len()]);
-    assert!(
-        (two / one - 1.0).abs() < 0.04,
-        "twins {two} against the floor alone {one} ({:+.2} %)",
-        100.0 * (two / one - 1.0)
-    );
+                    b / a
+                })
+                .sum::<f64>()
+        };
+        let one = floor(&single, &[0]);
+        let two = floor(&doubled, &[0, single.polygons.len()]);
+        assert!(
+            (two / one - 1.0).abs() < 0.04,
+            "gather {gather_rays}: twins {two} against the floor alone {one} ({:+.2} %)",
+            100.0 * (two / one - 1.0)
+        );
+    }
 }
 
 /// Stochastic Jacobi's final gathering under a cover lying flush on a surface (a rug 0.7 ray
@@ -378,9 +382,11 @@ fn stochastic_jacobi_gathers_nothing_under_a_flush_cover() {
             [300.0, h, 300.0],
         ])
     });
-    for solver in [
-        radiosity::solve::Solver::StochasticJacobi,
-        radiosity::solve::Solver::Progressive,
+    // Stochastic Jacobi with its final gathering (64 rays a patch) and without.
+    for (solver, gather_rays) in [
+        (radiosity::solve::Solver::StochasticJacobi, 64),
+        (radiosity::solve::Solver::StochasticJacobi, 0),
+        (radiosity::solve::Solver::Progressive, 0),
     ] {
         let s = pipeline::solve(
             &scene,
@@ -389,6 +395,7 @@ fn stochastic_jacobi_gathers_nothing_under_a_flush_cover() {
                 solver,
                 params: SolverParams {
                     iteration_rays: 64,
+                    gather_rays,
                     ..SolverParams::default()
                 },
                 ..Settings::default()
@@ -415,10 +422,14 @@ fn stochastic_jacobi_gathers_nothing_under_a_flush_cover() {
         assert!(under.0 > 0.0 && lit.0 > 0.0);
         assert!(
             mean(under) < 1e-3 * mean(open),
-            "{solver}: floor under the rug {} against {} in the open",
+            "{solver} (gather {gather_rays}): floor under the rug {} against {} in the open",
             mean(under),
             mean(open)
         );
-        assert!(mean(lit) > 0.3 * mean(open), "{solver}: rug {}", mean(lit));
+        assert!(
+            mean(lit) > 0.3 * mean(open),
+            "{solver} (gather {gather_rays}): rug {}",
+            mean(lit)
+        );
     }
 }

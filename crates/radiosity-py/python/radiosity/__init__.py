@@ -48,6 +48,7 @@ def solve(
     omega: float = 1.1,
     photons: int = 1000,
     iteration_rays: int = 16,
+    gather_rays: int = 0,
     resolution: int = 128,
     samples: int = 16,
     link_error: float = 2e-5,
@@ -56,7 +57,8 @@ def solve(
     `form_factor_method` (Monte Carlo rows on demand with `rays` rays for an average shooter;
     `resolution` and `samples` for the projection methods), `solver` until the unshot energy is
     `tolerance` of the emitted energy (`omega` for sor, `photons` for stochastic,
-    `iteration_rays` for stochastic-jacobi). `solver="hierarchical"` refines elements and links
+    `iteration_rays` and `gather_rays`, the final gathering's rays per patch, 0 for none, for
+    stochastic-jacobi). `solver="hierarchical"` refines elements and links
     instead of meshing (`link_error`; `patches` and the form-factor options are then unused);
     its leaves are the solution's patches. Same seed, same numbers as the CLI.
     `progress(stage, done, total)` is called now and then; an exception it raises, or Ctrl-C,
@@ -76,6 +78,7 @@ def solve(
         omega=omega,
         photons=photons,
         iteration_rays=iteration_rays,
+        gather_rays=gather_rays,
         resolution=resolution,
         samples=samples,
         link_error=link_error,

@@ -71,6 +71,7 @@ def solve(
     omega: float = 1.1,
     photons: int = 1000,
     iteration_rays: int = 16,
+    gather_rays: int = 0,
     resolution: int = 128,
     samples: int = 16,
     link_error: float = 2e-5,

@@ -278,9 +278,12 @@ pub struct SolverParams {
     pub photons: u32,
     /// Seed of `stochastic`'s and `stochastic-jacobi`'s random streams.
     pub seed: u64,
-    /// `stochastic-jacobi`: rays per patch in each iteration (R = this × N) and in the final
-    /// gathering iteration.
+    /// `stochastic-jacobi`: rays per patch in each iteration (R = this × N).
     pub iteration_rays: u32,
+    /// `stochastic-jacobi`: rays per patch of the final regular gathering iteration, 0 for
+    /// none (the default: on RenderPark's hospital it made every result noisier,
+    /// [`stochastic_jacobi`]).
+    pub gather_rays: u32,
     /// Memory the solver may use, bytes (`gauss`' dense matrix, `overshoot`'s shot matrix).
     pub memory_limit: u64,
 }
@@ -294,6 +297,7 @@ impl Default for SolverParams {
             photons: 1000,
             seed: 1,
             iteration_rays: 16,
+            gather_rays: 0,
             memory_limit: 4 << 30,
         }
     }

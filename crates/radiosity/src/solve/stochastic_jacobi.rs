@@ -73,7 +73,13 @@ pub struct StochasticJacobi<'s> {
     /// are nearly a Poisson process.
     direct: Vec<Rgb>,
     direct_sq: Vec<f64>,
+    /// Per patch, the variance of what the iterations after the first delivered (channels
+    /// summed): each of its arrivals times the power a ray carried in that iteration, as
+    /// for a Poisson process of rays of equal power.
+    indirect_var: Vec<f64>,
     rays_per_patch: u32,
+    /// Rays per patch of the final gathering iteration; 0 for none.
+    gather_rays: u32,
     seed: u64,
     emitted: Rgb,
     emitted_total: f64,
@@ -82,7 +88,8 @@ pub struct StochasticJacobi<'s> {
     absorbed: Rgb,
     escaped: Rgb,
     iterations: u64,
-    gathered: bool,
+    /// The final step ([`SolverState::finish`]) is done: gathered, or the error estimated.
+    finished: bool,
     estimated_error: f64,
     /// Ranks sharing the rays of each iteration, if distributed.
     ranks: Option<&'s crate::distributed::Ranks<'s>>,
@@ -142,7 +149,9 @@ impl<'s> StochasticJacobi<'s> {
             hits: vec![0; n],
             direct: Vec::new(),
             direct_sq: Vec::new(),
+            indirect_var: Vec::new(),
             rays_per_patch: params.iteration_rays,
+            gather_rays: params.gather_rays,
             seed: params.seed,
             emitted,
             emitted_total: emitted.sum(),
@@ -155,7 +164,7 @@ impl<'s> StochasticJacobi<'s> {
             absorbed: Rgb::BLACK,
             escaped: Rgb::BLACK,
             iterations: 0,
-            gathered: false,
+            finished: false,
             estimated_error: 0.0,
             ranks: None,
             timing: Timing::default(),
@@ -246,7 +255,10 @@ impl<'s> StochasticJacobi<'s> {
         };
         if first {
             self.direct_sq = vec![0.0; n];
+            self.indirect_var = vec![0.0; n];
         }
+        // The (channel-summed) power a ray of this iteration carries, on average.
+        let ray_power = total / rays.max(1) as f64;
         let mut escaped = self.escaped;
         // (source, hit) of each ray of a batch, filled in parallel, reduced in ray order.
         buf.resize((rays as usize).min(BATCH), (0, 0));
@@ -362,6 +374,10 @@ impl<'s> StochasticJacobi<'s> {
                 let got = rho * p * (1.0 / sys.area[i]);
                 if first {
                     self.direct[i] = got;
+                } else {
+                    // got = Σ ρ_i w_k / A_i over its arrivals, each about ρ̄_i w̄ / A_i.
+                    self.indirect_var[i] +=
+                        got.sum().abs() * (rho.sum() / 3.0) * ray_power / sys.area[i];
                 }
                 self.b[i] += got;
                 self.unshot[i] += got;
@@ -391,7 +407,7 @@ impl<'s> StochasticJacobi<'s> {
             .map(|i| (self.b[i] - sys.emission[i]) * sys.area[i])
             .sum::<Rgb>()
             * (1.0 / total_area);
-        let per = self.rays_per_patch as usize;
+        let per = self.gather_rays as usize;
         let old = &self.b;
         let (rays, hits, direct, direct_sq) =
             (&self.rays, &self.hits, &self.direct, &self.direct_sq);
@@ -472,7 +488,23 @@ impl<'s> StochasticJacobi<'s> {
             norm += sys.area[j] * b.sum() * b.sum();
         }
         self.estimated_error = if norm > 0.0 { (err / norm).sqrt() } else { 0.0 };
-        self.gathered = true;
+    }
+
+    /// The standard error of the shooting iterations' B alone (no final gathering), from the
+    /// variance of each patch's arrivals: the first iteration's counted, the later ones'
+    /// modelled ([`Self::indirect_var`]). It leaves out the noise a later iteration inherits
+    /// from the unshot radiosity the iteration before left (each source's ΔB is itself an
+    /// estimate), and so falls short of the error by up to the scene's reflected share.
+    fn shooting_error(&mut self) {
+        let sys = self.system;
+        let (mut err, mut norm) = (0.0, 0.0);
+        for j in 0..sys.len() {
+            let var = self.direct_sq.get(j).copied().unwrap_or(0.0)
+                + self.indirect_var.get(j).copied().unwrap_or(0.0);
+            err += sys.area[j] * var;
+            norm += sys.area[j] * self.b[j].sum() * self.b[j].sum();
+        }
+        self.estimated_error = if norm > 0.0 { (err / norm).sqrt() } else { 0.0 };
     }
 }
 
@@ -482,7 +514,7 @@ impl SolverState for StochasticJacobi<'_> {
     }
 
     fn step(&mut self, source: &mut dyn Operator) -> bool {
-        if self.gathered {
+        if self.finished {
             return false;
         }
         let sampler = source.photons().expect("checked by solve::start");
@@ -495,7 +527,12 @@ impl SolverState for StochasticJacobi<'_> {
     }
 
     fn finish(&mut self, source: &mut dyn Operator) -> bool {
-        if self.gathered {
+        if self.finished {
+            return false;
+        }
+        self.finished = true;
+        if self.gather_rays == 0 {
+            self.shooting_error();
             return false;
         }
         let sampler = source.photons().expect("checked by solve::start");
