@@ -359,6 +359,47 @@ fn stochastic_jacobi_twins_add_up_to_the_surface() {
     }
 }
 
+/// Stochastic Jacobi's pass over the patches after each iteration runs in parallel over fixed
+/// ranges of patches: on a mesh of several ranges (20,000 patches) one and two threads give
+/// the same B and the same books, bit for bit, with the final gathering and without.
+#[test]
+fn stochastic_jacobi_on_many_patches_does_not_depend_on_the_threads() {
+    let scene = builtin::cornell();
+    for gather_rays in [0, 4] {
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let s = pipeline::solve(
+                        &scene,
+                        &Settings {
+                            mesh: MeshParams::Patches(20_000),
+                            solver: radiosity::solve::Solver::StochasticJacobi,
+                            params: SolverParams {
+                                iteration_rays: 4,
+                                gather_rays,
+                                tolerance: 0.05,
+                                ..SolverParams::default()
+                            },
+                            ..Settings::default()
+                        },
+                        &radiosity::observe::Silent,
+                    )
+                    .unwrap();
+                    (s.radiosity, s.info.absorbed, s.info.escaped, s.info.unshot)
+                })
+        };
+        let (one, two) = (on(1), on(2));
+        assert!(one.0.len() > 16_384, "{} patches", one.0.len());
+        assert!(
+            one == two,
+            "gather {gather_rays}: one thread and two differ"
+        );
+    }
+}
+
 /// Stochastic Jacobi's final gathering under a cover lying flush on a surface (a rug 0.7 ray
 /// offsets above the Cornell box's floor): no light reaches the floor under the rug, as every
 /// shooting method finds, so its reflected radiosity is 0. A gathering ray launched a ray offset

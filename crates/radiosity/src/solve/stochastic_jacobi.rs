@@ -48,6 +48,8 @@ use rayon::prelude::*;
 
 /// Rays per parallel task and per random stream.
 pub const CHUNK: usize = 256;
+/// Patches of a part of the pass after each iteration, whose sums are added in order.
+const PASS: usize = 1 << 14;
 /// Rays whose hits are held at once (8 bytes each).
 const BATCH: usize = 1 << 20;
 /// Gathering rays a group of patches casts together in the final iteration.
@@ -68,15 +70,14 @@ pub struct StochasticJacobi<'s> {
     /// Rays shot from each patch so far, and how many of them hit a patch: s_j's estimate.
     rays: Vec<u32>,
     hits: Vec<u32>,
-    /// What the first iteration delivered: ρ_j × the direct irradiance from the emitters, and
-    /// the sum of the squares of its arrivals (channels summed): its variance, as the arrivals
-    /// are nearly a Poisson process.
+    /// What the first iteration delivered, ρ_j × the direct irradiance from the emitters: kept
+    /// for the final gathering only.
     direct: Vec<Rgb>,
-    direct_sq: Vec<f64>,
-    /// Per patch, the variance of what the iterations after the first delivered (channels
-    /// summed): each of its arrivals times the power a ray carried in that iteration, as
-    /// for a Poisson process of rays of equal power.
-    indirect_var: Vec<f64>,
+    /// Per patch, the variance (channels summed) of what the shooting iterations delivered:
+    /// the first iteration's, and without a final gathering every later one's too. The arrivals
+    /// are nearly a Poisson process of rays of equal power, so that an iteration adds what
+    /// arrived times the size of one arrival ([`Self::shoot`]).
+    shot_var: Vec<f64>,
     rays_per_patch: u32,
     /// Rays per patch of the final gathering iteration; 0 for none.
     gather_rays: u32,
@@ -148,8 +149,7 @@ impl<'s> StochasticJacobi<'s> {
             rays: vec![0; n],
             hits: vec![0; n],
             direct: Vec::new(),
-            direct_sq: Vec::new(),
-            indirect_var: Vec::new(),
+            shot_var: Vec::new(),
             rays_per_patch: params.iteration_rays,
             gather_rays: params.gather_rays,
             seed: params.seed,
@@ -235,6 +235,8 @@ impl<'s> StochasticJacobi<'s> {
         // All zero: the iteration before set each back once it was read.
         arrived.resize(n, Rgb::BLACK);
         let (mut acc, mut before, mut rays) = (0.0f64, 0u64, 0u64);
+        // The power the sources with rays shoot, per channel.
+        let mut shot = Rgb::BLACK;
         for i in 0..n {
             acc += energy(self.unshot[i], sys.area[i]);
             let upto = (acc / total * r - xi).ceil().max(0.0) as u64;
@@ -242,6 +244,9 @@ impl<'s> StochasticJacobi<'s> {
             before = before.max(upto);
             if first && count == 0 && self.unshot[i] != Rgb::BLACK {
                 count = 1;
+            }
+            if count > 0 {
+                shot += self.unshot[i] * sys.area[i];
             }
             rays += count;
             end.push(rays);
@@ -254,11 +259,11 @@ impl<'s> StochasticJacobi<'s> {
             self.unshot[i] * (sys.area[i] / count as f64)
         };
         if first {
-            self.direct_sq = vec![0.0; n];
-            self.indirect_var = vec![0.0; n];
+            self.shot_var = vec![0.0; n];
         }
-        // The (channel-summed) power a ray of this iteration carries, on average.
-        let ray_power = total / rays.max(1) as f64;
+        // The power a ray of this iteration carries, on average (each source's rays carry
+        // its power over its count, ⌊R p_i/P⌋ or ⌈R p_i/P⌉, so nearly this).
+        let ray_power = shot * (1.0 / rays.max(1) as f64);
         let mut escaped = self.escaped;
         // (source, hit) of each ray of a batch, filled in parallel, reduced in ray order.
         buf.resize((rays as usize).min(BATCH), (0, 0));
@@ -328,8 +333,9 @@ impl<'s> StochasticJacobi<'s> {
             // the books, are applied once per patch after the last batch, so a ray waits on one
             // cache miss (its receiver's sum), not on four arrays scattered over memory. The
             // rays of a source are consecutive: its weight is found once.
+            // A source's hits are counted here and added to its count when its rays end.
             let hits = &buf[..batch];
-            let (mut source, mut w) = (usize::MAX, Rgb::BLACK);
+            let (mut source, mut w, mut landed) = (usize::MAX, Rgb::BLACK, 0u32);
             for (k, &(i, j)) in hits.iter().enumerate() {
                 // Ask for the receiver AHEAD rays on, so that the misses overlap (a lost ray's
                 // u32::MAX asks for nothing).
@@ -338,52 +344,78 @@ impl<'s> StochasticJacobi<'s> {
                 }
                 let i = i as usize;
                 if i != source {
-                    (source, w) = (i, weight(i));
+                    if let Some(h) = self.hits.get_mut(source) {
+                        *h = h.saturating_add(landed);
+                    }
+                    (source, w, landed) = (i, weight(i), 0);
                 }
                 if j == u32::MAX {
                     escaped += w;
                 } else {
-                    let j = j as usize;
-                    self.hits[i] = self.hits[i].saturating_add(1);
-                    arrived[j] += w;
-                    if first {
-                        let db = sys.reflectance[j] * w * (1.0 / sys.area[j]);
-                        self.direct_sq[j] += db.sum() * db.sum();
-                    }
+                    landed += 1;
+                    arrived[j as usize] += w;
                 }
+            }
+            if let Some(h) = self.hits.get_mut(source) {
+                *h = h.saturating_add(landed);
             }
             self.timing.reduce += t.elapsed().as_secs_f64();
             done += batch as u64;
         }
         // What arrived at j is reflected as ΔB_j = ρ_j P_j / A_j, added to B_j and left
-        // unshot; the rest, (1 − ρ_j) P_j, is absorbed. In patch order, one pass.
+        // unshot; the rest, (1 − ρ_j) P_j, is absorbed. One pass, in parallel over fixed
+        // ranges of patches whose sums are added in order, so that the books do not depend on
+        // the threads.
         let t = std::time::Instant::now();
-        if first {
-            self.direct = vec![Rgb::BLACK; n];
-        }
-        let (mut absorbed, mut left) = (self.absorbed, 0.0);
-        for (i, p) in arrived.iter_mut().enumerate() {
-            let count = end[i] - if i == 0 { 0 } else { end[i - 1] };
-            if count > 0 {
-                self.unshot[i] = Rgb::BLACK;
-                self.rays[i] = self.rays[i].saturating_add(count.min(u32::MAX as u64) as u32);
-            }
-            let p = std::mem::replace(p, Rgb::BLACK);
-            if p != Rgb::BLACK {
-                let rho = sys.reflectance[i];
-                let got = rho * p * (1.0 / sys.area[i]);
-                if first {
-                    self.direct[i] = got;
-                } else {
-                    // got = Σ ρ_i w_k / A_i over its arrivals, each about ρ̄_i w̄ / A_i.
-                    self.indirect_var[i] +=
-                        got.sum().abs() * (rho.sum() / 3.0) * ray_power / sys.area[i];
+        let variance = first || self.gather_rays == 0;
+        let parts: Vec<(Rgb, f64)> = arrived
+            .par_chunks_mut(PASS)
+            .zip(self.unshot.par_chunks_mut(PASS))
+            .zip(self.b.par_chunks_mut(PASS))
+            .zip(self.rays.par_chunks_mut(PASS))
+            .zip(self.shot_var.par_chunks_mut(PASS))
+            .enumerate()
+            .map(|(c, ((((arrived, unshot), b), rays), var))| {
+                let (mut absorbed, mut left) = (Rgb::BLACK, 0.0);
+                for (k, p) in arrived.iter_mut().enumerate() {
+                    let i = c * PASS + k;
+                    let count = end[i] - if i == 0 { 0 } else { end[i - 1] };
+                    if count > 0 {
+                        unshot[k] = Rgb::BLACK;
+                        rays[k] = rays[k].saturating_add(count.min(u32::MAX as u64) as u32);
+                    }
+                    let p = std::mem::replace(p, Rgb::BLACK);
+                    if p != Rgb::BLACK {
+                        let rho = sys.reflectance[i];
+                        let a = sys.area[i];
+                        let got = rho * p * (1.0 / a);
+                        b[k] += got;
+                        unshot[k] += got;
+                        absorbed += (Rgb::splat(1.0) - rho) * p;
+                        if variance {
+                            // got = Σ_k ρ_i w_k / A_i over its arrivals, each about
+                            // ρ_i w̄ / A_i (channels summed).
+                            var[k] += got.sum().abs() * (rho * ray_power).sum().abs() / a;
+                        }
+                    }
+                    left += energy(unshot[k], sys.area[i]);
                 }
-                self.b[i] += got;
-                self.unshot[i] += got;
-                absorbed += (Rgb::splat(1.0) - rho) * p;
-            }
-            left += energy(self.unshot[i], sys.area[i]);
+                (absorbed, left)
+            })
+            .collect();
+        let (mut absorbed, mut left) = (self.absorbed, 0.0);
+        for (a, l) in parts {
+            absorbed += a;
+            left += l;
+        }
+        if first && self.gather_rays > 0 {
+            // The first iteration's arrivals are the direct light: B − E now.
+            self.direct = self
+                .b
+                .iter()
+                .zip(&sys.emission)
+                .map(|(&b, &e)| b - e)
+                .collect();
         }
         (self.escaped, self.absorbed) = (escaped, absorbed);
         self.timing.reduce += t.elapsed().as_secs_f64();
@@ -410,7 +442,7 @@ impl<'s> StochasticJacobi<'s> {
         let per = self.gather_rays as usize;
         let old = &self.b;
         let (rays, hits, direct, direct_sq) =
-            (&self.rays, &self.hits, &self.direct, &self.direct_sq);
+            (&self.rays, &self.hits, &self.direct, &self.shot_var);
         let seed = self.seed;
         // Per patch: the gathered B and the variance of its estimate (channels summed), from
         // its `per` draws in order.
@@ -491,16 +523,14 @@ impl<'s> StochasticJacobi<'s> {
     }
 
     /// The standard error of the shooting iterations' B alone (no final gathering), from the
-    /// variance of each patch's arrivals: the first iteration's counted, the later ones'
-    /// modelled ([`Self::indirect_var`]). It leaves out the noise a later iteration inherits
+    /// variance of each patch's arrivals ([`Self::shot_var`]). It leaves out the noise a later iteration inherits
     /// from the unshot radiosity the iteration before left (each source's ΔB is itself an
     /// estimate), and so falls short of the error by up to the scene's reflected share.
     fn shooting_error(&mut self) {
         let sys = self.system;
         let (mut err, mut norm) = (0.0, 0.0);
         for j in 0..sys.len() {
-            let var = self.direct_sq.get(j).copied().unwrap_or(0.0)
-                + self.indirect_var.get(j).copied().unwrap_or(0.0);
+            let var = self.shot_var.get(j).copied().unwrap_or(0.0);
             err += sys.area[j] * var;
             norm += sys.area[j] * self.b[j].sum() * self.b[j].sum();
         }
