@@ -48,11 +48,12 @@
 //!
 //! **Determinism.** Rays are traced in chunks of [`CHUNK`], each with its own random stream keyed
 //! by (seed, iteration, chunk); hits are reduced in chunk order, so B does not depend on the
-//! number of threads. A hit adds only the power it carries to its receiver's sum; reflectance
-//! and area turn each patch's sum into B, ΔB and the energy books in one pass after the
-//! iteration's last batch. Memory: B, ΔB, the iteration's arrived power, a variance and two
-//! ray counters per patch (and with the final gathering the direct light), plus one batch of
-//! hits.
+//! number of threads. The reduction is serial, and runs while the threads trace the next
+//! batch (nothing a batch draws depends on the one before). A hit adds only the power it
+//! carries to its receiver's sum; reflectance and area turn each patch's sum into B, ΔB and
+//! the energy books in one pass after the iteration's last batch. Memory: B, ΔB, the
+//! iteration's arrived power, a variance and two ray counters per patch (and with the final
+//! gathering the direct light), plus two batches of hits.
 
 use super::{Info, Operator, SolveError, Solver, SolverParams, SolverState, System};
 use crate::color::Rgb;
@@ -64,7 +65,8 @@ use rayon::prelude::*;
 pub const CHUNK: usize = 256;
 /// Patches of a part of the pass after each iteration, whose sums are added in order.
 const PASS: usize = 1 << 14;
-/// Rays whose hits are held at once (8 bytes each).
+/// Rays of a batch, whose hits are held at once (8 bytes each; two batches, the one reduced
+/// and the one traced meanwhile).
 const BATCH: usize = 1 << 20;
 /// Gathering rays a group of patches casts together in the final iteration.
 const GATHER_RAYS: usize = 256;
@@ -125,6 +127,8 @@ struct Scratch {
     end: Vec<u64>,
     arrived: Vec<Rgb>,
     buf: Vec<(u32, u32)>,
+    /// The batch traced while `buf`'s is reduced.
+    spare: Vec<(u32, u32)>,
 }
 
 /// Seconds of the iterations by part: the shooting iterations' tracing (parallel, shared
@@ -244,6 +248,7 @@ impl<'s> StochasticJacobi<'s> {
             mut end,
             mut arrived,
             mut buf,
+            mut spare,
         } = std::mem::take(&mut self.scratch);
         end.clear();
         // All zero: the iteration before set each back once it was read.
@@ -281,39 +286,110 @@ impl<'s> StochasticJacobi<'s> {
         let mut escaped = self.escaped;
         // (source, hit) of each ray of a batch, filled in parallel, reduced in ray order.
         buf.resize((rays as usize).min(BATCH), (0, 0));
-        let mut done = 0u64;
         let seed = self.seed;
         let iteration = self.iterations;
         self.timing.rays += rays;
-        while done < rays {
-            let t = std::time::Instant::now();
-            let batch = (rays - done).min(BATCH as u64) as usize;
-            let first_chunk = done / CHUNK as u64;
-            let trace = |c: usize, out: &mut [(u32, u32)]| {
-                let mut rng = stream(seed, iteration, first_chunk + c as u64, 1);
-                let start = done + (c * CHUNK) as u64;
-                // The chunk's sources, then their draws in order, several rays at a time.
-                let (mut from, mut hit) = ([0u32; CHUNK], [0u32; CHUNK]);
-                let (from, hit) = (&mut from[..out.len()], &mut hit[..out.len()]);
-                // The sources of consecutive rays: one search, then a walk along `end`.
-                let mut i = source_of(start);
-                for (s, k) in from.iter_mut().zip(start..) {
-                    while end[i] <= k && i + 1 < n {
-                        i += 1;
+        // Chunk `c` of the batch whose first ray is `done`, into `out`.
+        let trace = |done: u64, c: usize, out: &mut [(u32, u32)]| {
+            let mut rng = stream(seed, iteration, done / CHUNK as u64 + c as u64, 1);
+            let start = done + (c * CHUNK) as u64;
+            // The chunk's sources, then their draws in order, several rays at a time.
+            let (mut from, mut hit) = ([0u32; CHUNK], [0u32; CHUNK]);
+            let (from, hit) = (&mut from[..out.len()], &mut hit[..out.len()]);
+            // The sources of consecutive rays: one search, then a walk along `end`.
+            let mut i = source_of(start);
+            for (s, k) in from.iter_mut().zip(start..) {
+                while end[i] <= k && i + 1 < n {
+                    i += 1;
+                }
+                *s = i as u32;
+            }
+            sampler.sample_many(from, &mut rng, hit);
+            for ((slot, &i), &j) in out.iter_mut().zip(from.iter()).zip(hit.iter()) {
+                *slot = (i, j);
+            }
+        };
+        // The whole batch whose first ray is `done`, in parallel.
+        let trace_batch = |done: u64, out: &mut [(u32, u32)]| {
+            out.par_chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(c, out)| trace(done, c, out))
+        };
+        // In ray order, so that the sums do not depend on the threads. A hit adds only the
+        // power it carries: the receiver's reflectance and area, and with them B, ΔB and the
+        // books, are applied once per patch after the last batch, so a ray waits on one cache
+        // miss (its receiver's sum), not on four arrays scattered over memory. The rays of a
+        // source are consecutive: its weight is found once, and its hits are counted here and
+        // added to its count when its rays end.
+        let source_hits = &mut self.hits;
+        let mut reduce = |hits: &[(u32, u32)], arrived: &mut [Rgb], escaped: &mut Rgb| {
+            let (mut source, mut w, mut landed) = (usize::MAX, Rgb::BLACK, 0u32);
+            for (k, &(i, j)) in hits.iter().enumerate() {
+                // Ask for the receiver AHEAD rays on, so that the misses overlap (a lost ray's
+                // u32::MAX asks for nothing).
+                if let Some(&(_, next)) = hits.get(k + AHEAD) {
+                    crate::hint::prefetch_at(arrived, next as usize);
+                }
+                let i = i as usize;
+                if i != source {
+                    if let Some(h) = source_hits.get_mut(source) {
+                        *h = h.saturating_add(landed);
                     }
-                    *s = i as u32;
+                    (source, w, landed) = (i, weight(i), 0);
                 }
-                sampler.sample_many(from, &mut rng, hit);
-                for ((slot, &i), &j) in out.iter_mut().zip(from.iter()).zip(hit.iter()) {
-                    *slot = (i, j);
+                if j == u32::MAX {
+                    *escaped += w;
+                } else {
+                    landed += 1;
+                    arrived[j as usize] += w;
                 }
-            };
-            match self.ranks {
-                None => buf[..batch]
-                    .par_chunks_mut(CHUNK)
-                    .enumerate()
-                    .for_each(|(c, out)| trace(c, out)),
-                Some(ranks) => {
+            }
+            if let Some(h) = source_hits.get_mut(source) {
+                *h = h.saturating_add(landed);
+            }
+        };
+        match self.ranks {
+            None => {
+                // Each batch is reduced while the next is traced: the reduction is serial,
+                // and the other threads go on tracing. Its cost to the wall time is then the
+                // share of the threads it takes (its own time over their number), counted as
+                // the reduction's; the rest of the overlap is the rays'.
+                spare.resize(buf.len(), (0, 0));
+                let threads = rayon::current_num_threads() as f64;
+                let (mut cur, mut next) = (&mut buf, &mut spare);
+                let mut batch = (rays as usize).min(BATCH);
+                let t = std::time::Instant::now();
+                trace_batch(0, &mut cur[..batch]);
+                self.timing.trace += t.elapsed().as_secs_f64();
+                let mut done = 0u64;
+                loop {
+                    let after = done + batch as u64;
+                    let upcoming = (rays - after).min(BATCH as u64) as usize;
+                    let t = std::time::Instant::now();
+                    let (own, ()) = rayon::join(
+                        || {
+                            let t = std::time::Instant::now();
+                            reduce(&cur[..batch], &mut arrived, &mut escaped);
+                            t.elapsed().as_secs_f64()
+                        },
+                        || trace_batch(after, &mut next[..upcoming]),
+                    );
+                    let wall = t.elapsed().as_secs_f64();
+                    let reducing = if upcoming > 0 { own / threads } else { wall };
+                    self.timing.reduce += reducing;
+                    self.timing.trace += (wall - reducing).max(0.0);
+                    if upcoming == 0 {
+                        break;
+                    }
+                    std::mem::swap(&mut cur, &mut next);
+                    (done, batch) = (after, upcoming);
+                }
+            }
+            Some(ranks) => {
+                let mut done = 0u64;
+                while done < rays {
+                    let t = std::time::Instant::now();
+                    let batch = (rays - done).min(BATCH as u64) as usize;
                     // This rank's chunks of the batch; then everyone's hits, in chunk order.
                     let chunks = batch.div_ceil(CHUNK);
                     let mine = &crate::distributed::balance(&vec![1.0; chunks], ranks.size())
@@ -322,7 +398,7 @@ impl<'s> StochasticJacobi<'s> {
                     buf[lo..hi]
                         .par_chunks_mut(CHUNK)
                         .enumerate()
-                        .for_each(|(c, out)| trace(mine.start + c, out));
+                        .for_each(|(c, out)| trace(done, mine.start + c, out));
                     let hits: Vec<u32> = buf[lo..hi].iter().map(|&(_, j)| j).collect();
                     self.timing.trace += t.elapsed().as_secs_f64();
                     let t = std::time::Instant::now();
@@ -336,45 +412,12 @@ impl<'s> StochasticJacobi<'s> {
                         }
                         *slot = (i as u32, j);
                     }
+                    let t = std::time::Instant::now();
+                    reduce(&buf[..batch], &mut arrived, &mut escaped);
+                    self.timing.reduce += t.elapsed().as_secs_f64();
+                    done += batch as u64;
                 }
             }
-            if self.ranks.is_none() {
-                self.timing.trace += t.elapsed().as_secs_f64();
-            }
-            let t = std::time::Instant::now();
-            // In ray order, so that the sums do not depend on the threads. A hit adds only the
-            // power it carries: the receiver's reflectance and area, and with them B, ΔB and
-            // the books, are applied once per patch after the last batch, so a ray waits on one
-            // cache miss (its receiver's sum), not on four arrays scattered over memory. The
-            // rays of a source are consecutive: its weight is found once.
-            // A source's hits are counted here and added to its count when its rays end.
-            let hits = &buf[..batch];
-            let (mut source, mut w, mut landed) = (usize::MAX, Rgb::BLACK, 0u32);
-            for (k, &(i, j)) in hits.iter().enumerate() {
-                // Ask for the receiver AHEAD rays on, so that the misses overlap (a lost ray's
-                // u32::MAX asks for nothing).
-                if let Some(&(_, next)) = hits.get(k + AHEAD) {
-                    crate::hint::prefetch_at(&arrived, next as usize);
-                }
-                let i = i as usize;
-                if i != source {
-                    if let Some(h) = self.hits.get_mut(source) {
-                        *h = h.saturating_add(landed);
-                    }
-                    (source, w, landed) = (i, weight(i), 0);
-                }
-                if j == u32::MAX {
-                    escaped += w;
-                } else {
-                    landed += 1;
-                    arrived[j as usize] += w;
-                }
-            }
-            if let Some(h) = self.hits.get_mut(source) {
-                *h = h.saturating_add(landed);
-            }
-            self.timing.reduce += t.elapsed().as_secs_f64();
-            done += batch as u64;
         }
         // What arrived at j is reflected as ΔB_j = ρ_j P_j / A_j, added to B_j and left
         // unshot; the rest, (1 − ρ_j) P_j, is absorbed. One pass, in parallel over fixed
@@ -433,7 +476,12 @@ impl<'s> StochasticJacobi<'s> {
         }
         (self.escaped, self.absorbed) = (escaped, absorbed);
         self.timing.reduce += t.elapsed().as_secs_f64();
-        self.scratch = Scratch { end, arrived, buf };
+        self.scratch = Scratch {
+            end,
+            arrived,
+            buf,
+            spare,
+        };
         self.unshot_left = left;
     }
 
