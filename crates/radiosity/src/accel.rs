@@ -1734,8 +1734,11 @@ fn collapse(
     me as u32
 }
 
-/// Slices at least this long are split over threads (bounds, bins, subtrees).
+/// Slices at least this long are split over threads (bounds, bins).
 const PARALLEL_MIN: usize = 16 * 1024;
+
+/// Nodes of at least this many references build their two subtrees on two threads.
+const JOIN_MIN: usize = 1024;
 
 /// A node of the binary tree while it is built.
 enum Built {
@@ -1814,7 +1817,7 @@ fn build_tree(prims: &mut [Prim], depth: usize, budget: usize, split: &Splits) -
         let left = budget.saturating_sub(nl + nr - count);
         let lb = (left as u128 * nl as u128 / (nl + nr) as u128) as usize;
         let rb = left - lb;
-        let (a, b) = if count >= PARALLEL_MIN {
+        let (a, b) = if count >= JOIN_MIN {
             rayon::join(
                 || build_tree(l, depth + 1, lb, split),
                 || build_tree(r, depth + 1, rb, split),
