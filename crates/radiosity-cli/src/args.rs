@@ -560,7 +560,7 @@ pub struct SolveSystemArgs {
     pub iteration_rays: u32,
     /// `stochastic-jacobi`: rays per patch of a final regular gathering iteration (Bekaert's,
     /// with the constant control variate); 0, the default, for none: on RenderPark's hospital
-    /// it made the result noisier per patch and per surface at any count tried.
+    /// it made the result noisier per patch and per surface at any count tried. At most 2²⁰.
     #[arg(long, value_name = "N", default_value_t = 0, help_heading = SOLVER)]
     pub gather_rays: u32,
     /// Seed of `stochastic`.
@@ -628,7 +628,7 @@ pub struct SolveArgs {
     pub iteration_rays: u32,
     /// `stochastic-jacobi`: rays per patch of a final regular gathering iteration (Bekaert's,
     /// with the constant control variate); 0, the default, for none: on RenderPark's hospital
-    /// it made the result noisier per patch and per surface at any count tried.
+    /// it made the result noisier per patch and per surface at any count tried. At most 2²⁰.
     #[arg(long, value_name = "N", default_value_t = 0, help_heading = SOLVER)]
     pub gather_rays: u32,
     /// `hierarchical`: refine a link when the power it may misplace exceeds this fraction of

@@ -150,6 +150,7 @@ pub fn flag_of(e: &(dyn std::error::Error + 'static)) -> Option<&'static str> {
             SolverParameter::Omega => "--omega",
             SolverParameter::Photons => "--photons",
             SolverParameter::IterationRays => "--iteration-rays",
+            SolverParameter::GatherRays => "--gather-rays",
         });
     }
     None
@@ -195,6 +196,10 @@ pub fn solver_params(
     }
     if iteration_rays == 0 {
         bail!("--iteration-rays 0: at least one ray per patch and iteration is needed");
+    }
+    let most = radiosity::solve::stochastic_jacobi::MAX_GATHER_RAYS;
+    if gather_rays > most {
+        bail!("--gather-rays {gather_rays}: at most {most} rays a patch");
     }
     Ok(SolverParams {
         tolerance,

@@ -3023,6 +3023,26 @@ fn stochastic_jacobi_gathers_only_when_asked() {
         }
         total / area
     };
+    // More gathering rays than a patch may hold at once: refused before anything is built,
+    // one line naming the flag, no output file.
+    let refused = run(
+        &[
+            "solve",
+            "cornell",
+            "--solver",
+            "stochastic-jacobi",
+            "--gather-rays",
+            "4000000000",
+            "--out",
+            "refused.csv",
+        ],
+        &dir,
+    );
+    assert!(!refused.status.success());
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(err.contains("--gather-rays 4000000000"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!dir.join("refused.csv").exists());
     let (m0, m1) = (mean(&plain), mean(&gathered));
     eprintln!("mean B {m0} without gathering, {m1} with");
     // 64 rays a patch over 800 patches: the scene's mean is known to a fraction of a per

@@ -349,6 +349,28 @@ fn stochastic_jacobi_is_unbiased_thread_independent_and_balanced() {
     assert_eq!(on(1), on(2));
 }
 
+/// Stochastic Jacobi refuses more gathering rays a patch than it may hold at once, before
+/// casting any ray, naming the parameter; the most it takes is accepted.
+#[test]
+fn stochastic_jacobi_refuses_too_many_gathering_rays() {
+    use radiosity::solve::stochastic_jacobi::{StochasticJacobi, MAX_GATHER_RAYS};
+    use radiosity::solve::{Parameter, SolveError};
+    let mut r = reciprocal(8, 0.5, 0.9, (0.3, 0.7), 2, 3);
+    let (sys, _) = r.parts();
+    let with = |gather_rays| SolverParams {
+        gather_rays,
+        ..Default::default()
+    };
+    match StochasticJacobi::new(sys, &with(MAX_GATHER_RAYS + 1)) {
+        Err(SolveError::Parameter {
+            parameter: Parameter::GatherRays,
+            ..
+        }) => {}
+        other => panic!("{:?}", other.map(|_| ())),
+    }
+    assert!(StochasticJacobi::new(sys, &with(MAX_GATHER_RAYS)).is_ok());
+}
+
 /// A shot's receivers are updated in parallel spans when the column is long (over 512
 /// entries): the residuals are bit-identical to a plain serial loop over the column with a
 /// linear-scan shooter, on 1 and on 2 threads; and an operator that hands out rows for the

@@ -81,6 +81,8 @@ pub enum Parameter {
     Photons,
     /// [`SolverParams::iteration_rays`].
     IterationRays,
+    /// [`SolverParams::gather_rays`].
+    GatherRays,
 }
 
 impl std::fmt::Display for Parameter {
@@ -90,6 +92,7 @@ impl std::fmt::Display for Parameter {
             Parameter::Omega => "relaxation factor ω",
             Parameter::Photons => "photons per shot",
             Parameter::IterationRays => "rays per patch and iteration",
+            Parameter::GatherRays => "gathering rays per patch",
         })
     }
 }

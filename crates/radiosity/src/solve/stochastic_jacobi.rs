@@ -68,6 +68,10 @@ const PASS: usize = 1 << 14;
 /// Rays of a batch, whose hits are held at once (8 bytes each; two batches, the one reduced
 /// and the one traced meanwhile).
 const BATCH: usize = 1 << 20;
+/// The most gathering rays a patch may ask for ([`SolverParams::gather_rays`]): a patch's draws
+/// are held at once (8 MiB at this count), and more would not improve a per-patch mean that
+/// the shooting's noise already bounds.
+pub const MAX_GATHER_RAYS: u32 = 1 << 20;
 /// Gathering rays a group of patches casts together in the final iteration.
 const GATHER_RAYS: usize = 256;
 /// How many rays ahead of the one being reduced its receiver is asked for from memory
@@ -157,6 +161,13 @@ impl<'s> StochasticJacobi<'s> {
                 parameter: super::Parameter::IterationRays,
                 value: 0.0,
                 range: "[1, 2³²)",
+            });
+        }
+        if params.gather_rays > MAX_GATHER_RAYS {
+            return Err(SolveError::Parameter {
+                parameter: super::Parameter::GatherRays,
+                value: params.gather_rays as f64,
+                range: "[0, 2²⁰]",
             });
         }
         let n = system.len();
