@@ -306,6 +306,35 @@ fn results_do_not_depend_on_the_thread_count() {
     assert!(p1 == p2, "pictures differ between 1 and 2 threads");
 }
 
+/// `scene` solved by `solver` on about `patches` patches with stochastic Jacobi's
+/// `iteration_rays` and `gather_rays` (the defaults otherwise, or `tolerance` if given).
+fn solved(
+    scene: &Scene,
+    patches: usize,
+    solver: radiosity::solve::Solver,
+    (iteration_rays, gather_rays): (u32, u32),
+    tolerance: Option<f64>,
+) -> pipeline::Solution {
+    let defaults = SolverParams::default();
+    let params = SolverParams {
+        iteration_rays,
+        gather_rays,
+        tolerance: tolerance.unwrap_or(defaults.tolerance),
+        ..defaults
+    };
+    pipeline::solve(
+        scene,
+        &Settings {
+            mesh: MeshParams::Patches(patches),
+            solver,
+            params,
+            ..Settings::default()
+        },
+        &radiosity::observe::Silent,
+    )
+    .unwrap()
+}
+
 /// Stochastic Jacobi with a coincident twin of the Cornell box's floor: whichever twin each
 /// ray meets first receives the light there, so the two twins' radiosities add up to the
 /// floor's own. The twin that the final gathering finds covered sees nothing, including the
@@ -320,21 +349,13 @@ fn stochastic_jacobi_twins_add_up_to_the_surface() {
     doubled.polygons.push(single.polygons[0].clone());
     for gather_rays in [64, 0] {
         let floor = |scene: &radiosity::scene::Scene, surfaces: &[usize]| {
-            let s = pipeline::solve(
+            let s = solved(
                 scene,
-                &Settings {
-                    mesh: MeshParams::Patches(3000),
-                    solver: radiosity::solve::Solver::StochasticJacobi,
-                    params: SolverParams {
-                        iteration_rays: 64,
-                        gather_rays,
-                        ..SolverParams::default()
-                    },
-                    ..Settings::default()
-                },
-                &radiosity::observe::Silent,
-            )
-            .unwrap();
+                3000,
+                radiosity::solve::Solver::StochasticJacobi,
+                (64, gather_rays),
+                None,
+            );
             surfaces
                 .iter()
                 .map(|&k| {
@@ -372,22 +393,13 @@ fn stochastic_jacobi_on_many_patches_does_not_depend_on_the_threads() {
                 .build()
                 .unwrap()
                 .install(|| {
-                    let s = pipeline::solve(
+                    let s = solved(
                         &scene,
-                        &Settings {
-                            mesh: MeshParams::Patches(20_000),
-                            solver: radiosity::solve::Solver::StochasticJacobi,
-                            params: SolverParams {
-                                iteration_rays: 4,
-                                gather_rays,
-                                tolerance: 0.05,
-                                ..SolverParams::default()
-                            },
-                            ..Settings::default()
-                        },
-                        &radiosity::observe::Silent,
-                    )
-                    .unwrap();
+                        20_000,
+                        radiosity::solve::Solver::StochasticJacobi,
+                        (4, gather_rays),
+                        Some(0.05),
+                    );
                     (s.radiosity, s.info.absorbed, s.info.escaped, s.info.unshot)
                 })
         };
@@ -429,21 +441,7 @@ fn stochastic_jacobi_gathers_nothing_under_a_flush_cover() {
         (radiosity::solve::Solver::StochasticJacobi, 0),
         (radiosity::solve::Solver::Progressive, 0),
     ] {
-        let s = pipeline::solve(
-            &scene,
-            &Settings {
-                mesh: MeshParams::Patches(3000),
-                solver,
-                params: SolverParams {
-                    iteration_rays: 64,
-                    gather_rays,
-                    ..SolverParams::default()
-                },
-                ..Settings::default()
-            },
-            &radiosity::observe::Silent,
-        )
-        .unwrap();
+        let s = solved(&scene, 3000, solver, (64, gather_rays), None);
         let (mut under, mut open, mut lit) = ((0.0, 0.0), (0.0, 0.0), (0.0, 0.0));
         for (k, p) in s.mesh.patches.iter().enumerate() {
             let a = p.area as f64;
