@@ -105,7 +105,7 @@ unsafe impl GlobalAlloc for Counting {
 /// The counters as the library's memory probe.
 pub struct Probe;
 
-impl radiosity::experiment::MemoryProbe for Probe {
+impl radiosity_experiments::MemoryProbe for Probe {
     fn current(&self) -> u64 {
         CURRENT.load(Relaxed)
     }

@@ -155,6 +155,10 @@ const PICTURE: &str = "Picture";
 #[derive(Debug, Parser)]
 #[command(name = "radiosity", version, about, long_about = None, after_help = EXAMPLES_TOP)]
 pub struct Cli {
+    /// Worker threads (default: one per core), for any command; the pool is started once.
+    /// Results do not depend on it.
+    #[arg(long, global = true, value_name = "T", help_heading = RUN)]
+    pub threads: Option<usize>,
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
@@ -179,10 +183,6 @@ const EXAMPLES_SOLVE: &str = "Examples:
 const EXAMPLES_VIEW: &str = "Examples:
   radiosity view baked.glb
   radiosity view baked.glb --eye 0,1.6,3 --target 0,1,0 -o shot.png";
-
-const EXAMPLES_BENCH: &str = "Examples:
-  radiosity bench --patches 10000 --runs 5
-  radiosity bench --scale hosp.mgf --one-sided --sizes 25000,100000 --solver stochastic-jacobi";
 
 const EXAMPLES_SOLVE_SYSTEM: &str = "Examples:
   radiosity solve-system --matrix F.mtx --patches patches.csv -o B.csv
@@ -210,9 +210,6 @@ pub enum Command {
     /// Show a baked glTF as a glTF viewer does (unlit, COLOR_0 as is), without solving.
     #[command(after_help = EXAMPLES_VIEW)]
     View(ViewArgs),
-    /// Measure ray-casting speed and the time to converge the Cornell box.
-    #[command(after_help = EXAMPLES_BENCH)]
-    Bench(BenchArgs),
     /// Solve a given linear system: a form-factor matrix (Matrix Market) and a patches CSV.
     #[command(after_help = EXAMPLES_SOLVE_SYSTEM)]
     SolveSystem(SolveSystemArgs),
@@ -224,55 +221,23 @@ pub enum Command {
     /// grows). Writes CSVs, plots (SVG and PNG) and a Markdown summary.
     #[command(after_help = EXAMPLES_EXPERIMENT)]
     Experiment(ExperimentArgs),
-    /// Fuzz every input parser and the option parser with seeded mutations of valid files:
-    /// panics, cases over 10 s or over 1 GiB of heap fail the run.
-    #[command(after_help = EXAMPLES_FUZZ)]
-    Fuzz(FuzzArgs),
     /// Radiative heat transfer between grey diffuse surfaces: temperatures, net heat flux and
     /// power per surface, from a boundary-condition table (net-radiation method).
     #[command(after_help = EXAMPLES_THERMAL)]
     Thermal(ThermalArgs),
 }
 
-impl Command {
-    /// The `--threads` the command was given, if it takes one.
-    pub fn threads(&self) -> Option<usize> {
-        match self {
-            Command::Render(a) => a.solve.threads,
-            Command::Solve(a) => a.solve.threads,
-            Command::Bench(a) => a.threads,
-            Command::FormFactors(a) => a.threads,
-            Command::Experiment(a) => a.threads,
-            Command::Thermal(a) => a.threads,
-            Command::View(_) | Command::SolveSystem(_) | Command::Fuzz(_) => None,
-        }
-    }
-}
-
 const EXAMPLES_THERMAL: &str = "Examples:
   radiosity thermal examples/hot-plate.obj --boundary examples/hot-plate-bc.csv --out surfaces.csv
   radiosity thermal room.vs3 --boundary bc.csv --out surfaces.csv --unit mm --environment 293.15";
 
-/// Ray-casting backends (`bench --rays SCENE --backend`).
+/// How a run's summary is printed (`--report`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum BackendArg {
-    /// Every backend this binary has.
-    All,
-    /// The engine's own BVH (and, where it meets pieces whole, its tree over every patch's
-    /// triangles beside it).
-    Bvh,
-    /// Intel Embree 3 (builds with `--features embree`).
-    Embree,
-}
-
-/// How `bench --hierarchical` makes its reference surface means (`--reference-tracer`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum ReferenceTracer {
-    /// Particles shot from the emitters, each crediting the surfaces it reaches: rays go where
-    /// the light goes (best where lamps throw small bright spots).
-    Light,
-    /// Paths from points spread over each surface by area, with next-event estimation.
-    Path,
+pub enum ReportFormat {
+    /// Lines for people.
+    Text,
+    /// One JSON object on standard output, nothing else there.
+    Json,
 }
 
 /// How a view-factor matrix is written (`form-factors --format`).
@@ -397,31 +362,6 @@ pub struct ThermalArgs {
     /// `patch,name,x,y,z,area,emissivity,temperature,flux,power`.
     #[arg(long, value_name = "patches.csv", help_heading = OUTPUT)]
     pub patches_out: Option<PathBuf>,
-    /// Worker threads (default: one per core). Results do not depend on it.
-    #[arg(long, value_name = "T", help_heading = RUN)]
-    pub threads: Option<usize>,
-}
-
-const EXAMPLES_FUZZ: &str = "Examples:
-  radiosity fuzz --cases 1000000 --out fuzz-out
-  radiosity fuzz --cases 10000 --targets gltf,glb --seed 7";
-
-/// `radiosity fuzz`.
-#[derive(Debug, Args)]
-pub struct FuzzArgs {
-    /// Cases per parser.
-    #[arg(long, value_name = "N", default_value_t = 10_000, help_heading = RUN)]
-    pub cases: u64,
-    /// Seed of the mutations.
-    #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]
-    pub seed: u64,
-    /// Only these parsers: obj, mtl, mgf, gltf, glb, ply-ascii, ply-binary, matrix-market,
-    /// patches-csv, vs3, vs3a, bc-csv, pfm, options (default: all).
-    #[arg(long, value_name = "P,P,…", value_delimiter = ',', help_heading = RUN)]
-    pub targets: Vec<String>,
-    /// Scratch folder for the cases (inputs that made a parser panic are kept there).
-    #[arg(long, value_name = "DIR", default_value = "fuzz-out", help_heading = OUTPUT)]
-    pub out: std::path::PathBuf,
 }
 
 /// Which experiment.
@@ -447,9 +387,6 @@ pub struct ExperimentArgs {
     /// Small sizes that run in seconds.
     #[arg(long, help_heading = RUN)]
     pub quick: bool,
-    /// Worker threads (default: one per core).
-    #[arg(long, value_name = "T", help_heading = RUN)]
-    pub threads: Option<usize>,
     /// Seed of the random systems, Monte Carlo and photons.
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]
     pub seed: u64,
@@ -518,9 +455,6 @@ pub struct FormFactorsArgs {
     /// Also write the rows' patches (or faces) as CSV.
     #[arg(long, value_name = "patches.csv", help_heading = OUTPUT)]
     pub patches_out: Option<PathBuf>,
-    /// Worker threads (default: one per core). Results do not depend on it.
-    #[arg(long, value_name = "T", help_heading = RUN)]
-    pub threads: Option<usize>,
 }
 
 /// `radiosity solve-system`.
@@ -648,14 +582,16 @@ pub struct SolveArgs {
     /// Seed of every random stream.
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]
     pub seed: u64,
-    /// Worker threads (default: one per core). Results do not depend on it.
-    #[arg(long, value_name = "T", help_heading = RUN)]
-    pub threads: Option<usize>,
     /// Write the convergence trace (iteration,seconds,error,unshot) to this CSV. The form
     /// factors are then estimated and stored in full first, and the error is measured against
     /// their LU solution (N ≤ 5,000).
     #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
     pub trace: Option<PathBuf>,
+    /// How the run's summary is printed on standard output: `text` (lines for people) or
+    /// `json` (one JSON object and nothing else, for scripts and the workbench: patches,
+    /// rays, iterations, energy, seconds per stage, memory, CPU time, outputs).
+    #[arg(long, value_name = "FORMAT", value_enum, default_value = "text", help_heading = OUTPUT)]
+    pub report: ReportFormat,
 }
 
 /// Camera overrides.
@@ -678,13 +614,16 @@ pub struct CameraArgs {
 /// `radiosity render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
+    /// The scene and how it is solved.
     #[command(flatten)]
     pub solve: SolveArgs,
+    /// The camera.
     #[command(flatten)]
     pub camera: CameraArgs,
     /// Output image: .png (tone-mapped sRGB), .exr or .pfm (linear radiance). Default SCENE.png.
     #[arg(long, short, value_name = "FILE", help_heading = OUTPUT)]
     pub out: Option<PathBuf>,
+    /// Picture size and sampling.
     #[command(flatten)]
     pub image: ImageArgs,
     /// Exposure adjustment in stops, relative to automatic exposure (PNG only).
@@ -739,6 +678,7 @@ pub enum IntegratorArg {
 /// `radiosity solve`.
 #[derive(Debug, Args)]
 pub struct SolveCmdArgs {
+    /// The scene and how it is solved.
     #[command(flatten)]
     pub solve: SolveArgs,
     /// Output: .csv (one row per patch: geometry, material, radiosity), or a baked mesh with the
@@ -766,141 +706,20 @@ pub struct SolveCmdArgs {
     pub elements_out: Option<PathBuf>,
 }
 
-/// `radiosity bench`.
-#[derive(Debug, Args)]
-pub struct BenchArgs {
-    /// Patches of the Cornell box.
-    #[arg(long, value_name = "N", default_value_t = 10_000, help_heading = MESHING)]
-    pub patches: usize,
-    /// Rays per ray-casting measurement (default 2,000,000); or a scene (built-in name or
-    /// file), which measures ray casting on it alone: `--rays SCENE [--rays N]`.
-    #[arg(long, value_name = "N|SCENE", action = clap::ArgAction::Append, help_heading = RUN)]
-    pub rays: Vec<String>,
-    /// Repetitions of each measurement (the median is reported).
-    #[arg(long, value_name = "K", default_value_t = 5, help_heading = RUN)]
-    pub runs: usize,
-    /// Worker threads (default: one per core).
-    #[arg(long, value_name = "T", help_heading = RUN)]
-    pub threads: Option<usize>,
-    /// Instead: time per iteration of every solver on the Cornell box's stored form factors
-    /// at these patch counts.
-    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1.., help_heading = SOLVER)]
-    pub solvers: Option<Vec<usize>>,
-    /// Instead: every form-factor method's error against Howell's closed forms at three
-    /// resolutions, and its time per row on the Cornell box at 1,000, 4,000 and 16,000 patches
-    /// (`--form-factors` is the older name).
-    #[arg(long = "form-factor-accuracy", visible_alias = "form-factors", help_heading = FORM_FACTORS)]
-    pub form_factors: bool,
-    /// Instead: the full face-to-face view-factor matrix of the built-in `city` (19,847 facets)
-    /// by monte-carlo and by hemicube, with time and peak memory.
-    #[arg(long, help_heading = FORM_FACTORS)]
-    pub city: bool,
-    /// Instead: the distributed methods (Jacobi on stored rows, stochastic Jacobi) on this scene
-    /// at `--patches`, over the ranks of this run (run it under `mpirun -np K`; alone it is one
-    /// rank): time per stage, per iteration, bytes exchanged, load balance and parallel
-    /// efficiency against one rank (rank 0 alone, measured first in the same run), medians of
-    /// `--runs`.
-    #[arg(long, value_name = "SCENE", help_heading = SCENE)]
-    pub ranks: Option<String>,
-    /// Instead: solve this scene at each of `--sizes` (patch counts), each in a fresh process,
-    /// and print rays, wall and CPU time, the time of each stage, peak resident memory, the
-    /// bookkeeping's share of the wall time (`solve %`), the round trip of a value between two
-    /// cores just before and after the solve (`xcore0 ns`, `xcore1 ns`), and the fitted
-    /// exponents against N.
-    #[arg(long, value_name = "SCENE", requires = "sizes", help_heading = SCENE)]
-    pub scale: Option<String>,
-    /// `--scale`: the patch counts.
-    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1.., help_heading = MESHING)]
-    pub sizes: Option<Vec<usize>>,
-    /// `--scale`: keep every surface one-sided (see `solve --help`).
-    #[arg(long, help_heading = SCENE)]
-    pub one_sided: bool,
-    /// `--scale`: time the method's bookkeeping alone, in this process: solve each size once to
-    /// fill the row cache, then `--runs` more times on the cached rows (no rays), and print the
-    /// shots, the receivers updated and the median time of those solves.
-    #[arg(long, requires = "scale", help_heading = RUN)]
-    pub bookkeeping: bool,
-    /// `--scale`: the solution method.
-    #[arg(long, value_name = "M", value_enum, default_value = "progressive", help_heading = SOLVER)]
-    pub solver: SolverArg,
-    /// `--scale`: stop at this fraction of the emitted energy unshot.
-    #[arg(long, value_name = "F", default_value_t = 0.01, help_heading = SOLVER)]
-    pub tolerance: f64,
-    /// `--scale`, `stochastic-jacobi`: rays per patch and iteration.
-    #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
-    pub iteration_rays: u32,
-    /// `--scale`, `stochastic-jacobi`: rays per patch of the final gathering iteration (0:
-    /// none).
-    #[arg(long, value_name = "N", default_value_t = 0, help_heading = SOLVER)]
-    pub gather_rays: u32,
-    /// Time against error of the three ways to make a picture (radiosity shown directly, the
-    /// final gather, the path tracer) on SCENE, against a path-traced reference; writes
-    /// pictures.csv, pictures.svg/.png and the images to --out.
-    #[arg(long, value_name = "SCENE", help_heading = SCENE)]
-    pub pictures: Option<String>,
-    /// `--pictures`: the reference image (.pfm) to compare against; without it one is path
-    /// traced with --reference-spp paths a pixel.
-    #[arg(long, value_name = "REF.pfm", help_heading = SCENE)]
-    pub reference: Option<PathBuf>,
-    /// `--pictures`: a second, independent reference (another `--seed`): the references' own
-    /// noise is then measured from their difference rather than fitted, and the pictures are
-    /// compared with their average.
-    #[arg(long = "reference-b", value_name = "REF2.pfm", requires = "reference", help_heading = SCENE)]
-    pub reference_b: Option<PathBuf>,
-    /// `--pictures`: paths per pixel of the reference when it is made.
-    #[arg(long, value_name = "N", default_value_t = 16384, help_heading = SCENE)]
-    pub reference_spp: u32,
-    /// `--rays SCENE`: which ray casters to time (`embree` needs a build with `--features
-    /// embree`).
-    #[arg(long, value_enum, default_value = "all", help_heading = RUN)]
-    pub backend: BackendArg,
-    /// `--pictures`: image size (square).
-    #[arg(long, value_name = "PX", default_value_t = 256, help_heading = SCENE)]
-    pub size: u32,
-    /// `--pictures`: folder for the results.
-    #[arg(long, value_name = "DIR", default_value = "pictures", help_heading = OUTPUT)]
-    pub out: PathBuf,
-    /// Per-surface accuracy of hierarchical radiosity (at each --link-errors) and of uniform
-    /// meshes (at each --sizes, progressive) on SCENE, against path-traced surface means
-    /// (--reference surfaces.csv, made with --reference-paths paths when absent).
-    #[arg(long, value_name = "SCENE", help_heading = SCENE)]
-    pub hierarchical: Option<String>,
-    /// `--hierarchical`: the link errors to try.
-    #[arg(long, value_name = "E,E,…", value_delimiter = ',', num_args = 1.., help_heading = SOLVER)]
-    pub link_errors: Option<Vec<f64>>,
-    /// `--hierarchical`: refinement passes of the hierarchical solves (default: the solver's).
-    #[arg(long, value_name = "N", help_heading = SOLVER)]
-    pub passes: Option<u32>,
-    /// `--hierarchical`: seeds of the solves' random streams (visibility samples, Monte Carlo
-    /// rows); each method runs once a seed, a row each, to show how much the errors owe to
-    /// the draw.
-    #[arg(long = "solve-seeds", value_name = "S,S,…", value_delimiter = ',', num_args = 1.., default_value = "1", help_heading = SOLVER)]
-    pub solve_seeds: Vec<u64>,
-    /// `--hierarchical`: paths (`--reference-tracer path`, shared by area) or particles
-    /// (`light`) of the reference in all.
-    #[arg(long, value_name = "N", default_value_t = 20_000_000, help_heading = SCENE)]
-    pub reference_paths: u64,
-    /// `--hierarchical`: how the reference is made when the --reference file is absent: a
-    /// light tracer or a path tracer (both independent of every radiosity method).
-    #[arg(long = "reference-tracer", value_enum, value_name = "T", default_value = "light", help_heading = SCENE)]
-    pub reference_tracer: ReferenceTracer,
-    /// `--hierarchical`: Monte Carlo rays a form-factor row of the uniform solves.
-    #[arg(long = "uniform-rays", value_name = "N", default_value_t = 1024, help_heading = FORM_FACTORS)]
-    pub uniform_rays: u32,
-}
-
 /// `radiosity view`.
 #[derive(Debug, Args)]
 pub struct ViewArgs {
     /// A baked glTF (.glb or .gltf) whose primitives carry COLOR_0, e.g. from
     /// `radiosity solve SCENE --out baked.glb`.
     pub file: PathBuf,
+    /// The camera.
     #[command(flatten)]
     pub camera: CameraArgs,
     /// Output image: .png (COLOR_0 sRGB-encoded), .exr or .pfm (COLOR_0 linear). Default
     /// FILE.png.
     #[arg(long, short, value_name = "FILE", help_heading = OUTPUT)]
     pub out: Option<PathBuf>,
+    /// Picture size and sampling.
     #[command(flatten)]
     pub image: ImageArgs,
     /// Final gather over the baked `_RADIOSITY` (exact direct light, indirect gathered from

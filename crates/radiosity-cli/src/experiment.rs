@@ -4,10 +4,10 @@
 use crate::args::{ExperimentArgs, ExperimentKind};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use radiosity::experiment as exp;
-use radiosity::experiment::complexity::{self, Quantity, CASES};
-use radiosity::experiment::convergence::{self, paper_name, Case, Curve};
-use radiosity::export::plot::{write_plot, Mark, Plot, Series};
+use radiosity_experiments as exp;
+use radiosity_experiments::complexity::{self, Quantity, CASES};
+use radiosity_experiments::convergence::{self, paper_name, Case, Curve};
+use radiosity_experiments::plot::{write_plot, Mark, Plot, Series};
 use radiosity::observe::{Event, Observer};
 use radiosity::solve::Solver;
 use std::fmt::Write as _;
@@ -61,7 +61,6 @@ fn write_text(path: &Path, text: &str) -> Result<()> {
 
 /// Run the experiment `a.kind`.
 pub fn run(a: ExperimentArgs) -> Result<()> {
-    crate::settings::threads(a.threads)?;
     if !(a.sweeps > 0.0 && a.sweeps.is_finite()) {
         bail!("--sweeps {}: must be a positive number", a.sweeps);
     }

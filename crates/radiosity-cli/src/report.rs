@@ -199,7 +199,7 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
     // Resident memory is what the run used; the heap count also includes memory reserved and
     // never touched (a linear-algebra library's per-thread scratch), so it comes second.
     let heap = {
-        use radiosity::experiment::MemoryProbe;
+        use radiosity_experiments::MemoryProbe;
         crate::alloc::Probe.peak() as f64 / (1024.0 * 1024.0)
     };
     match resources() {
@@ -254,4 +254,59 @@ pub fn ranks(r: &radiosity::distributed::solve::Report) {
             48.0 * r.blocks.last().map_or(0, |b| b.end) as f64 / (1 << 20) as f64
         );
     }
+}
+
+/// The summary as one JSON object (`--report json`): what [`summary`] prints, as numbers.
+/// Keys: `scene`, `polygons`, `patches`, `rays`, `rows`, `iterations`, `method`, `converged`,
+/// `unshot_fraction`, `estimated_error`, `energy` (`emitted`, `absorbed`, `escaped`,
+/// `unshot`: sums over the three channels), `seconds` (`mesh`, `bvh`, `form_factors`,
+/// `solve`, `solve_rays`, and `render`, `write` where a picture was made), `memory`
+/// (`peak_resident_bytes`, `heap_peak_bytes`), `cpu_seconds`; for hierarchical radiosity also
+/// `elements` and `links`. Absent measurements are `null`.
+pub fn summary_json(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) -> serde_json::Value {
+    use radiosity_experiments::MemoryProbe;
+    use serde_json::json;
+    let i = &s.info;
+    let t = &s.timings;
+    let mut seconds = json!({
+        "mesh": t.mesh,
+        "bvh": t.bvh,
+        "form_factors": t.form_factors,
+        "solve": t.solve,
+        "solve_rays": t.solve_rays,
+    });
+    if let Some((r, w)) = render {
+        seconds["render"] = json!(r);
+        seconds["write"] = json!(w);
+    }
+    let res = resources();
+    let mut v = json!({
+        "scene": scene.name,
+        "polygons": scene.polygons.len(),
+        "patches": s.mesh.len(),
+        "rays": s.form_factors.rays,
+        "rows": s.form_factors.rows,
+        "iterations": i.iterations,
+        "method": s.method_name(),
+        "converged": i.converged,
+        "unshot_fraction": i.unshot_fraction,
+        "estimated_error": i.estimated_error,
+        "energy": {
+            "emitted": i.emitted.sum(),
+            "absorbed": i.absorbed.sum(),
+            "escaped": i.escaped.sum(),
+            "unshot": i.unshot.sum(),
+        },
+        "seconds": seconds,
+        "memory": {
+            "peak_resident_bytes": res.map(|r| r.1),
+            "heap_peak_bytes": crate::alloc::Probe.peak(),
+        },
+        "cpu_seconds": res.map(|r| r.0),
+    });
+    if let Some(h) = &s.hierarchy {
+        v["elements"] = json!(h.hierarchy.info.elements);
+        v["links"] = json!(h.hierarchy.info.links);
+    }
+    v
 }

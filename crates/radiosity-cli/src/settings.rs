@@ -59,9 +59,6 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
     if a.rays == 0 {
         bail!("--rays 0: at least one ray per form-factor row is needed");
     }
-    if a.threads == Some(0) {
-        bail!("--threads 0: at least one thread is needed");
-    }
     form_factor_numbers(a.resolution, a.samples, None)?;
     let form_factors = FormFactorParams {
         method: a.form_factors.0,

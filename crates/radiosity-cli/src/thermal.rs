@@ -43,7 +43,6 @@ pub fn run(a: ThermalArgs) -> Result<()> {
     crate::settings::form_factor_numbers(a.resolution, a.samples, a.rays)?;
     // Engineers' default: one patch per face.
     let mesh_params = crate::settings::mesh_params(a.patches, a.max_edge, MeshParams::Faces)?;
-    crate::settings::threads(a.threads)?;
 
     // The scene, and what View3D's file says of its surfaces.
     let is_vs3 = FileFormat::from_path(Path::new(&a.scene)) == Some(FileFormat::Vs3)

@@ -54,7 +54,6 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
             crate::settings::mesh_params(a.patches, a.max_edge, MeshParams::default())?
         };
     let faces = mesh_params == MeshParams::Faces;
-    crate::settings::threads(a.threads)?;
     let vs3 = if is_vs3 {
         let v = vs3::load(Path::new(&a.scene))?;
         for w in &v.scene.warnings {

@@ -26,10 +26,8 @@
 pub mod accel;
 pub mod color;
 pub mod distributed;
-pub mod experiment;
 pub mod export;
 pub mod formfactor;
-pub mod fuzz;
 pub mod geom;
 pub mod hierarchical;
 mod hint;

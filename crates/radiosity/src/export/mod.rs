@@ -4,7 +4,6 @@
 //! never leaves a half-written output.
 
 pub mod bake;
-pub mod plot;
 
 use crate::color::Rgb;
 use crate::io::FileFormat;

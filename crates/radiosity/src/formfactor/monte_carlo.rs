@@ -23,7 +23,6 @@ use crate::geom::orthonormal_basis;
 use crate::geom::Ray;
 use crate::mesh::Mesh;
 use crate::sampling::{cosine_direction_in, stream, uniform, Rng64};
-use rand::Rng;
 use rayon::prelude::*;
 
 /// Rays per random stream of a row.
@@ -145,31 +144,6 @@ pub fn estimate_row(
             }
         }
     }
-}
-
-/// Trace `count` rays from random patches (uniform over patch indices), from uniform points in
-/// cosine-distributed directions: the incoherent rays of form-factor estimation, without the
-/// coherence of tracing one patch's row at a time. Returns how many hit a front side. For
-/// measuring ray-casting speed.
-pub fn trace_random_rays(mesh: &Mesh, bvh: &Bvh, count: usize, seed: u64) -> u64 {
-    let offset = bvh.ray_offset();
-    let n = mesh.len() as u64;
-    let chunks = count.div_ceil(1024);
-    (0..chunks)
-        .into_par_iter()
-        .map(|c| {
-            let mut rng = stream(seed, u64::MAX, 0, c as u64);
-            let todo = (count - c * 1024).min(1024);
-            let mut rays = [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); 1024];
-            for ray in &mut rays[..todo] {
-                let i = ((rng.random::<u32>() as u64 * n) >> 32) as usize;
-                *ray = photon_ray(mesh, i, offset, &mut rng);
-            }
-            let mut hits = [None; 1024];
-            bvh.closest_hits(&rays[..todo], f32::INFINITY, &mut hits[..todo]);
-            hits.iter().flatten().filter(|h| h.front).count() as u64
-        })
-        .sum()
 }
 
 /// Where one *gathering* ray from patch `i` first lands: as [`sample_photon`], but a point that

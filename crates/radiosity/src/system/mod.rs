@@ -19,10 +19,38 @@
 //! `formfactor` produces operators and `solve` consumes them; neither imports the other.
 
 mod operator;
+pub mod random;
 mod sparse;
 
 pub use operator::{Column, Gathered, Operator, PhotonSampler};
 pub use sparse::SparseMatrix;
+
+/// A radiosity system with its form factors stored: what the papers' solvers are compared
+/// on when a system is given rather than a scene (random systems, a Matrix Market file).
+#[derive(Clone, Debug)]
+pub struct StoredSystem {
+    /// Areas, reflectances, emissions.
+    pub system: System,
+    /// The form factors.
+    pub f: SparseMatrix,
+}
+
+impl StoredSystem {
+    /// The system and, separately borrowed, its matrix.
+    pub fn parts(&mut self) -> (&System, &mut SparseMatrix) {
+        (&self.system, &mut self.f)
+    }
+
+    /// Number of patches.
+    pub fn len(&self) -> usize {
+        self.system.len()
+    }
+
+    /// True for the empty system.
+    pub fn is_empty(&self) -> bool {
+        self.system.is_empty()
+    }
+}
 
 use crate::color::Rgb;
 

@@ -1,4 +1,4 @@
-//! `radiosity bench --pictures SCENE`: CPU time against picture error for the three ways to
+//! `radiosity-bench pictures SCENE`: CPU time against picture error for the three ways to
 //! make a picture, each run in a fresh child process (`radiosity render … -o X.pfm`) so its
 //! CPU time is its own, each compared with one path-traced reference (relative RMSE with the
 //! emitters left out, [`radiosity::render::compare`]).
@@ -7,9 +7,9 @@
 //! squared errors are σ₁²/n + σ_ref² for n paths a pixel: a least-squares fit over them gives
 //! σ_ref, and every error is also reported with it taken out, √(e² − σ_ref²).
 
-use crate::args::BenchArgs;
+use crate::args::PicturesArgs;
 use anyhow::{bail, Context, Result};
-use radiosity::export::plot::{write_plot, Mark, Plot, Series};
+use radiosity_experiments::plot::{write_plot, Mark, Plot, Series};
 use radiosity::render::compare::{difference, read_pfm};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -82,13 +82,13 @@ fn ladder() -> Vec<Run> {
     runs
 }
 
-fn cpu_of(stdout: &str) -> f64 {
-    stdout
-        .lines()
-        .find(|l| l.starts_with("cpu "))
-        .and_then(|l| l.split_whitespace().nth(1))
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(f64::NAN)
+/// CPU seconds from a child `radiosity render --report json`.
+fn cpu_of(stdout: &str) -> Result<f64> {
+    let v: serde_json::Value = serde_json::from_str(stdout.trim())
+        .context("radiosity render --report json printed no JSON object")?;
+    Ok(v.get("cpu_seconds")
+        .and_then(serde_json::Value::as_f64)
+        .unwrap_or(f64::NAN))
 }
 
 fn render(exe: &Path, scene: &str, size: u32, args: &[String], out: &Path) -> Result<(f64, f64)> {
@@ -97,6 +97,7 @@ fn render(exe: &Path, scene: &str, size: u32, args: &[String], out: &Path) -> Re
         .arg(scene)
         .args(["--width", &size.to_string(), "--height", &size.to_string()])
         .args(args)
+        .args(["--report", "json"])
         .arg("-o")
         .arg(out);
     let t = Instant::now();
@@ -109,18 +110,19 @@ fn render(exe: &Path, scene: &str, size: u32, args: &[String], out: &Path) -> Re
             String::from_utf8_lossy(&result.stderr).trim()
         );
     }
-    Ok((cpu_of(&String::from_utf8_lossy(&result.stdout)), wall))
+    Ok((cpu_of(&String::from_utf8_lossy(&result.stdout))?, wall))
 }
 
 /// Run the picture benchmark.
-pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
+pub fn run(a: &PicturesArgs) -> Result<()> {
+    let scene = a.scene.as_str();
     if a.size == 0 || a.size > 4096 {
         bail!("--size {}: between 1 and 4096 pixels", a.size);
     }
     if a.reference_spp == 0 {
         bail!("--reference-spp 0: at least one path per pixel is needed");
     }
-    let exe = std::env::current_exe().context("cannot find the radiosity executable")?;
+    let exe = crate::radiosity_exe()?;
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create {}", a.out.display()))?;
     let reference_path = match &a.reference {

@@ -1,11 +1,16 @@
-//! `radiosity bench`: ray-casting speed on incoherent form-factor rays, and the time to
+//! `radiosity-bench cornell`, `solvers`, `form-factors` and `city`: ray-casting speed on incoherent form-factor rays, and the time to
 //! converge the Cornell box (meshing, hierarchy, form factors and solve) to 1 % unshot energy.
 //! Each figure is the median of `--runs` repetitions.
 
-use crate::args::BenchArgs;
+use crate::args::{CornellArgs, SolversArgs};
+use crate::median;
 use anyhow::{bail, Result};
 use radiosity::accel::Bvh;
-use radiosity::formfactor::monte_carlo::trace_random_rays;
+use radiosity::formfactor::monte_carlo::photon_ray;
+use radiosity::geom::Ray;
+use radiosity::sampling::stream;
+use rand::Rng;
+use rayon::prelude::*;
 use radiosity::formfactor::{
     closed_form, Estimator, FormFactorMethod, Params as FfParams, Storage,
 };
@@ -16,19 +21,13 @@ use radiosity::scene::builtin;
 use radiosity::solve::{Solver, SolverParams};
 use std::time::Instant;
 
-/// The median of `v` (the mean of the middle two for an even count).
-pub(crate) fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Time per iteration of every solver on stored Monte Carlo form factors of the Cornell box.
-fn solvers(sizes: &[usize], runs: usize) -> Result<()> {
+pub fn solvers(a: &SolversArgs) -> Result<()> {
+    let (sizes, runs) = (&a.sizes, a.runs);
+    crate::positive(&[("--runs", runs)])?;
+    if sizes.contains(&0) {
+        bail!("patch counts must be positive");
+    }
     let scene = builtin::cornell();
     println!("solver time per iteration, Cornell box, stored sparse F (256 rays per row), median of {runs}:");
     println!(
@@ -84,52 +83,10 @@ fn solvers(sizes: &[usize], runs: usize) -> Result<()> {
     Ok(())
 }
 
-/// Run the benchmark and print its table.
-pub fn run(a: BenchArgs) -> Result<()> {
-    if let Some(scene) = &a.ranks {
-        if a.runs == 0 || a.patches == 0 {
-            bail!("--runs and --patches must be positive");
-        }
-        return crate::ranks_bench::run(&a, scene);
-    }
-    crate::ranks::refuse_unless_single("bench (except --ranks)")?;
-    // `--rays` is a count, a scene, or both (given twice).
-    let mut count = 2_000_000usize;
-    let mut ray_scene = None;
-    for v in &a.rays {
-        match v.parse::<usize>() {
-            Ok(n) => count = n,
-            Err(_) => ray_scene = Some(v.clone()),
-        }
-    }
-    if a.runs == 0 || count == 0 || a.patches == 0 {
-        bail!("--runs, --rays and --patches must be positive");
-    }
-    if let Some(scene) = ray_scene {
-        return crate::rays::run(&a, &scene, count);
-    }
-    if let Some(scene) = &a.scale {
-        return crate::scale::run(&a, scene);
-    }
-    if let Some(scene) = &a.pictures {
-        return crate::pictures::run(&a, scene);
-    }
-    if let Some(scene) = &a.hierarchical {
-        return crate::accuracy::run(&a, scene);
-    }
-    crate::settings::threads(a.threads)?;
-    if a.form_factors {
-        return form_factor_table(a.runs);
-    }
-    if a.city {
-        return city();
-    }
-    if let Some(sizes) = &a.solvers {
-        if sizes.contains(&0) {
-            bail!("--solvers: patch counts must be positive");
-        }
-        return solvers(sizes, a.runs);
-    }
+/// Ray casting and convergence on the Cornell box.
+pub fn run(a: &CornellArgs) -> Result<()> {
+    crate::positive(&[("--runs", a.runs), ("--rays", a.rays), ("--patches", a.patches)])?;
+    let count = a.rays;
     let scene = builtin::cornell();
     let mesh = Mesh::build(&scene, MeshParams::Patches(a.patches))?;
     let t = Instant::now();
@@ -232,7 +189,8 @@ fn unit_squares() -> Vec<(&'static str, radiosity::scene::Scene, f64)> {
 }
 
 /// Errors against closed forms, and time per row as N grows.
-fn form_factor_table(runs: usize) -> Result<()> {
+pub fn form_factor_table(runs: usize) -> Result<()> {
+    crate::positive(&[("--runs", runs)])?;
     println!("relative error against Howell's closed forms (unit squares, one patch per face; K = 16 points):");
     println!("| method | setting | parallel (F = 0.19982) | perpendicular (F = 0.20004) |");
     println!("|---|---|---|---|");
@@ -341,7 +299,7 @@ fn reset_peak() {
 }
 
 /// The full face-to-face matrix of the city by Monte Carlo and by hemicube.
-fn city() -> Result<()> {
+pub fn city() -> Result<()> {
     let scene = builtin::city(63);
     let mesh = Mesh::build(&scene, MeshParams::Faces)?;
     let bvh = Bvh::build(&mesh);
@@ -388,4 +346,29 @@ fn city() -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Trace `count` rays from random patches (uniform over patch indices), from uniform points in
+/// cosine-distributed directions: the incoherent rays of form-factor estimation, without the
+/// coherence of tracing one patch's row at a time. Returns how many hit a front side. For
+/// measuring ray-casting speed.
+pub fn trace_random_rays(mesh: &Mesh, bvh: &Bvh, count: usize, seed: u64) -> u64 {
+    let offset = bvh.ray_offset();
+    let n = mesh.len() as u64;
+    let chunks = count.div_ceil(1024);
+    (0..chunks)
+        .into_par_iter()
+        .map(|c| {
+            let mut rng = stream(seed, u64::MAX, 0, c as u64);
+            let todo = (count - c * 1024).min(1024);
+            let mut rays = [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); 1024];
+            for ray in &mut rays[..todo] {
+                let i = ((rng.random::<u32>() as u64 * n) >> 32) as usize;
+                *ray = photon_ray(mesh, i, offset, &mut rng);
+            }
+            let mut hits = [None; 1024];
+            bvh.closest_hits(&rays[..todo], f32::INFINITY, &mut hits[..todo]);
+            hits.iter().flatten().filter(|h| h.front).count() as u64
+        })
+        .sum()
 }

@@ -12,37 +12,13 @@
 
 pub mod complexity;
 pub mod convergence;
-pub mod random;
+pub mod plot;
+/// The random systems (moved to the library: they are systems to compare solvers on).
+pub use radiosity::system::random;
 
-use crate::observe::{Event, Observer, Stage};
-use crate::system::SparseMatrix;
-use crate::system::System;
+use radiosity::observe::{Event, Observer, Stage};
 
-/// A radiosity system with its form factors stored.
-#[derive(Clone, Debug)]
-pub struct StoredSystem {
-    /// Areas, reflectances, emissions.
-    pub system: System,
-    /// The form factors.
-    pub f: SparseMatrix,
-}
-
-impl StoredSystem {
-    /// The system and, separately borrowed, its matrix.
-    pub fn parts(&mut self) -> (&System, &mut SparseMatrix) {
-        (&self.system, &mut self.f)
-    }
-
-    /// Number of patches.
-    pub fn len(&self) -> usize {
-        self.system.len()
-    }
-
-    /// True for the empty system.
-    pub fn is_empty(&self) -> bool {
-        self.system.is_empty()
-    }
-}
+pub use radiosity::system::StoredSystem;
 
 /// Heap memory in use, as the program sees it.
 pub trait MemoryProbe: Sync {
@@ -124,29 +100,29 @@ pub fn fit_exponent(points: &[(f64, f64)]) -> Option<f64> {
 pub enum ExperimentError {
     /// A stage of the engine failed.
     #[error(transparent)]
-    Engine(#[from] crate::Error),
+    Engine(#[from] radiosity::Error),
     /// Writing a result failed.
     #[error(transparent)]
-    Export(#[from] crate::export::ExportError),
+    Export(#[from] radiosity::export::ExportError),
     /// The parameters cannot work.
     #[error("{0}")]
     Invalid(String),
 }
 
-impl From<crate::solve::SolveError> for ExperimentError {
-    fn from(e: crate::solve::SolveError) -> Self {
+impl From<radiosity::solve::SolveError> for ExperimentError {
+    fn from(e: radiosity::solve::SolveError) -> Self {
         Self::Engine(e.into())
     }
 }
 
-impl From<crate::scene::SceneError> for ExperimentError {
-    fn from(e: crate::scene::SceneError) -> Self {
+impl From<radiosity::scene::SceneError> for ExperimentError {
+    fn from(e: radiosity::scene::SceneError) -> Self {
         Self::Engine(e.into())
     }
 }
 
-impl From<crate::formfactor::FormFactorError> for ExperimentError {
-    fn from(e: crate::formfactor::FormFactorError) -> Self {
+impl From<radiosity::formfactor::FormFactorError> for ExperimentError {
+    fn from(e: radiosity::formfactor::FormFactorError) -> Self {
         Self::Invalid(e.to_string())
     }
 }

@@ -19,14 +19,14 @@
 
 use super::random::section6;
 use super::{CaseProgress, ExperimentError, StoredSystem};
-use crate::accel::Bvh;
-use crate::formfactor::{Estimator, FormFactorMethod, Params as FfParams, Storage};
-use crate::mesh::{Mesh, MeshParams};
-use crate::observe::Observer;
-use crate::pipeline::patch_system;
-use crate::scene::builtin;
-use crate::solve::gauss::dense_solve;
-use crate::solve::{relative_error, start, Solver, SolverParams};
+use radiosity::accel::Bvh;
+use radiosity::formfactor::{Estimator, FormFactorMethod, Params as FfParams, Storage};
+use radiosity::mesh::{Mesh, MeshParams};
+use radiosity::observe::Observer;
+use radiosity::pipeline::patch_system;
+use radiosity::scene::builtin;
+use radiosity::solve::gauss::dense_solve;
+use radiosity::solve::{relative_error, start, Solver, SolverParams};
 use std::time::Instant;
 
 /// How the experiment runs.
@@ -141,9 +141,9 @@ impl Curve {
 }
 
 fn scene_system(
-    scene: &crate::scene::Scene,
+    scene: &radiosity::scene::Scene,
     mesh: &Mesh,
-    f: crate::system::SparseMatrix,
+    f: radiosity::system::SparseMatrix,
 ) -> StoredSystem {
     StoredSystem {
         system: patch_system(scene, mesh),
@@ -156,12 +156,12 @@ fn hemicube_matrix(
     params: FfParams,
     progress: &dyn Observer,
     label: &str,
-) -> Result<(crate::system::SparseMatrix, f64), ExperimentError> {
+) -> Result<(radiosity::system::SparseMatrix, f64), ExperimentError> {
     let bvh = Bvh::build(mesh);
     let case_progress = CaseProgress::begin(progress, label, mesh.len() as u64);
     let t = Instant::now();
     let f = Estimator::new(mesh, &bvh, params)?
-        .matrix(Storage::Sparse, &crate::observe::Silent)
+        .matrix(Storage::Sparse, &radiosity::observe::Silent)
         .into_sparse();
     let s = t.elapsed().as_secs_f64();
     case_progress.advance(mesh.len() as u64);

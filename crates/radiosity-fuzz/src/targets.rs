@@ -7,10 +7,10 @@
 //! bounds time and memory ([`Report::slowest`]; the `radiosity fuzz` command also counts the
 //! heap). The corpus is built in, so the fuzzer runs anywhere.
 
-use crate::io::{matrix_market, patches_csv};
-use crate::mesh::{Mesh, MeshParams};
-use crate::sampling::{stream, uniform, Rng64};
-use crate::scene::{load_with, LoadOptions};
+use radiosity::io::{matrix_market, patches_csv};
+use radiosity::mesh::{Mesh, MeshParams};
+use radiosity::sampling::{stream, uniform, Rng64};
+use radiosity::scene::{load_with, LoadOptions};
 use rand::Rng;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -110,11 +110,11 @@ pub struct Report {
 fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
     let room = |name: &str| -> Vec<u8> {
         match name {
-            "room.gltf" => include_bytes!("../tests/data/room.gltf").to_vec(),
-            "room.bin" => include_bytes!("../tests/data/room.bin").to_vec(),
-            "checker.png" => include_bytes!("../tests/data/checker.png").to_vec(),
-            "room.ply" => include_bytes!("../tests/data/room.ply").to_vec(),
-            _ => include_bytes!("../tests/data/room_be.ply").to_vec(),
+            "room.gltf" => include_bytes!("../../radiosity/tests/data/room.gltf").to_vec(),
+            "room.bin" => include_bytes!("../../radiosity/tests/data/room.bin").to_vec(),
+            "checker.png" => include_bytes!("../../radiosity/tests/data/checker.png").to_vec(),
+            "room.ply" => include_bytes!("../../radiosity/tests/data/room.ply").to_vec(),
+            _ => include_bytes!("../../radiosity/tests/data/room_be.ply").to_vec(),
         }
     };
     let s = |n: &str, t: &str| (n.to_string(), t.as_bytes().to_vec());
@@ -147,13 +147,13 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
 
 /// A small binary glTF: the built-in furnace baked by our own writer.
 fn glb(scratch: &Path) -> Vec<u8> {
-    let scene = crate::scene::builtin::furnace();
+    let scene = radiosity::scene::builtin::furnace();
     let mesh = Mesh::build(&scene, MeshParams::Patches(30)).expect("the furnace meshes");
-    let values = vec![crate::color::Rgb::splat(1.0); mesh.vertices.len()];
+    let values = vec![radiosity::color::Rgb::splat(1.0); mesh.vertices.len()];
     let path = scratch.join("seed.glb");
-    crate::export::bake::write(
+    radiosity::export::bake::write(
         &path,
-        &crate::export::bake::Bake {
+        &radiosity::export::bake::Bake {
             scene: &scene,
             mesh: &mesh,
             vertex_radiosity: &values,
@@ -252,8 +252,8 @@ fn parse(target: Target, dir: &Path) -> bool {
         Target::PlyBinary => scene("room_be.ply"),
         Target::Vs3 => scene("box.vs3"),
         Target::Vs3a => scene("room.vs3"),
-        Target::BoundaryCsv => crate::thermal::read_boundary_csv(&dir.join("bc.csv")).is_ok(),
-        Target::Pfm => crate::render::compare::read_pfm(&dir.join("ref.pfm")).is_ok(),
+        Target::BoundaryCsv => radiosity::thermal::read_boundary_csv(&dir.join("bc.csv")).is_ok(),
+        Target::Pfm => radiosity::render::compare::read_pfm(&dir.join("ref.pfm")).is_ok(),
         Target::MatrixMarket | Target::PatchesCsv => {
             let m = matrix_market::read(&dir.join("f.mtx"));
             let p = patches_csv::read(&dir.join("p.csv"));

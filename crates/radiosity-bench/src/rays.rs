@@ -1,10 +1,10 @@
-//! `radiosity bench --rays SCENE [--rays N] [--patches N] [--threads T]`: the ray-casting
+//! `radiosity-bench rays SCENE [--rays N] [--patches N] [--threads T]`: the ray-casting
 //! workload of form-factor estimation on any scene (a patch picked uniformly, a uniform point
 //! on it, a cosine-distributed direction, closest hit), the same rays for every backend: the
 //! engine's BVH, and Embree when the binary is built with the `embree` feature. Prints M rays/s
 //! (median of the runs), hit rate, nanoseconds per ray and thread, and the ratio.
 
-use crate::args::BenchArgs;
+use crate::args::RaysArgs;
 use anyhow::{bail, Result};
 use radiosity::accel::Bvh;
 use radiosity::formfactor::monte_carlo::photon_ray;
@@ -173,13 +173,14 @@ fn time_runs(cast: impl Fn() -> Vec<(u32, f32)>, count: usize, runs: usize) -> T
 }
 
 /// Run the ray benchmark on `scene`.
-pub fn run(a: &BenchArgs, scene: &str, count: usize) -> Result<()> {
+pub fn run(a: &RaysArgs) -> Result<()> {
     use crate::args::BackendArg;
-    crate::settings::threads(a.threads)?;
+    crate::positive(&[("--runs", a.runs), ("--rays", a.rays), ("--patches", a.patches)])?;
+    let (scene, count) = (&a.scene, a.rays);
     if a.backend == BackendArg::Embree && !cfg!(feature = "embree") {
         bail!("--backend embree: this binary was built without Embree (cargo build --release --features embree, with Debian's libembree-dev)");
     }
-    let scene = crate::load_scene(scene, a.one_sided)?;
+    let scene = radiosity_cli::load_scene(scene, a.one_sided)?;
     scene.validate_geometry()?;
     let mesh = Mesh::build(&scene, MeshParams::Patches(a.patches))?;
     let t = Instant::now();

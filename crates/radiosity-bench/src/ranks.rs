@@ -1,7 +1,7 @@
 //! `radiosity bench --ranks SCENE`: the distributed methods over the ranks of this run.
 
-use crate::args::BenchArgs;
-use crate::bench::median;
+use crate::args::RanksArgs;
+use crate::median;
 use anyhow::Result;
 use radiosity::distributed::{self, solve::Report, Ranks, Serial};
 use radiosity::formfactor::Params;
@@ -41,14 +41,15 @@ fn once(scene: &radiosity::scene::Scene, settings: &Settings, ranks: &Ranks<'_>)
 }
 
 /// Run the benchmark.
-pub fn run(a: &BenchArgs, scene_name: &str) -> Result<()> {
-    crate::settings::threads(a.threads)?;
-    if !(a.tolerance > 0.0 && a.tolerance < 1.0) {
-        anyhow::bail!("--tolerance {}: must be in (0, 1)", a.tolerance);
+pub fn run(a: &RanksArgs) -> Result<()> {
+    crate::positive(&[("--runs", a.runs), ("--patches", a.patches)])?;
+    let scene_name = a.scene.as_str();
+    if !(a.solve.tolerance > 0.0 && a.solve.tolerance < 1.0) {
+        anyhow::bail!("--tolerance {}: must be in (0, 1)", a.solve.tolerance);
     }
-    let scene = crate::load_scene(scene_name, a.one_sided)?;
+    let scene = radiosity_cli::load_scene(scene_name, a.solve.one_sided)?;
     let serial = Ranks::new(&Serial);
-    let world = crate::ranks::current().unwrap_or(&serial);
+    let world = radiosity_cli::ranks::current().unwrap_or(&serial);
     let k = world.size();
     let threads = rayon::current_num_threads();
     println!(
@@ -81,9 +82,9 @@ pub fn run(a: &BenchArgs, scene_name: &str) -> Result<()> {
             form_factors: Params::shooting(),
             solver,
             params: SolverParams {
-                tolerance: a.tolerance,
-                iteration_rays: a.iteration_rays,
-                gather_rays: a.gather_rays,
+                tolerance: a.solve.tolerance,
+                iteration_rays: a.solve.iteration_rays,
+                gather_rays: a.solve.gather_rays,
                 ..SolverParams::default()
             },
             ..Settings::default()

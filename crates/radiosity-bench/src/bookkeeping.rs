@@ -5,7 +5,7 @@
 //! shooter, updating the receivers, keeping the books), free of the rays' noise, which at 10⁵
 //! patches and more is five to ten times larger.
 
-use crate::args::BenchArgs;
+use crate::args::ScaleArgs;
 use anyhow::{bail, Context, Result};
 use radiosity::formfactor::{Estimator, OnDemandRows, Params as FormFactorParams};
 use radiosity::mesh::{Mesh, MeshParams};
@@ -52,8 +52,10 @@ impl Operator for Counting<'_, '_> {
 }
 
 /// Run the bookkeeping benchmark.
-pub fn run(a: &BenchArgs, scene: &str, sizes: &[usize]) -> Result<()> {
-    let method = a.solver.0;
+pub fn run(a: &ScaleArgs) -> Result<()> {
+    crate::positive(&[("--runs", a.runs)])?;
+    let (scene, sizes) = (a.scene.as_str(), &a.sizes);
+    let method = a.solve.solver.0;
     if matches!(
         method,
         Solver::Gauss | Solver::Stochastic | Solver::StochasticJacobi
@@ -63,13 +65,12 @@ pub fn run(a: &BenchArgs, scene: &str, sizes: &[usize]) -> Result<()> {
             method.name()
         );
     }
-    crate::settings::threads(a.threads)?;
-    let scene_data = crate::load_scene(scene, a.one_sided)?;
+    let scene_data = radiosity_cli::load_scene(scene, a.solve.one_sided)?;
     let limit = radiosity::pipeline::available_memory().unwrap_or(8 << 30);
     println!(
         "bookkeeping: {scene}, {} to {:.2}% unshot, {} threads; each size solved once to fill the row cache, then {} more times on the cached rows (the median is reported)",
         method.name(),
-        100.0 * a.tolerance,
+        100.0 * a.solve.tolerance,
         rayon::current_num_threads(),
         a.runs
     );
@@ -99,7 +100,7 @@ pub fn run(a: &BenchArgs, scene: &str, sizes: &[usize]) -> Result<()> {
         let estimator = Estimator::new(&mesh, &bvh, ff)?;
         let mut rows = OnDemandRows::new(estimator);
         let params = SolverParams {
-            tolerance: a.tolerance,
+            tolerance: a.solve.tolerance,
             ..Default::default()
         };
         let mut times = Vec::new();
@@ -112,7 +113,7 @@ pub fn run(a: &BenchArgs, scene: &str, sizes: &[usize]) -> Result<()> {
                 entries: 0,
             };
             let t = Instant::now();
-            let info = crate::settings::on_worker(|| -> Result<_> {
+            let info = radiosity_cli::settings::on_worker(|| -> Result<_> {
                 let mut s = radiosity::solve::start(method, &system, &mut source, &params)?;
                 Ok(radiosity::solve::run(
                     &mut *s,

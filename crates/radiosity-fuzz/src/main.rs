@@ -1,12 +1,17 @@
-//! `radiosity fuzz`: the long run of the library's mutation fuzzer ([`radiosity::fuzz`]) over
-//! every parser and over the option parser, with a watchdog that stops the run, keeping the
+//! `radiosity-fuzz`: the long run of the mutation fuzzer ([`targets`]) over every parser of
+//! the `radiosity` library and over the `radiosity` command's option parser, with a watchdog that stops the run, keeping the
 //! input, if a case takes more than 10 s, and a heap count per case (more than 1 GiB fails).
 
-use crate::args::{Cli, FuzzArgs};
+mod targets;
+
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use radiosity::experiment::MemoryProbe;
-use radiosity::fuzz::{run, Target};
+use radiosity_cli::alloc::Probe;
+use radiosity_cli::args::Cli;
+use radiosity_experiments::MemoryProbe;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use targets::{run, Target};
 use radiosity::sampling::stream;
 use rand::Rng;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -18,8 +23,49 @@ const HANG: Duration = Duration::from_secs(10);
 /// Most heap a case may allocate.
 const HEAP: u64 = 1 << 30;
 
+/// Fuzz every input parser and the `radiosity` option parser with seeded mutations of valid
+/// files: panics, cases over 10 s or over 1 GiB of heap fail the run.
+#[derive(Debug, Parser)]
+#[command(name = "radiosity-fuzz", version, about, long_about = None, after_help = EXAMPLES)]
+struct FuzzArgs {
+    /// Cases per parser.
+    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    cases: u64,
+    /// Seed of the mutations.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    seed: u64,
+    /// Only these parsers (default: all).
+    #[arg(long, value_name = "P,P,…", value_delimiter = ',')]
+    targets: Vec<String>,
+    /// Folder for the scratch files and the inputs that failed.
+    #[arg(long, value_name = "DIR", default_value = "fuzz-out")]
+    out: PathBuf,
+}
+
+const EXAMPLES: &str = "Examples:
+  radiosity-fuzz --cases 1000000 --out fuzz-out
+  radiosity-fuzz --cases 10000 --targets gltf,glb --seed 7";
+
+fn main() -> ExitCode {
+    let a = match FuzzArgs::try_parse() {
+        Ok(a) => a,
+        Err(e) if e.use_stderr() => {
+            eprintln!("radiosity-fuzz: error: {}", radiosity_cli::usage_error(&e));
+            return ExitCode::from(2);
+        }
+        Err(e) => e.exit(),
+    };
+    match radiosity_cli::settings::threads(None).and_then(|()| run_all(a)) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("radiosity-fuzz: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
 /// Run the fuzzer.
-pub fn run_all(a: FuzzArgs) -> Result<()> {
+fn run_all(a: FuzzArgs) -> Result<()> {
     if a.cases == 0 {
         bail!("--cases 0: at least one case is needed");
     }
@@ -37,7 +83,7 @@ pub fn run_all(a: FuzzArgs) -> Result<()> {
                 && (epoch.elapsed().as_millis() as u64).saturating_sub(s) > HANG.as_millis() as u64
             {
                 eprintln!(
-                    "radiosity: error: a fuzz case ran past {} s; its input is the newest file under the output folder",
+                    "radiosity-fuzz: error: a fuzz case ran past {} s; its input is the newest file under the output folder",
                     HANG.as_secs()
                 );
                 std::process::exit(3);
@@ -56,13 +102,13 @@ pub fn run_all(a: FuzzArgs) -> Result<()> {
         let mut peak = 0u64;
         let mut heavy = false;
         started.store(epoch.elapsed().as_millis() as u64 + 1, Ordering::Relaxed);
-        crate::alloc::Probe.reset_peak();
-        let base = crate::alloc::Probe.current();
+        Probe.reset_peak();
+        let base = Probe.current();
         let report = run(target, a.cases, a.seed, &a.out, &mut |_, _| {
-            let used = crate::alloc::Probe.peak().saturating_sub(base);
+            let used = Probe.peak().saturating_sub(base);
             peak = peak.max(used);
             heavy |= used > HEAP;
-            crate::alloc::Probe.reset_peak();
+            Probe.reset_peak();
             started.store(epoch.elapsed().as_millis() as u64 + 1, Ordering::Relaxed);
         })
         .context("writing the fuzz cases")?;
@@ -138,9 +184,9 @@ fn options(cases: u64, seed: u64) -> (u64, u64) {
             Err(_) => refused += 1,
             Ok(cli) => {
                 // The cross-flag checks that run before any work.
-                if let crate::args::Command::Render(r) = &cli.command {
-                    refused += u64::from(crate::settings::settings(&r.solve).is_err());
-                    let _ = crate::settings::image(&r.image, 1, 4);
+                if let radiosity_cli::args::Command::Render(r) = &cli.command {
+                    refused += u64::from(radiosity_cli::settings::settings(&r.solve).is_err());
+                    let _ = radiosity_cli::settings::image(&r.image, 1, 4);
                 }
             }
         }

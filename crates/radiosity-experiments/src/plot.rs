@@ -5,7 +5,7 @@
 //! binary (crate `dejavu`), so no system font or fontconfig is needed; the SVG names the
 //! `sans-serif` family and leaves the font to the viewer.
 
-use super::{write_atomic, ExportError, OutputError};
+use radiosity::export::{write_atomic, ExportError, OutputError};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};

@@ -1,13 +1,13 @@
-//! `radiosity bench --scale SCENE --sizes N,N,…`: solve a scene at each size with one method,
+//! `radiosity-bench scale SCENE --sizes N,N,…`: solve a scene at each size with one method,
 //! each size in a fresh child process (`radiosity solve`), so that its CPU time and peak
 //! resident memory are its own; print patches, rays, wall and CPU seconds, the time of each
 //! stage, peak resident memory, and the fitted exponents of time against N; and, so that a
 //! run's bookkeeping can be read against the machine it met, the share of the wall time it took
 //! and how long a value took to go between two cores and back just before and just after it.
 
-use crate::args::BenchArgs;
+use crate::args::ScaleArgs;
 use anyhow::{bail, Context, Result};
-use radiosity::experiment::fit_exponent;
+use radiosity_experiments::fit_exponent;
 use std::process::Command;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -100,62 +100,45 @@ struct Row {
     resident_mib: f64,
 }
 
-/// The numbers of a summary line, in order (commas inside numbers are not used).
-fn numbers(line: &str) -> Vec<f64> {
-    line.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == 'e' || c == '-'))
-        .filter_map(|t| t.parse::<f64>().ok())
-        .collect()
-}
-
-fn parse(summary: &str) -> Row {
-    let mut row = Row::default();
-    for line in summary.lines() {
-        let n = numbers(line);
-        let get = |k: usize| n.get(k).copied().unwrap_or(f64::NAN);
-        if line.starts_with("patches ") {
-            row.patches = get(0);
-        } else if line.starts_with("rays ") {
-            row.rays = get(0);
-        } else if line.starts_with("iterations ") {
-            row.iterations = get(0);
-        } else if line.starts_with("time ") {
-            (row.mesh, row.bvh, row.form_factors, row.solve) = (get(0), get(1), get(2), get(3));
-            // A solver's own rays (stochastic Jacobi's), part of its solve: counted with the
-            // rows, so that `solve s` is everything but rays for every method.
-            if let Some(k) = line.find("(rays ") {
-                let rays = numbers(&line[k..]).first().copied().unwrap_or(f64::NAN);
-                row.form_factors += rays;
-                row.solve -= rays;
-            }
-        } else if line.starts_with("memory ") {
-            row.resident_mib = get(0);
-        } else if line.starts_with("cpu ") {
-            row.cpu = get(0);
-        }
-    }
-    row
+/// One solve's figures from the child's `--report json`.
+fn parse(report: &str) -> Result<Row> {
+    let v: serde_json::Value = serde_json::from_str(report.trim())
+        .context("radiosity solve --report json printed no JSON object")?;
+    let num = |p: &str| v.pointer(p).and_then(serde_json::Value::as_f64).unwrap_or(f64::NAN);
+    // A solver's own rays (stochastic Jacobi's), part of its solve: counted with the rows, so
+    // that `solve s` is everything but rays for every method.
+    let solve_rays = num("/seconds/solve_rays");
+    Ok(Row {
+        patches: num("/patches"),
+        rays: num("/rays"),
+        iterations: num("/iterations"),
+        wall: f64::NAN,
+        cpu: num("/cpu_seconds"),
+        mesh: num("/seconds/mesh"),
+        bvh: num("/seconds/bvh"),
+        form_factors: num("/seconds/form_factors") + solve_rays,
+        solve: num("/seconds/solve") - solve_rays,
+        resident_mib: num("/memory/peak_resident_bytes") / (1024.0 * 1024.0),
+    })
 }
 
 /// Run the scale benchmark.
-pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
-    let sizes = a
-        .sizes
-        .as_ref()
-        .context("--scale needs --sizes N,N,… (patch counts)")?;
+pub fn run(a: &ScaleArgs, threads: Option<usize>) -> Result<()> {
+    let (scene, sizes) = (a.scene.as_str(), &a.sizes);
     if sizes.is_empty() || sizes.contains(&0) {
         bail!("--sizes: patch counts must be positive");
     }
     if a.bookkeeping {
-        return crate::bookkeeping::run(a, scene, sizes);
+        return crate::bookkeeping::run(a);
     }
-    let exe = std::env::current_exe().context("cannot find the radiosity executable")?;
+    let exe = crate::radiosity_exe()?;
     let dir = std::env::temp_dir().join(format!("radiosity-scale-{}", std::process::id()));
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
     println!(
         "scale: {scene}, {} to {:.2}% unshot, {} threads; each size solved in a fresh process",
-        a.solver.0,
-        100.0 * a.tolerance,
-        a.threads.unwrap_or_else(rayon::current_num_threads)
+        a.solve.solver.0,
+        100.0 * a.solve.tolerance,
+        threads.unwrap_or_else(rayon::current_num_threads)
     );
     println!(
         "{:>9} {:>11} {:>8} {:>9} {:>9} {:>8} {:>8} {:>9} {:>9} {:>10} {:>8} {:>7} {:>9} {:>9}",
@@ -181,16 +164,17 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
         cmd.arg("solve")
             .arg(scene)
             .args(["--patches", &n.to_string()])
-            .args(["--solver", a.solver.0.name()])
-            .args(["--tolerance", &a.tolerance.to_string()])
-            .args(["--iteration-rays", &a.iteration_rays.to_string()])
-            .args(["--gather-rays", &a.gather_rays.to_string()])
+            .args(["--solver", a.solve.solver.0.name()])
+            .args(["--tolerance", &a.solve.tolerance.to_string()])
+            .args(["--iteration-rays", &a.solve.iteration_rays.to_string()])
+            .args(["--gather-rays", &a.solve.gather_rays.to_string()])
+            .args(["--report", "json"])
             .arg("--out")
             .arg(&out);
-        if a.one_sided {
+        if a.solve.one_sided {
             cmd.arg("--one-sided");
         }
-        if let Some(t) = a.threads {
+        if let Some(t) = threads {
             cmd.args(["--threads", &t.to_string()]);
         }
         let before = cross_core_round_trip();
@@ -206,7 +190,7 @@ pub fn run(a: &BenchArgs, scene: &str) -> Result<()> {
                 String::from_utf8_lossy(&result.stderr).trim()
             );
         }
-        let mut row = parse(&String::from_utf8_lossy(&result.stdout));
+        let mut row = parse(&String::from_utf8_lossy(&result.stdout))?;
         row.wall = wall;
         let [xcore0, xcore1] =
             [before, after].map(|t| t.map_or("—".to_string(), |t| format!("{t:.0}")));

@@ -16,17 +16,17 @@
 //! (so the stored F that Jacobi and Gauss-Seidel read is not theirs; it is the matrix cases').
 
 use super::{fit_exponent, measure, CaseProgress, ExperimentError, MemoryProbe};
-use crate::accel::Bvh;
-use crate::formfactor::OnDemandRows;
-use crate::formfactor::{Estimator, FormFactorMethod, Params as FfParams, Storage};
-use crate::mesh::{Mesh, MeshParams};
-use crate::observe::Observer;
-use crate::pipeline::patch_system;
-use crate::scene::builtin;
-use crate::solve::gauss::dense_solve;
-use crate::solve::{run, start, Solver, SolverParams};
-use crate::system::SparseMatrix;
-use crate::system::{Operator, System};
+use radiosity::accel::Bvh;
+use radiosity::formfactor::OnDemandRows;
+use radiosity::formfactor::{Estimator, FormFactorMethod, Params as FfParams, Storage};
+use radiosity::mesh::{Mesh, MeshParams};
+use radiosity::observe::Observer;
+use radiosity::pipeline::patch_system;
+use radiosity::scene::builtin;
+use radiosity::solve::gauss::dense_solve;
+use radiosity::solve::{run, start, Solver, SolverParams};
+use radiosity::system::SparseMatrix;
+use radiosity::system::{Operator, System};
 
 /// How the experiment runs.
 #[derive(Clone, Debug, PartialEq)]
@@ -281,7 +281,7 @@ fn solve_to_tolerance(
     system: &System,
     source: &mut dyn Operator,
     params: &SolverParams,
-) -> Result<crate::solve::Info, ExperimentError> {
+) -> Result<radiosity::solve::Info, ExperimentError> {
     let mut solver = start(method, system, source, params)?;
     Ok(run(&mut *solver, source, params, false, &mut |_, _| true))
 }
@@ -362,7 +362,7 @@ pub fn run_all(
                     };
                     let est = Estimator::new(&s.mesh, &s.bvh, ff)?;
                     let (f, seconds, peak) = measure(probe, || {
-                        est.matrix(Storage::Sparse, &crate::observe::Silent)
+                        est.matrix(Storage::Sparse, &radiosity::observe::Silent)
                             .into_sparse()
                     });
                     m.seconds = seconds;

@@ -9,7 +9,7 @@
 //! that spot, so the light of the place is the *sum* of the twins' radiosities; hierarchical
 //! radiosity lights every twin as the surface, so it is any one of them (their largest).
 
-use crate::args::{BenchArgs, ReferenceTracer};
+use crate::args::{HierarchicalArgs, ReferenceTracer};
 use anyhow::{bail, Context, Result};
 use radiosity::hierarchical::Params as HierarchicalParams;
 use radiosity::mesh::MeshParams;
@@ -20,7 +20,7 @@ use std::time::Instant;
 
 /// Surface means and their standard errors, from `path` or made and written there.
 fn reference(
-    a: &BenchArgs,
+    a: &HierarchicalArgs,
     scene: &radiosity::scene::Scene,
     path: &Path,
 ) -> Result<Vec<(Rgb, Rgb)>> {
@@ -190,9 +190,9 @@ fn errors(
 }
 
 /// Run the accuracy benchmark.
-pub fn run(a: &BenchArgs, name: &str) -> Result<()> {
-    crate::settings::threads(a.threads)?;
-    let scene = crate::load_scene(name, a.one_sided)?;
+pub fn run(a: &HierarchicalArgs) -> Result<()> {
+    let name = &a.scene;
+    let scene = radiosity_cli::load_scene(name, a.one_sided)?;
     let path = a
         .reference
         .clone()

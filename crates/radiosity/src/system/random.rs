@@ -5,8 +5,7 @@
 use super::StoredSystem;
 use crate::color::Rgb;
 use crate::sampling::{stream, uniform, Rng64};
-use crate::system::Entry;
-use crate::system::{SparseMatrix, System};
+use super::{Entry, SparseMatrix, System};
 
 /// A random system (the same shape as any stored system).
 pub type Random = StoredSystem;

@@ -1,0 +1,617 @@
+//! `radiosity`: the command-line front end. Parses arguments, runs the library, reports.
+//!
+//! A library so that the workbench's binaries (`radiosity-bench`, `radiosity-fuzz`) share the
+//! command's argument types, settings, worker pool and ranks; the `radiosity` binary is
+//! [`main`]. Nothing here is physics: that is the `radiosity` crate's.
+
+pub mod alloc;
+pub mod args;
+mod experiment;
+pub mod ranks;
+mod report;
+pub mod settings;
+mod thermal;
+mod view_factors;
+
+use anyhow::{Context, Result};
+use args::{
+    Cli, Command, RenderArgs, ReportFormat, SolveArgs, SolveCmdArgs, SolveSystemArgs, ViewArgs,
+};
+use clap::Parser;
+use radiosity::export::bake::{self, Bake};
+use radiosity::export::{
+    write_image, write_patches_csv, write_radiosity_csv, write_text, ImageFormat,
+};
+use radiosity::io::FileFormat;
+use radiosity::observe::Silent;
+use radiosity::pipeline::{self, Solution};
+use radiosity::render::auto_exposure;
+use radiosity::render::baked::BakedView;
+use radiosity::scene::{self, Scene};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// Run one command.
+fn run(command: Command) -> Result<()> {
+    let single = |what: &str| ranks::refuse_unless_single(what);
+    match command {
+        Command::Render(a) => single("render").and_then(|()| render(a)),
+        Command::Solve(a) => solve(a),
+        Command::View(a) => single("view").and_then(|()| view(a)),
+        Command::SolveSystem(a) => single("solve-system").and_then(|()| solve_system(a)),
+        Command::FormFactors(a) => view_factors::run(a),
+        Command::Experiment(a) => single("experiment").and_then(|()| experiment::run(a)),
+        Command::Thermal(a) => thermal::run(a),
+    }
+}
+
+/// The `radiosity` command: parse the arguments, run, and say what went wrong on one line.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if e.use_stderr() => {
+            eprintln!("radiosity: error: {}", usage_error(&e));
+            return ExitCode::from(2);
+        }
+        Err(e) => e.exit(),
+    };
+    if let Err(e) = ranks::start() {
+        eprintln!("radiosity: error: {e:#}");
+        return ExitCode::FAILURE;
+    }
+    let result = settings::threads(cli.threads).and_then(|()| {
+        // MPI was initialised on this thread (its communicator is thread-local, and MPI is
+        // told only this thread calls it): under mpirun the command stays here.
+        if ranks::launched().is_some() {
+            run(cli.command)
+        } else {
+            settings::on_worker(|| run(cli.command))
+        }
+    });
+    match result {
+        Ok(()) => {
+            ranks::finish();
+            ExitCode::SUCCESS
+        }
+        Err(e) if ranks::distributed() => ranks::fail(&format!("{e:#}")),
+        Err(e) => {
+            // The chain once: each error's text says what went wrong at its level, and a
+            // library error about a parameter is given the option's name.
+            let flag = e.chain().find_map(settings::flag_of);
+            let hint = e
+                .chain()
+                .find_map(settings::hint_of)
+                .map_or(String::new(), |h| format!(" ({h})"));
+            match flag {
+                Some(flag) if !format!("{e:#}").contains(flag) => {
+                    eprintln!("radiosity: error: {flag}: {e:#}{hint}")
+                }
+                _ => eprintln!("radiosity: error: {e:#}{hint}"),
+            }
+            ranks::finish();
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// A command-line error on one line: for a value that is not one of a flag's possible values,
+/// `--flag value: unknown value (possible: …; did you mean 'x'?)`; otherwise clap's message and
+/// its tips.
+pub fn usage_error(e: &clap::Error) -> String {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    let text = |kind| match e.get(kind) {
+        Some(ContextValue::String(s)) => Some(s.clone()),
+        Some(ContextValue::Strings(v)) => Some(v.join(", ")),
+        _ => None,
+    };
+    if e.kind() == ErrorKind::InvalidValue {
+        if let (Some(arg), Some(value)) = (
+            text(ContextKind::InvalidArg),
+            text(ContextKind::InvalidValue),
+        ) {
+            let flag = arg.split_whitespace().next().unwrap_or(&arg).to_string();
+            let mut line = format!("{flag} {value}: unknown value");
+            if let Some(valid) = text(ContextKind::ValidValue) {
+                line += &format!(" (possible: {valid}");
+                if let Some(s) = text(ContextKind::SuggestedValue) {
+                    line += &format!("; did you mean '{s}'?");
+                }
+                line += ")";
+            }
+            return line;
+        }
+    }
+    let rendered = e.render().to_string();
+    rendered
+        .lines()
+        .map(str::trim)
+        .filter(|l| {
+            !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information")
+        })
+        .map(|l| l.strip_prefix("error: ").unwrap_or(l))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// Load the scene named on the command line and print its warnings.
+pub fn load_scene(name: &str, one_sided: bool) -> Result<Scene> {
+    let scene = scene::load_with(name, &scene::LoadOptions { one_sided })?;
+    // Every rank loads the scene; one says what is wrong with it.
+    if ranks::is_root() {
+        for w in &scene.warnings {
+            eprintln!("radiosity: warning: {w}");
+        }
+    }
+    Ok(scene)
+}
+
+/// Load and solve, with a progress bar (and the trace, if asked). Under mpirun, the
+/// distributed methods (and, over several ranks, every method, to be refused if sequential)
+/// run over the ranks, and their report comes back too.
+fn solve_scene(
+    a: &SolveArgs,
+) -> Result<(
+    Scene,
+    Solution,
+    Option<radiosity::distributed::solve::Report>,
+)> {
+    let settings = settings::settings(a)?;
+    let scene = load_scene(&a.scene, a.one_sided)?;
+    let progress = report::Progress::new(settings.params.tolerance);
+    let over_ranks = ranks::current().filter(|r| {
+        r.size() > 1
+            || (settings.hierarchical.is_none()
+                && radiosity::distributed::solve::DISTRIBUTED_SOLVERS.contains(&settings.solver))
+    });
+    let mut distributed = None;
+    let solution = match over_ranks {
+        Some(r) => radiosity::distributed::solve::solve(&scene, &settings, r, &progress).map(
+            |(s, report)| {
+                distributed = Some(report);
+                s
+            },
+        ),
+        None => pipeline::solve(&scene, &settings, &progress),
+    };
+    progress.finish();
+    let solution = solution?;
+    if let (Some(path), Some(t)) = (&a.trace, &solution.trace) {
+        write_text(path, t.csv()).context("writing the trace")?;
+        if a.report == ReportFormat::Text {
+            println!("trace       {} ({} rows)", path.display(), t.len());
+        }
+    }
+    Ok((scene, solution, distributed))
+}
+
+fn solve_system(a: SolveSystemArgs) -> Result<()> {
+    let solver = a.solver.0;
+    let params = settings::solver_params(
+        a.tolerance,
+        a.max_iterations,
+        a.omega,
+        a.photons,
+        a.iteration_rays,
+        a.gather_rays,
+        a.seed,
+    )?;
+    if FileFormat::from_path(&a.out) != Some(FileFormat::Csv) {
+        anyhow::bail!("{}: unsupported output format (use .csv)", a.out.display());
+    }
+    settings::check_output(&a.out)?;
+    if let Some(t) = &a.trace {
+        settings::check_output(t)?;
+    }
+    let patches = radiosity::io::patches_csv::read(&a.patches)?;
+    let mut matrix = radiosity::io::matrix_market::read(&a.matrix)?;
+    if matrix.n() != patches.system.len() {
+        anyhow::bail!(
+            "{}: {} patches, but {} is {} × {}",
+            a.patches.display(),
+            patches.system.len(),
+            a.matrix.display(),
+            matrix.n(),
+            matrix.n()
+        );
+    }
+    let progress = report::Progress::new(params.tolerance);
+    let solved = pipeline::solve_system(
+        &patches.system,
+        &mut matrix,
+        solver,
+        &params,
+        a.trace.is_some(),
+        &progress,
+    );
+    progress.finish();
+    let solved = solved?;
+    let info = &solved.info;
+    write_radiosity_csv(&a.out, &solved.radiosity, patches.single_channel)?;
+    if let (Some(path), Some(t)) = (&a.trace, &solved.trace) {
+        write_text(path, t.csv()).context("writing the trace")?;
+        println!("trace       {} ({} rows)", path.display(), t.len());
+    }
+    let e = info.emitted.sum();
+    println!(
+        "system      {} patches, {} form factors",
+        matrix.n(),
+        matrix.nnz()
+    );
+    println!(
+        "iterations  {} by {} ({}; unshot energy left {:.3e} of emitted) in {:.3} s",
+        info.iterations,
+        solver,
+        if info.converged {
+            "converged".to_string()
+        } else {
+            format!(
+                "stopped after {} iterations without converging",
+                info.iterations
+            )
+        },
+        info.unshot_fraction,
+        info.seconds
+    );
+    println!(
+        "energy      emitted {:.6e}: absorbed {:.2}%, escaped {:.2}%, unshot {:.2}%",
+        e,
+        100.0 * info.absorbed.sum() / e,
+        100.0 * info.escaped.sum() / e,
+        100.0 * info.unshot.sum() / e
+    );
+    println!("wrote       {}", a.out.display());
+    capped_at(a.max_iterations, info, &a.out)
+}
+
+fn render(mut a: RenderArgs) -> Result<()> {
+    use args::IntegratorArg;
+    a.solve.picture = true;
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_output(&a.solve.scene, "png"));
+    ImageFormat::from_path(&out)?;
+    settings::check_output(&out)?;
+    if let Some(t) = &a.solve.trace {
+        settings::check_output(t)?;
+    }
+    let integrator = if a.gather {
+        IntegratorArg::Gather
+    } else {
+        a.integrator
+    };
+    let settings = settings::settings(&a.solve)?;
+    let default_spp = match integrator {
+        IntegratorArg::Path => 256,
+        IntegratorArg::Gather => 16,
+        IntegratorArg::Radiosity => 4,
+    };
+    let params = settings::image(&a.image, a.solve.seed, default_spp)?;
+    if !a.exposure.is_finite() {
+        anyhow::bail!(
+            "--exposure {}: must be a finite number of stops",
+            a.exposure
+        );
+    }
+    if a.direct_samples == 0 {
+        anyhow::bail!("--direct-samples 0: at least one shadow ray per sample is needed");
+    }
+    if !(a.cache_accuracy.is_finite() && a.cache_accuracy > 0.0) {
+        anyhow::bail!(
+            "--cache-accuracy {}: must be a positive number",
+            a.cache_accuracy
+        );
+    }
+    if !(a.gather_near.is_finite() && a.gather_near >= 0.0) {
+        anyhow::bail!(
+            "--gather-near {}: a number of patch sizes, at least 0",
+            a.gather_near
+        );
+    }
+    if integrator == IntegratorArg::Path {
+        let scene = load_scene(&a.solve.scene, a.solve.one_sided)?;
+        let camera = settings::camera(default_camera_unsolved(&scene), &a.camera)?;
+        let t = Instant::now();
+        let progress = report::Progress::new(settings.params.tolerance);
+        let image = pipeline::path_trace(&scene, &camera, &params, &progress);
+        progress.finish();
+        let image = image?;
+        let render_s = t.elapsed().as_secs_f64();
+        let scale = auto_exposure(&image) * 2f32.powf(a.exposure);
+        write_image(&out, &image, scale).context("writing the image")?;
+        if a.solve.report == ReportFormat::Json {
+            let res = report::resources();
+            let v = serde_json::json!({
+                "scene": scene.name,
+                "polygons": scene.polygons.len(),
+                "integrator": "path",
+                "samples_per_pixel": params.samples_per_pixel,
+                "seconds": { "render": render_s },
+                "cpu_seconds": res.map(|r| r.0),
+                "memory": { "peak_resident_bytes": res.map(|r| r.1) },
+                "out": out,
+            });
+            println!("{v}");
+            return Ok(());
+        }
+        println!(
+            "path traced {} in {render_s:.2} s ({} paths per pixel)",
+            scene.place(),
+            params.samples_per_pixel
+        );
+        if let Some((cpu, _)) = report::resources() {
+            println!("cpu         {cpu:.2} s (user and system, all threads)");
+        }
+        println!(
+            "wrote       {} ({}×{})",
+            out.display(),
+            params.width,
+            params.height
+        );
+        return Ok(());
+    }
+    let (scene, solution, _) = solve_scene(&a.solve)?;
+    let camera = settings::camera(solution.default_camera(&scene), &a.camera)?;
+    let t = Instant::now();
+    let progress = report::Progress::new(settings.params.tolerance);
+    let image = match integrator {
+        IntegratorArg::Gather => solution.render_gather(
+            &camera,
+            &params,
+            radiosity::render::gather::GatherParams {
+                direct: a.direct_samples,
+                indirect: a.indirect_samples,
+                near: a.gather_near,
+                cache_samples: a.cache_samples,
+                cache_accuracy: a.cache_accuracy,
+            },
+            &progress,
+        ),
+        _ => solution.render(&camera, &params, &progress),
+    };
+    progress.finish();
+    let render_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let scale = auto_exposure(&image) * 2f32.powf(a.exposure);
+    write_image(&out, &image, scale).context("writing the image")?;
+    let write_s = t.elapsed().as_secs_f64();
+    if a.solve.report == ReportFormat::Json {
+        let mut v = report::summary_json(&scene, &solution, Some((render_s, write_s)));
+        v["integrator"] = serde_json::json!(match integrator {
+            IntegratorArg::Gather => "gather",
+            _ => "radiosity",
+        });
+        v["samples_per_pixel"] = serde_json::json!(params.samples_per_pixel);
+        v["out"] = serde_json::json!(out);
+        println!("{v}");
+        return Ok(());
+    }
+    report::summary(&scene, &solution, Some((render_s, write_s)));
+    println!(
+        "wrote       {} ({}×{}, {} samples per pixel{})",
+        out.display(),
+        params.width,
+        params.height,
+        params.samples_per_pixel,
+        if integrator == IntegratorArg::Gather {
+            format!(
+                ", gather {} direct + {} indirect rays each",
+                a.direct_samples, a.indirect_samples
+            )
+        } else {
+            String::new()
+        }
+    );
+    capped(&a.solve, &solution.info, &out)
+}
+
+/// The camera for a scene rendered without a solution: its own, else from inside when it is
+/// an interior with a known vertical, else framing it (as [`Solution::default_camera`]).
+fn default_camera_unsolved(scene: &Scene) -> radiosity::scene::Camera {
+    match (scene.camera, scene.up) {
+        (Some(c), _) => c,
+        (None, Some(up)) => {
+            match radiosity::mesh::Mesh::build(scene, radiosity::mesh::MeshParams::Faces) {
+                Ok(mesh) => {
+                    let bvh = radiosity::accel::Bvh::build(&mesh);
+                    radiosity::render::camera::default_camera(&bvh, up)
+                }
+                Err(_) => scene.camera_or_default(),
+            }
+        }
+        (None, None) => scene.camera_or_default(),
+    }
+}
+
+/// A solve that the default iteration cap stopped before it converged (the user gave no
+/// `--max-iterations`) is an error once its result is written: a non-zero exit, and a line
+/// saying what was reached and what to change.
+fn capped(a: &SolveArgs, info: &radiosity::solve::Info, out: &std::path::Path) -> Result<()> {
+    capped_at(a.max_iterations, info, out)
+}
+
+fn capped_at(
+    max_iterations: Option<u64>,
+    info: &radiosity::solve::Info,
+    out: &std::path::Path,
+) -> Result<()> {
+    if info.converged || max_iterations.is_some() {
+        return Ok(());
+    }
+    anyhow::bail!(
+        "{}: the solve did not converge within the default cap of {} iterations (unshot energy left {:.3e} of emitted); the result written is unconverged: give --max-iterations to go further or a larger --tolerance",
+        out.display(),
+        info.iterations,
+        info.unshot_fraction
+    )
+}
+
+fn solve(a: SolveCmdArgs) -> Result<()> {
+    let format = FileFormat::from_path(&a.out);
+    let baked = format.is_some_and(FileFormat::is_baked_mesh);
+    if format != Some(FileFormat::Csv) && !baked {
+        anyhow::bail!(
+            "{}: unsupported output format (use .csv, .glb, .gltf or .ply)",
+            a.out.display()
+        );
+    }
+    if !a.exposure.is_finite() {
+        anyhow::bail!(
+            "--exposure {}: must be a finite number of stops",
+            a.exposure
+        );
+    }
+    settings::check_output(&a.out)?;
+    if let Some(t) = &a.solve.trace {
+        settings::check_output(t)?;
+    }
+    for (flag, path) in [
+        ("--links-out", &a.links_out),
+        ("--elements-out", &a.elements_out),
+    ] {
+        if let Some(p) = path {
+            if a.solve.solver.0.is_some() {
+                anyhow::bail!("{flag}: only the hierarchical solver has links and elements (add --solver hierarchical)");
+            }
+            settings::check_output(p)?;
+        }
+    }
+    settings::settings(&a.solve)?;
+    let (scene, solution, distributed) = solve_scene(&a.solve)?;
+    if !ranks::is_root() {
+        return Ok(());
+    }
+    if let Some(h) = &solution.hierarchy {
+        if let Some(p) = &a.links_out {
+            radiosity::export::write_links_csv(p, &h.hierarchy)?;
+            if a.solve.report == ReportFormat::Text {
+            println!(
+                "links       {} ({} rows)",
+                p.display(),
+                h.hierarchy.links.len()
+            );
+            }
+        }
+        if let Some(p) = &a.elements_out {
+            radiosity::export::write_elements_csv(p, &h.hierarchy, &h.root_surfaces)?;
+            if a.solve.report == ReportFormat::Text {
+            println!(
+                "elements    {} ({} rows)",
+                p.display(),
+                h.hierarchy.elements.items.len()
+            );
+            }
+        }
+    }
+    let t = Instant::now();
+    if baked {
+        let vertex = solution.vertex_display_radiosity();
+        let bake = Bake {
+            scene: &scene,
+            mesh: &solution.mesh,
+            vertex_radiosity: &vertex,
+            scale: solution.auto_exposure() * 2f32.powf(a.exposure),
+            camera: Some(solution.default_camera(&scene)),
+        };
+        bake::write(&a.out, &bake)?;
+    } else {
+        write_patches_csv(&a.out, &scene, &solution.mesh, &solution.radiosity)?;
+    }
+    let write_s = t.elapsed().as_secs_f64();
+    if a.solve.report == ReportFormat::Json {
+        let mut v = report::summary_json(&scene, &solution, None);
+        v["seconds"]["write"] = serde_json::json!(write_s);
+        v["out"] = serde_json::json!(a.out);
+        if let Some(r) = &distributed {
+            v["ranks"] = serde_json::json!(r.blocks.len());
+            v["bytes_sent"] = serde_json::json!(r.bytes_sent());
+        }
+        println!("{v}");
+        return capped(&a.solve, &solution.info, &a.out);
+    }
+    report::summary(&scene, &solution, None);
+    if let Some(r) = &distributed {
+        report::ranks(r);
+    }
+    println!(
+        "wrote       {} ({} patches) in {write_s:.3} s",
+        a.out.display(),
+        solution.mesh.len()
+    );
+    capped(&a.solve, &solution.info, &a.out)
+}
+
+/// Show a baked glTF's vertex colours from its camera (or `--eye`/`--target`), as an unlit
+/// glTF viewer would: no solving, PNG pixels are the sRGB encoding of COLOR_0.
+fn view(a: ViewArgs) -> Result<()> {
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_output(&a.file.to_string_lossy(), "png"));
+    ImageFormat::from_path(&out)?;
+    settings::check_output(&out)?;
+    let params = settings::image(&a.image, 1, if a.gather { 16 } else { 4 })?;
+    if !matches!(
+        FileFormat::from_path(&a.file),
+        Some(FileFormat::Glb | FileFormat::Gltf)
+    ) {
+        anyhow::bail!(
+            "{}: view shows baked glTF files (.glb or .gltf)",
+            a.file.display()
+        );
+    }
+    if a.gather && a.direct_samples == 0 {
+        anyhow::bail!("--direct-samples 0: at least one shadow ray per sample is needed");
+    }
+    let which = if a.gather {
+        radiosity::scene::gltf::VertexValues::Radiosity
+    } else {
+        radiosity::scene::gltf::VertexValues::Colour
+    };
+    let baked = BakedView::load_values(&a.file, which)?;
+    for w in &baked.scene.warnings {
+        eprintln!("radiosity: warning: {w}");
+    }
+    let camera = settings::camera(baked.default_camera(), &a.camera)?;
+    if a.gather {
+        let image = baked.render_gather(
+            &camera,
+            &params,
+            radiosity::render::gather::GatherParams {
+                direct: a.direct_samples,
+                cache_samples: a.cache_samples,
+                ..Default::default()
+            },
+            &Silent,
+        );
+        write_image(&out, &image, auto_exposure(&image)).context("writing the image")?;
+        println!(
+            "wrote       {} ({}×{}, final gather over the baked radiosity of {} triangles)",
+            out.display(),
+            params.width,
+            params.height,
+            baked.mesh.patches.len()
+        );
+        return Ok(());
+    }
+    let image = baked.render(&camera, &params, &Silent);
+    write_image(&out, &image, 1.0).context("writing the image")?;
+    println!(
+        "wrote       {} ({}×{}, {} triangles shown with their COLOR_0)",
+        out.display(),
+        params.width,
+        params.height,
+        baked.mesh.patches.len()
+    );
+    Ok(())
+}
+
+/// `SCENE.EXT` for a built-in scene, `STEM.EXT` (in the current folder) for a file.
+fn default_output(scene: &str, ext: &str) -> PathBuf {
+    let stem = std::path::Path::new(scene)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("scene");
+    PathBuf::from(format!("{stem}.{ext}"))
+}
