@@ -173,7 +173,7 @@ const EXAMPLES_TOP: &str = "Examples:
 const EXAMPLES_RENDER: &str = "Examples:
   radiosity render cornell --patches 4000 -o cornell.png
   radiosity render hosp.mgf --one-sided --solver overshoot-ambient --width 1024 --height 768
-  radiosity render cornell --gather --spp 16 -o gathered.png
+  radiosity render cornell --integrator radiosity -o preview.png   the solution itself, fastest
   radiosity render cornell --integrator path --spp 1024 -o reference.exr";
 
 const EXAMPLES_SOLVE: &str = "Examples:
@@ -635,13 +635,14 @@ pub struct RenderArgs {
         help_heading = OUTPUT
     )]
     pub exposure: f32,
-    /// How pixels are computed: `radiosity` shows the solution (Gouraud-interpolated, with the
-    /// display ambient term); `gather` computes direct light per pixel with exact shadows and
-    /// gathers the indirect from the solution (no ambient term); `path` path-traces the scene
-    /// without solving (the reference).
-    #[arg(long, value_enum, default_value = "radiosity", help_heading = PICTURE)]
+    /// How pixels are computed: `gather` (the default) computes direct light per pixel with
+    /// exact shadows and gathers the indirect from the solution (no ambient term, no mesh
+    /// showing); `radiosity` shows the solution itself (Gouraud-interpolated, with the display
+    /// ambient term: fastest, a preview); `path` path-traces the scene without solving (the
+    /// reference).
+    #[arg(long, value_enum, default_value = "gather", help_heading = PICTURE)]
     pub integrator: IntegratorArg,
-    /// Same as --integrator gather.
+    /// Same as --integrator gather (the default; kept for scripts that name it).
     #[arg(long, conflicts_with = "integrator", help_heading = PICTURE)]
     pub gather: bool,
     /// Gather: shadow rays to the emitters per camera sample.
@@ -744,8 +745,8 @@ pub struct ImageArgs {
     /// Image height in pixels.
     #[arg(long, value_name = "H", default_value_t = 512, help_heading = OUTPUT)]
     pub height: u32,
-    /// Camera rays per pixel, stratified when a square (default 4; 16 with --gather; 256
-    /// paths with --integrator path).
+    /// Camera rays per pixel, stratified when a square (default 16 for `render`'s gather, 4
+    /// with --integrator radiosity and for `view`, 256 paths with --integrator path).
     #[arg(long, value_name = "N", help_heading = OUTPUT)]
     pub spp: Option<u32>,
 }

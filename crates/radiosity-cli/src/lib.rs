@@ -177,7 +177,7 @@ fn solve_scene(
     progress.finish();
     let solution = solution?;
     if let (Some(path), Some(t)) = (&a.trace, &solution.trace) {
-        write_text(path, t.csv()).context("writing the trace")?;
+        write_text(path, &t.csv()).context("writing the trace")?;
         if a.report == ReportFormat::Text {
             println!("trace       {} ({} rows)", path.display(), t.len());
         }
@@ -229,7 +229,7 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
     let info = &solved.info;
     write_radiosity_csv(&a.out, &solved.radiosity, patches.single_channel)?;
     if let (Some(path), Some(t)) = (&a.trace, &solved.trace) {
-        write_text(path, t.csv()).context("writing the trace")?;
+        write_text(path, &t.csv()).context("writing the trace")?;
         println!("trace       {} ({} rows)", path.display(), t.len());
     }
     let e = info.emitted.sum();

@@ -4,7 +4,7 @@
 //! error after N/4 and N/2 iterations ranks overshoot ≤ progressive < gauss-seidel-0.
 
 use radiosity::color::Rgb;
-use radiosity::experiment::random::{reciprocal, section6, Random};
+use radiosity::system::random::{reciprocal, section6, Random};
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::pipeline;
 use radiosity::scene::builtin;
