@@ -25,6 +25,7 @@
 
 pub mod accel;
 pub mod color;
+pub mod comm;
 pub mod distributed;
 pub mod export;
 pub mod formfactor;

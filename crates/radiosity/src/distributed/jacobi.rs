@@ -16,7 +16,7 @@
 //! iteration count is rows relaxed, N a sweep, as there.
 
 use super::rows::RowBlock;
-use super::Ranks;
+use crate::comm::Ranks;
 use crate::color::Rgb;
 use crate::solve::{Info, SolverParams, System};
 use rayon::prelude::*;

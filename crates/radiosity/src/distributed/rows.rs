@@ -3,7 +3,7 @@
 //! matrix on one rank for writing. Every row has its own random streams (keyed by the row, not
 //! the rank), so the matrix is the same bytes for any number of ranks.
 
-use super::{balance, Ranks};
+use crate::comm::{balance, Ranks};
 use crate::formfactor::{monte_carlo, Estimator, FormFactorMethod, Scratch};
 use crate::observe::{Event, Observer, Stage};
 use crate::sampling::stream;
@@ -141,7 +141,7 @@ pub fn split(
     estimator: &Estimator<'_>,
     ranks: &Ranks<'_>,
     observer: &dyn Observer,
-    report: &mut super::solve::Report,
+    report: &mut super::Report,
 ) -> (RowBlock, f64) {
     let t = Instant::now();
     let costs = row_costs(estimator, ranks);

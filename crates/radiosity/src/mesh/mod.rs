@@ -479,6 +479,21 @@ impl Mesh {
     }
 }
 
+/// The linear system of `mesh`'s patches in `scene`: areas, and reflectances and emissions
+/// from their materials. The one bridge from geometry to the solvers.
+pub fn patch_system(scene: &Scene, mesh: &Mesh) -> crate::system::System {
+    let material = |p: &Patch| &scene.materials[p.material as usize];
+    crate::system::System {
+        area: mesh.patches.iter().map(|p| p.area as f64).collect(),
+        reflectance: mesh
+            .patches
+            .iter()
+            .map(|p| material(p).reflectance)
+            .collect(),
+        emission: mesh.patches.iter().map(|p| material(p).emission).collect(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -81,7 +81,7 @@ impl BakedView {
         gather: super::gather::GatherParams,
         observer: &dyn Observer,
     ) -> Image {
-        let system = crate::pipeline::patch_system(&self.scene, &self.mesh);
+        let system = crate::mesh::patch_system(&self.scene, &self.mesh);
         let surfaces = super::light::Surfaces {
             mesh: &self.mesh,
             bvh: &self.bvh,

@@ -202,7 +202,7 @@ pub(crate) mod tests {
         pub(crate) fn new(scene: &Scene, patches: usize) -> Self {
             let mesh = Mesh::build(scene, MeshParams::Patches(patches)).unwrap();
             let bvh = Bvh::build(&mesh);
-            let system = crate::pipeline::patch_system(scene, &mesh);
+            let system = crate::mesh::patch_system(scene, &mesh);
             Self { mesh, bvh, system }
         }
 

@@ -113,7 +113,7 @@ pub struct StochasticJacobi<'s> {
     finished: bool,
     estimated_error: f64,
     /// Ranks sharing the rays of each iteration, if distributed.
-    ranks: Option<&'s crate::distributed::Ranks<'s>>,
+    ranks: Option<&'s crate::comm::Ranks<'s>>,
     /// Where the shooting iterations' time went.
     timing: Timing,
     /// Buffers an iteration fills, kept for the next.
@@ -213,7 +213,7 @@ impl<'s> StochasticJacobi<'s> {
     /// Share every iteration's rays among `ranks`: each traces a contiguous run of the
     /// iteration's chunks and the hits are all-gathered (4 bytes a ray), so every rank reduces
     /// the same hits in the same order and B is the same bytes as on one process.
-    pub fn distributed(mut self, ranks: &'s crate::distributed::Ranks<'s>) -> Self {
+    pub fn distributed(mut self, ranks: &'s crate::comm::Ranks<'s>) -> Self {
         self.ranks = Some(ranks);
         self
     }
@@ -403,7 +403,7 @@ impl<'s> StochasticJacobi<'s> {
                     let batch = (rays - done).min(BATCH as u64) as usize;
                     // This rank's chunks of the batch; then everyone's hits, in chunk order.
                     let chunks = batch.div_ceil(CHUNK);
-                    let mine = &crate::distributed::balance(&vec![1.0; chunks], ranks.size())
+                    let mine = &crate::comm::balance(&vec![1.0; chunks], ranks.size())
                         [ranks.rank()];
                     let (lo, hi) = (mine.start * CHUNK, (mine.end * CHUNK).min(batch));
                     buf[lo..hi]
@@ -554,7 +554,7 @@ impl<'s> StochasticJacobi<'s> {
         };
         let range = match self.ranks {
             None => 0..n,
-            Some(r) => crate::distributed::balance(&vec![1.0; n], r.size())[r.rank()].clone(),
+            Some(r) => crate::comm::balance(&vec![1.0; n], r.size())[r.rank()].clone(),
         };
         // Groups of patches whose draws are cast together ([`PhotonSampler::gather_many`]);
         // patch j draws from its own stream, so B does not depend on the grouping.

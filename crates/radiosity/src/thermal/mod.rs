@@ -32,7 +32,7 @@
 
 pub mod boundary;
 
-use crate::distributed::{Ranks, Serial};
+use crate::comm::{Ranks, Serial};
 use crate::system::SparseMatrix;
 use faer::linalg::solvers::Solve;
 use rayon::prelude::*;
@@ -92,7 +92,7 @@ pub enum LinearSolver {
     /// Jacobi sweeps `J ← b + D K J` on the stored F, O(nnz) a sweep; converges for every
     /// solvable problem (the spectral radius of D K is below 1 when some surface has a
     /// prescribed temperature or sees an opening), at a rate set by the reflectances: slowly
-    /// where most surfaces re-radiate. Over ranks ([`crate::distributed`]) each sweeps its block
+    /// where most surfaces re-radiate. Over ranks ([`crate::comm`]) each sweeps its block
     /// of patches and the blocks are all-gathered, as BiCGSTAB's products are.
     Jacobi,
 }
@@ -368,7 +368,7 @@ fn blocks(f: &SparseMatrix, n: usize, ranks: &Ranks<'_>) -> std::ops::Range<usiz
     let costs: Vec<f64> = (0..n)
         .map(|i| 1.0 + f.column_entries(i).len() as f64)
         .collect();
-    crate::distributed::balance(&costs, ranks.size())[ranks.rank()].clone()
+    crate::comm::balance(&costs, ranks.size())[ranks.rank()].clone()
 }
 
 /// `g(i)` for every patch: this rank's block `mine` in parallel, then every rank's block

@@ -1,0 +1,325 @@
+//! Radiative heat transfer: boundary names → materials, mesh, F (memory checked first),
+//! reciprocity and closure enforced, the net-radiation solve.
+
+use crate::accel::Bvh;
+use crate::formfactor::Estimator;
+use crate::mesh::{Mesh, MeshParams};
+use crate::observe::{Event, Observer, Stage};
+use crate::scene::Scene;
+use crate::Error;
+use std::time::Instant;
+use super::*;
+use crate::comm::Ranks;
+use crate::distributed::{rows, Report};
+
+/// Whether a thermal problem's surfaces close an enclosure.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Enclosure {
+    /// Closed when `hint` says so (a View3D file's `encl`), else when every row of F sums to
+    /// at least 0.99 (what is missing is then estimation error).
+    #[default]
+    Auto,
+    /// Every row is rescaled to sum to 1.
+    Closed,
+    /// What a row misses reaches the surroundings.
+    Open,
+}
+
+/// How a thermal problem is meshed and its view factors computed.
+#[derive(Clone, Copy, Debug)]
+pub struct ThermalSettings {
+    /// Patches (the engineer's default: one per face).
+    pub mesh: MeshParams,
+    /// View factors; `rays` is replaced by [`thermal_default_rays`] when `default_rays`.
+    pub form_factors: crate::formfactor::Params,
+    /// Use [`thermal_default_rays`] for Monte Carlo.
+    pub default_rays: bool,
+    /// Metres per scene unit.
+    pub unit_metres: f64,
+    /// Temperature of the surroundings, K.
+    pub environment: f64,
+    /// Closed or open.
+    pub enclosure: Enclosure,
+    /// What `Enclosure::Auto` takes from the input (a View3D file's `encl`), if anything.
+    pub enclosure_hint: Option<bool>,
+    /// Dense or iterative.
+    pub linear: crate::thermal::LinearSolver,
+    /// Bytes the job may use (0: the machine's available memory).
+    pub memory_limit: u64,
+}
+
+impl Default for ThermalSettings {
+    fn default() -> Self {
+        Self {
+            mesh: MeshParams::Faces,
+            form_factors: crate::formfactor::Params::default(),
+            default_rays: true,
+            unit_metres: 1.0,
+            environment: 0.0,
+            enclosure: Enclosure::Auto,
+            enclosure_hint: None,
+            linear: crate::thermal::LinearSolver::Auto,
+            memory_limit: 0,
+        }
+    }
+}
+
+/// Default Monte Carlo rays per row of a thermal solve on `n` patches: 10⁶ up to 100
+/// patches, then a total of 10⁸ rays shared out, but at least 10⁴ a row (each patch's
+/// irradiation then has a relative standard error of at most 1 % of the spread of the
+/// radiosities it sees).
+pub fn thermal_default_rays(n: usize) -> u32 {
+    (1e8 / n.max(1) as f64).clamp(1e4, 1e6) as u32
+}
+
+/// A thermal problem solved: the patches, the system, the solution and what was done.
+#[derive(Debug)]
+pub struct ThermalOutcome {
+    /// The patches.
+    pub mesh: Mesh,
+    /// Areas (m²), boundaries, surroundings.
+    pub system: crate::thermal::ThermalSystem,
+    /// Radiosity, irradiation, temperature and flux per patch.
+    pub solution: crate::thermal::ThermalSolution,
+    /// Per boundary: area m², net power W, temperature K ([`crate::thermal::ThermalSolution::per_boundary`]).
+    pub per_boundary: Vec<(f64, f64, f64)>,
+    /// The form-factor parameters used.
+    pub form_factors: crate::formfactor::Params,
+    /// Seconds computing F.
+    pub form_factor_seconds: f64,
+    /// F's row sums and reciprocity before and after enforcement.
+    pub before: crate::formfactor::Summary,
+    /// See `before`.
+    pub after: crate::formfactor::Summary,
+    /// Whether the enclosure was treated as closed.
+    pub closed: bool,
+}
+
+/// The boundary of each material of `scene` that has polygons, from `(name, boundary)` pairs;
+/// `Err` with a message naming the unknown name (and what the scene has) or the surfaces
+/// without a boundary. `combined` maps a name that a View3D file combines into another to
+/// that other's name, for the message.
+#[allow(clippy::type_complexity)]
+pub fn thermal_boundaries(
+    scene: &Scene,
+    names: &[(String, crate::thermal::Boundary)],
+    combined: &dyn Fn(&str) -> Option<String>,
+) -> Result<Vec<Option<u32>>, (Option<usize>, String)> {
+    let mut used = vec![false; scene.materials.len()];
+    for p in &scene.polygons {
+        used[p.material] = true;
+    }
+    let by_name: std::collections::HashMap<&str, usize> = scene
+        .materials
+        .iter()
+        .enumerate()
+        .filter(|(m, _)| used[*m])
+        .map(|(m, mat)| (mat.name.as_str(), m))
+        .collect();
+    let mut boundary_of = vec![None; scene.materials.len()];
+    for (k, (name, _)) in names.iter().enumerate() {
+        let Some(&m) = by_name.get(name.as_str()) else {
+            let hint = match combined(name) {
+                Some(t) => format!("it is combined into '{t}' (cmb); name that surface"),
+                None => {
+                    let mut all: Vec<&str> = by_name.keys().copied().collect();
+                    all.sort_unstable();
+                    let shown = all.len().min(20);
+                    format!(
+                        "the scene's surfaces are: {}{}",
+                        all[..shown].join(", "),
+                        if all.len() > shown {
+                            format!(" and {} more", all.len() - shown)
+                        } else {
+                            String::new()
+                        }
+                    )
+                }
+            };
+            return Err((Some(k), format!("unknown surface '{name}'; {hint}")));
+        };
+        boundary_of[m] = Some(k as u32);
+    }
+    let mut missing: Vec<&str> = (0..scene.materials.len())
+        .filter(|&m| used[m] && boundary_of[m].is_none())
+        .map(|m| scene.materials[m].name.as_str())
+        .collect();
+    if !missing.is_empty() {
+        missing.sort_unstable();
+        return Err((
+            None,
+            format!(
+                "no boundary condition for {} surface{}: {} (add a row for each; leave temperature and flux empty for an adiabatic surface)",
+                missing.len(),
+                if missing.len() == 1 { "" } else { "s" },
+                missing.join(", ")
+            ),
+        ));
+    }
+    Ok(boundary_of)
+}
+
+/// A thermal problem's F made physical: closed or open as `settings` say (open or closed by its
+/// row sums when automatic), reciprocity enforced, rows rescaled to 1 when closed. Returns it,
+/// its summaries before and after, and whether it was treated as closed.
+pub fn thermal_enclosure(
+    matrix: crate::system::SparseMatrix,
+    area: &[f64],
+    settings: &ThermalSettings,
+) -> (
+    crate::system::SparseMatrix,
+    crate::formfactor::Summary,
+    crate::formfactor::Summary,
+    bool,
+) {
+    use crate::formfactor::{enforce, summary, Enforce};
+    let before = summary(&matrix, area);
+    let closed = match settings.enclosure {
+        Enclosure::Closed => true,
+        Enclosure::Open => false,
+        Enclosure::Auto => settings
+            .enclosure_hint
+            .unwrap_or(before.min_row_sum >= 0.99),
+    };
+    let matrix = enforce(
+        matrix,
+        area,
+        Enforce {
+            clamp: false,
+            normalize_rows: closed,
+            symmetrize: true,
+        },
+    );
+    let after = summary(&matrix, area);
+    (matrix, before, after, closed)
+}
+
+/// The thermal system of `mesh`'s patches: areas in m², each patch's boundary.
+pub fn thermal_system(
+    mesh: &Mesh,
+    area: &[f64],
+    boundary_of: &[Option<u32>],
+    boundaries: &[crate::thermal::Boundary],
+    settings: &ThermalSettings,
+    closed: bool,
+) -> crate::thermal::ThermalSystem {
+    let unit2 = settings.unit_metres * settings.unit_metres;
+    crate::thermal::ThermalSystem {
+        area: area.iter().map(|a| a * unit2).collect(),
+        group: mesh
+            .patches
+            .iter()
+            .map(|p| boundary_of[p.material as usize].unwrap_or(u32::MAX))
+            .collect(),
+        boundaries: boundaries.to_vec(),
+        environment: settings.environment,
+        closed,
+    }
+}
+
+/// Solve a radiative heat-transfer problem on `scene`: `boundary_of` (from
+/// [`thermal_boundaries`]) gives each material's boundary in `boundaries`. Meshes, computes
+/// F (memory checked first), enforces reciprocity (and closure when closed), solves.
+pub fn thermal(
+    scene: &Scene,
+    boundary_of: &[Option<u32>],
+    boundaries: &[crate::thermal::Boundary],
+    settings: &ThermalSettings,
+    observer: &dyn Observer,
+) -> Result<ThermalOutcome, Error> {
+    thermal_over(scene, boundary_of, boundaries, settings, None, observer).map(|(o, _)| o)
+}
+
+/// [`thermal`], over `ranks` when given: the rows of F split over the ranks by cost
+/// ([`crate::distributed::rows`]), all-gathered so that every rank can enforce reciprocity
+/// and closure on the whole matrix (both couple row i with column i), then the net-radiation
+/// system solved by Jacobi sweeps split over the ranks ([`crate::thermal::solve_ranks`]); the
+/// direct and BiCGSTAB solves run on every rank alike. The same bytes on every rank and for
+/// any number of ranks, with the run's [`Report`].
+pub fn thermal_over(
+    scene: &Scene,
+    boundary_of: &[Option<u32>],
+    boundaries: &[crate::thermal::Boundary],
+    settings: &ThermalSettings,
+    ranks: Option<&Ranks<'_>>,
+    observer: &dyn Observer,
+) -> Result<(ThermalOutcome, Option<Report>), Error> {
+    scene.validate_geometry()?;
+    let start = ranks.map(Ranks::traffic);
+    let limit = match settings.memory_limit {
+        0 => available_memory().unwrap_or(u64::MAX),
+        l => l,
+    };
+    let mut params = settings.form_factors;
+    let check = |p: &crate::formfactor::Params| MemoryCheck::stored_matrix(p, limit);
+    if settings.default_rays {
+        params.rays = 10_000;
+    }
+    check(&params).before_meshing(scene, settings.mesh)?;
+    observer.event(Event::Stage(Stage::Mesh));
+    let mesh = Mesh::build(scene, settings.mesh)?;
+    if settings.default_rays {
+        params.rays = thermal_default_rays(mesh.len());
+    }
+    check(&params).check(mesh.len() as u64)?;
+    let t = Instant::now();
+    observer.event(Event::Stage(Stage::Bvh));
+    let bvh = Bvh::build(&mesh);
+    let estimator = Estimator::new(&mesh, &bvh, params)?;
+    let mut report = ranks.map(|r| Report {
+        transport: r.communicator().describe(),
+        ..Default::default()
+    });
+    let (matrix, mut busy) = match (ranks, report.as_mut()) {
+        (Some(r), Some(report)) => {
+            let (block, busy) = rows::split(&estimator, r, observer, report);
+            (rows::all_gather_matrix(&block, mesh.len(), r), busy)
+        }
+        _ => (
+            estimator
+                .matrix(crate::formfactor::Storage::Sparse, observer)
+                .into_sparse(),
+            0.0,
+        ),
+    };
+    let form_factor_seconds = t.elapsed().as_secs_f64();
+    drop(estimator);
+    drop(bvh);
+    let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
+    let (matrix, before, after, closed) = thermal_enclosure(matrix, &area, settings);
+    let system = thermal_system(&mesh, &area, boundary_of, boundaries, settings, closed);
+    observer.event(Event::Stage(Stage::Solve));
+    let params_solve = crate::thermal::ThermalParams {
+        linear: settings.linear,
+        memory_limit: limit,
+        ..Default::default()
+    };
+    let solution = match ranks {
+        Some(r) => {
+            let before_solve = r.traffic().seconds;
+            let t_solve = Instant::now();
+            let s = crate::thermal::solve_ranks(&system, &matrix, params_solve, r)?;
+            busy += t_solve.elapsed().as_secs_f64() - (r.traffic().seconds - before_solve);
+            s
+        }
+        None => crate::thermal::solve(&system, &matrix, params_solve)?,
+    };
+    let per_boundary = solution.per_boundary(&system);
+    if let (Some(report), Some(r), Some(start)) = (report.as_mut(), ranks, &start) {
+        report.finish(busy, start, r);
+    }
+    Ok((
+        ThermalOutcome {
+            mesh,
+            system,
+            solution,
+            per_boundary,
+            form_factors: params,
+            form_factor_seconds,
+            before,
+            after,
+            closed,
+        },
+        report,
+    ))
+}
