@@ -24,8 +24,8 @@ use glam::DVec3;
 use std::f64::consts::PI;
 
 /// The angle `atan2(y, x)` for `y ≥ 0` (in [0, π]), to within 10⁻⁹ relative: the angle an
-/// edge subtends in Lambert's contour formula, where `libm`'s `atan2` was a tenth of the
-/// hierarchical solver's time. Reduced to [0, 1] by symmetry, then to |t| ≤ tan(π/12) by
+/// edge subtends in Lambert's contour formula, a hot spot where `libm`'s `atan2` is slow
+/// (`docs/notes/hierarchical.md`). Reduced to [0, 1] by symmetry, then to |t| ≤ tan(π/12) by
 /// `atan u = π/6 + atan((u√3 − 1)/(u + √3))`, where the Taylor series to t¹³ errs by at most
 /// t¹⁵/15 < 2·10⁻¹⁰.
 #[inline]
@@ -430,7 +430,7 @@ impl Context<'_> {
         let mut sources = [0.0f64; 4];
         // The source's four children, for the shares of `k` that each sends: in the near
         // field the exact factor to each from one point in each quarter of the receiver
-        // (four exact factors per point cost as much as the rest of the estimate, and the
+        // (exact factors at every point are costly, `docs/notes/hierarchical.md`, and the
         // shares vary slowly over the receiver); in the far field (centres more
         // than twice the radii apart) the kernel from the receiver's centre to each child's,
         // which varies little over the receiver there.
