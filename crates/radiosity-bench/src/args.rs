@@ -238,7 +238,12 @@ pub struct HierarchicalArgs {
     pub reference_paths: u64,
     /// How the reference is made when the --reference file is absent: a light tracer or a
     /// path tracer (both independent of every radiosity method).
-    #[arg(long = "reference-tracer", value_enum, value_name = "T", default_value = "light")]
+    #[arg(
+        long = "reference-tracer",
+        value_enum,
+        value_name = "T",
+        default_value = "light"
+    )]
     pub reference_tracer: ReferenceTracer,
     /// Monte Carlo rays a form-factor row of the uniform solves.
     #[arg(long = "uniform-rays", value_name = "N", default_value_t = 1024)]

@@ -91,7 +91,7 @@ pub fn run(a: &ScaleArgs) -> Result<()> {
         let mesh = Mesh::build(&scene_data, MeshParams::Patches(n))?;
         let needed = memory.check(mesh.len() as u64)?;
         let bvh = radiosity::accel::Bvh::build(&mesh);
-        let system = radiosity::pipeline::patch_system(&scene_data, &mesh);
+        let system = radiosity::mesh::patch_system(&scene_data, &mesh);
         system.validate().context("the scene's patch system")?;
         let ff = FormFactorParams {
             cache_bytes: ((limit - needed) / 2) as usize,

@@ -7,18 +7,18 @@ use crate::median;
 use anyhow::{bail, Result};
 use radiosity::accel::Bvh;
 use radiosity::formfactor::monte_carlo::photon_ray;
-use radiosity::geom::Ray;
-use radiosity::sampling::stream;
-use rand::Rng;
-use rayon::prelude::*;
 use radiosity::formfactor::{
     closed_form, Estimator, FormFactorMethod, Params as FfParams, Storage,
 };
+use radiosity::geom::Ray;
 use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::pipeline::{self, Settings};
+use radiosity::sampling::stream;
 use radiosity::scene::builtin;
 use radiosity::solve::{Solver, SolverParams};
+use rand::Rng;
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// Time per iteration of every solver on stored Monte Carlo form factors of the Cornell box.
@@ -44,7 +44,7 @@ pub fn solvers(a: &SolversArgs) -> Result<()> {
         )
         .expect("valid parameters")
         .sparse_matrix();
-        let data = pipeline::patch_system(&scene, &mesh);
+        let data = radiosity::mesh::patch_system(&scene, &mesh);
         let system = &data;
         for method in Solver::ALL {
             let iterations = match method {
@@ -85,7 +85,11 @@ pub fn solvers(a: &SolversArgs) -> Result<()> {
 
 /// Ray casting and convergence on the Cornell box.
 pub fn run(a: &CornellArgs) -> Result<()> {
-    crate::positive(&[("--runs", a.runs), ("--rays", a.rays), ("--patches", a.patches)])?;
+    crate::positive(&[
+        ("--runs", a.runs),
+        ("--rays", a.rays),
+        ("--patches", a.patches),
+    ])?;
     let count = a.rays;
     let scene = builtin::cornell();
     let mesh = Mesh::build(&scene, MeshParams::Patches(a.patches))?;

@@ -9,8 +9,8 @@
 
 use crate::args::PicturesArgs;
 use anyhow::{bail, Context, Result};
-use radiosity_experiments::plot::{write_plot, Mark, Plot, Series};
 use radiosity::render::compare::{difference, read_pfm};
+use radiosity_experiments::plot::{write_plot, Mark, Plot, Series};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::process::Command;

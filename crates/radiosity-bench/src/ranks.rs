@@ -2,8 +2,8 @@
 
 use crate::args::RanksArgs;
 use crate::median;
-use anyhow::Result;
-use radiosity::distributed::{self, solve::Report, Ranks, Serial};
+use anyhow::{Context, Result};
+use radiosity::distributed::{Ranks, Report, Serial};
 use radiosity::formfactor::Params;
 use radiosity::mesh::MeshParams;
 use radiosity::observe::Silent;
@@ -26,7 +26,8 @@ struct Run {
 fn once(scene: &radiosity::scene::Scene, settings: &Settings, ranks: &Ranks<'_>) -> Result<Run> {
     ranks.barrier();
     let t = Instant::now();
-    let (sol, report) = distributed::solve::solve(scene, settings, ranks, &Silent)?;
+    let (sol, report) = radiosity::pipeline::solve_over(scene, settings, Some(ranks), &Silent)?;
+    let report = report.context("the method did not run over the ranks")?;
     ranks.barrier();
     Ok(Run {
         wall: t.elapsed().as_secs_f64(),

@@ -175,7 +175,11 @@ fn time_runs(cast: impl Fn() -> Vec<(u32, f32)>, count: usize, runs: usize) -> T
 /// Run the ray benchmark on `scene`.
 pub fn run(a: &RaysArgs) -> Result<()> {
     use crate::args::BackendArg;
-    crate::positive(&[("--runs", a.runs), ("--rays", a.rays), ("--patches", a.patches)])?;
+    crate::positive(&[
+        ("--runs", a.runs),
+        ("--rays", a.rays),
+        ("--patches", a.patches),
+    ])?;
     let (scene, count) = (&a.scene, a.rays);
     if a.backend == BackendArg::Embree && !cfg!(feature = "embree") {
         bail!("--backend embree: this binary was built without Embree (cargo build --release --features embree, with Debian's libembree-dev)");

@@ -104,7 +104,11 @@ struct Row {
 fn parse(report: &str) -> Result<Row> {
     let v: serde_json::Value = serde_json::from_str(report.trim())
         .context("radiosity solve --report json printed no JSON object")?;
-    let num = |p: &str| v.pointer(p).and_then(serde_json::Value::as_f64).unwrap_or(f64::NAN);
+    let num = |p: &str| {
+        v.pointer(p)
+            .and_then(serde_json::Value::as_f64)
+            .unwrap_or(f64::NAN)
+    };
     // A solver's own rays (stochastic Jacobi's), part of its solve: counted with the rows, so
     // that `solve s` is everything but rays for every method.
     let solve_rays = num("/seconds/solve_rays");

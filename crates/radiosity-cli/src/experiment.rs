@@ -4,12 +4,12 @@
 use crate::args::{ExperimentArgs, ExperimentKind};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use radiosity::observe::{Event, Observer};
+use radiosity::solve::Solver;
 use radiosity_experiments as exp;
 use radiosity_experiments::complexity::{self, Quantity, CASES};
 use radiosity_experiments::convergence::{self, paper_name, Case, Curve};
 use radiosity_experiments::plot::{write_plot, Mark, Plot, Series};
-use radiosity::observe::{Event, Observer};
-use radiosity::solve::Solver;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Mutex;

@@ -149,33 +149,13 @@ pub fn load_scene(name: &str, one_sided: bool) -> Result<Scene> {
 /// Load and solve, with a progress bar (and the trace, if asked). Under mpirun, the
 /// distributed methods (and, over several ranks, every method, to be refused if sequential)
 /// run over the ranks, and their report comes back too.
-fn solve_scene(
-    a: &SolveArgs,
-) -> Result<(
-    Scene,
-    Solution,
-    Option<radiosity::distributed::solve::Report>,
-)> {
+fn solve_scene(a: &SolveArgs) -> Result<(Scene, Solution, Option<radiosity::distributed::Report>)> {
     let settings = settings::settings(a)?;
     let scene = load_scene(&a.scene, a.one_sided)?;
     let progress = report::Progress::new(settings.params.tolerance);
-    let over_ranks = ranks::current().filter(|r| {
-        r.size() > 1
-            || (settings.hierarchical.is_none()
-                && radiosity::distributed::solve::DISTRIBUTED_SOLVERS.contains(&settings.solver))
-    });
-    let mut distributed = None;
-    let solution = match over_ranks {
-        Some(r) => radiosity::distributed::solve::solve(&scene, &settings, r, &progress).map(
-            |(s, report)| {
-                distributed = Some(report);
-                s
-            },
-        ),
-        None => pipeline::solve(&scene, &settings, &progress),
-    };
+    let solution = pipeline::solve_over(&scene, &settings, ranks::current(), &progress);
     progress.finish();
-    let solution = solution?;
+    let (solution, distributed) = solution?;
     if let (Some(path), Some(t)) = (&a.trace, &solution.trace) {
         write_text(path, &t.csv()).context("writing the trace")?;
         if a.report == ReportFormat::Text {
@@ -486,21 +466,21 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
         if let Some(p) = &a.links_out {
             radiosity::export::write_links_csv(p, &h.hierarchy)?;
             if a.solve.report == ReportFormat::Text {
-            println!(
-                "links       {} ({} rows)",
-                p.display(),
-                h.hierarchy.links.len()
-            );
+                println!(
+                    "links       {} ({} rows)",
+                    p.display(),
+                    h.hierarchy.links.len()
+                );
             }
         }
         if let Some(p) = &a.elements_out {
             radiosity::export::write_elements_csv(p, &h.hierarchy, &h.root_surfaces)?;
             if a.solve.report == ReportFormat::Text {
-            println!(
-                "elements    {} ({} rows)",
-                p.display(),
-                h.hierarchy.elements.items.len()
-            );
+                println!(
+                    "elements    {} ({} rows)",
+                    p.display(),
+                    h.hierarchy.elements.items.len()
+                );
             }
         }
     }

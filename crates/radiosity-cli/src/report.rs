@@ -215,7 +215,7 @@ pub fn summary(scene: &Scene, s: &Solution, render: Option<(f64, f64)>) {
 }
 
 /// The lines of a distributed run: ranks and their blocks, traffic, balance, sweeps.
-pub fn ranks(r: &radiosity::distributed::solve::Report) {
+pub fn ranks(r: &radiosity::distributed::Report) {
     let blocks: Vec<String> = r
         .blocks
         .iter()

@@ -151,26 +151,16 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             bar.set_position(done)
         }
     };
-    let mut distributed = None;
-    let outcome = match crate::ranks::current() {
-        Some(ranks) => radiosity::distributed::thermal::thermal(
-            &scene,
-            &boundary_of,
-            &boundaries,
-            &settings,
-            ranks,
-            &progress,
-        )
-        .map(|(o, r)| {
-            distributed = Some(r);
-            o
-        }),
-        None => {
-            radiosity::pipeline::thermal(&scene, &boundary_of, &boundaries, &settings, &progress)
-        }
-    };
+    let outcome = radiosity::pipeline::thermal_over(
+        &scene,
+        &boundary_of,
+        &boundaries,
+        &settings,
+        crate::ranks::current(),
+        &progress,
+    );
     bar.finish_and_clear();
-    let outcome = outcome.map_err(|e| match e {
+    let (outcome, distributed) = outcome.map_err(|e| match e {
         radiosity::Error::Thermal(thermal::ThermalError::Unphysical { group, value }) => anyhow::anyhow!(
             "{}:{}: the flux prescribed for '{}' cannot be met: part of it would need a negative black-body exitance ({value:.4e} W/m²); it takes out more heat than the enclosure can supply",
             a.boundary.display(),

@@ -2,16 +2,15 @@
 
 use crate::args::{FormFactorsArgs, MatrixFormatArg};
 use anyhow::{bail, Result};
-use radiosity::accel::Bvh;
 use radiosity::export::{write_patch_table, PatchRow};
-use radiosity::formfactor::{aggregate, enforce, summary, Enforce, Estimator, Params, Storage};
+use radiosity::formfactor::{aggregate, enforce, summary, Enforce, Params, Storage};
 use radiosity::geom::Vec3;
 use radiosity::io::{matrix_market, FileFormat};
 use radiosity::mesh::{check_planar, Mesh, MeshParams};
 use radiosity::observe::Event;
+use radiosity::pipeline::{view_factors_over, ViewFactorSettings};
 use radiosity::scene::{vector_area, vs3, Scene};
 use std::path::Path;
-use std::time::Instant;
 
 fn ext_is(path: &std::path::Path, format: FileFormat) -> bool {
     FileFormat::from_path(path) == Some(format)
@@ -87,28 +86,60 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         seed: a.seed,
         ..Params::default()
     };
-    let mut distributed = None;
-    let (mesh, matrix, _, compute_s) = match crate::ranks::current() {
-        Some(ranks) => {
-            let (mesh, matrix, report, s) = compute_ranks(&scene, mesh_params, params, ranks)?;
-            // Rank 0 writes; the others are done.
-            let Some(matrix) = matrix else {
-                return Ok(());
-            };
-            distributed = Some(report);
-            (mesh, matrix, params, s)
-        }
-        None => compute(&scene, mesh_params, params, storage, None)?,
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} form factors {pos}/{len} rows [{bar:30}] {elapsed_precise} (eta {eta})",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    let settings = ViewFactorSettings {
+        mesh: mesh_params,
+        form_factors: params,
+        storage,
+        memory_limit: 0,
     };
-    let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
+    let computed = view_factors_over(
+        &scene,
+        &settings,
+        None,
+        crate::ranks::current(),
+        &|e: Event<'_>| {
+            if let Event::Progress { done, total, .. } = e {
+                bar.set_length(total);
+                bar.set_position(done)
+            }
+        },
+    );
+    bar.finish_and_clear();
+    let (vf, distributed) = computed.map_err(too_big)?;
+    // Under mpirun rank 0 writes; the others are done.
+    if vf.matrix.is_none() {
+        return Ok(());
+    }
+    let per_face = if faces && !view3d {
+        vf.per_face(&scene)
+    } else {
+        None
+    };
+    let area = vf.areas();
+    let radiosity::pipeline::ViewFactors {
+        mesh,
+        matrix,
+        seconds: compute_s,
+        ..
+    } = vf;
+    let matrix = matrix.expect("rank 0 holds the matrix");
+    let mesh = &mesh;
     if view3d {
-        return write_view3d(&a, &scene, vs3.as_ref(), &mesh, &matrix, &area, compute_s);
+        return write_view3d(&a, &scene, vs3.as_ref(), mesh, &matrix, &area, compute_s);
     }
 
     // One row per face, or per patch.
     let (matrix, area, rows) = if faces {
-        let group: Vec<u32> = mesh.patches.iter().map(|p| p.surface).collect();
-        let (m, face_area) = aggregate(&matrix, &area, &group, scene.polygons.len());
+        drop(matrix);
+        let (m, face_area) = per_face.expect("rank 0 holds the matrix");
         let rows = scene
             .polygons
             .iter()
@@ -204,35 +235,10 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     Ok(())
 }
 
-/// Mesh `scene` and compute every row of F by `params` (Monte Carlo's rays per row set by
-/// `rays_for(patches)` when given), with a progress bar and the memory checked before meshing
-/// and after: (mesh, F, the parameters used, seconds).
-pub fn compute(
-    scene: &radiosity::scene::Scene,
-    mesh_params: MeshParams,
-    mut params: Params,
-    storage: Storage,
-    rays_for: Option<&dyn Fn(usize) -> u32>,
-) -> Result<(Mesh, radiosity::system::SparseMatrix, Params, f64)> {
-    let t = Instant::now();
-    let memory = |params: &Params| radiosity::pipeline::MemoryCheck {
-        limit: radiosity::pipeline::available_memory().unwrap_or(u64::MAX),
-        stored_rows: true,
-        // Entries a row can hold at most: one per ray; one per pixel (or disc cell) of each
-        // sample point; every other patch for the analytic method.
-        rays: {
-            use radiosity::formfactor::FormFactorMethod as M;
-            let pixels = (params.resolution as u64).pow(2) * 3 * params.samples as u64;
-            match params.method {
-                M::MonteCarlo => params.rays,
-                M::Hemicube | M::Tetrahedron | M::Hemisphere => pixels.min(u32::MAX as u64) as u32,
-                M::Analytic => u32::MAX,
-            }
-        },
-    };
-    // A view-factor matrix is stored whatever the method: the remedy is fewer patches.
-    let too_big = |e: radiosity::Error| {
-        match e {
+/// A stored view-factor matrix too large for memory: the remedy is fewer patches, whatever the
+/// method.
+fn too_big(e: radiosity::Error) -> anyhow::Error {
+    match e {
         radiosity::Error::OutOfMemory {
             what,
             needed,
@@ -245,78 +251,6 @@ pub fn compute(
         ),
         e => e.into(),
     }
-    };
-    memory(&params)
-        .before_meshing(scene, mesh_params)
-        .map_err(too_big)?;
-    let mesh = Mesh::build(scene, mesh_params)?;
-    if let Some(f) = rays_for {
-        params.rays = f(mesh.len());
-    }
-    memory(&params).check(mesh.len() as u64).map_err(too_big)?;
-    let bvh = Bvh::build(&mesh);
-    let estimator = Estimator::new(&mesh, &bvh, params)?;
-    let bar = indicatif::ProgressBar::new(mesh.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} form factors {pos}/{len} rows [{bar:30}] {elapsed_precise} (eta {eta})",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
-    );
-    let matrix = estimator
-        .matrix(storage, &|e: Event<'_>| {
-            if let Event::Progress { done, .. } = e {
-                bar.set_position(done)
-            }
-        })
-        .into_sparse();
-    bar.finish_and_clear();
-    drop(estimator);
-    drop(bvh);
-    Ok((mesh, matrix, params, t.elapsed().as_secs_f64()))
-}
-
-/// [`compute`] over the ranks of a distributed run: each computes the rows of its block
-/// (balanced by estimated cost), and rank 0 gathers the matrix (`None` on the others).
-fn compute_ranks(
-    scene: &Scene,
-    mesh_params: MeshParams,
-    params: Params,
-    ranks: &radiosity::distributed::Ranks<'_>,
-) -> Result<(
-    Mesh,
-    Option<radiosity::system::SparseMatrix>,
-    radiosity::distributed::solve::Report,
-    f64,
-)> {
-    use radiosity::distributed::{rows, solve::Report};
-    let t = Instant::now();
-    let start = ranks.traffic();
-    let limit = radiosity::pipeline::available_memory().unwrap_or(u64::MAX);
-    let memory = radiosity::pipeline::thermal_memory(&params, limit);
-    memory.before_meshing(scene, mesh_params)?;
-    let mesh = Mesh::build(scene, mesh_params)?;
-    memory.check(mesh.len() as u64)?;
-    let bvh = Bvh::build(&mesh);
-    let estimator = Estimator::new(&mesh, &bvh, params)?;
-    let mut report = Report {
-        transport: ranks.communicator().describe(),
-        ..Report::default()
-    };
-    let bar = indicatif::ProgressBar::new(mesh.len() as u64);
-    let progress = |e: Event<'_>| {
-        if let Event::Progress { done, .. } = e {
-            bar.set_position(done)
-        }
-    };
-    let (block, busy) = rows::split(&estimator, ranks, &progress, &mut report);
-    bar.finish_and_clear();
-    let matrix = rows::gather_matrix(&block, mesh.len(), 0, ranks);
-    report.finish(busy, &start, ranks);
-    drop(estimator);
-    drop(bvh);
-    Ok((mesh, matrix, report, t.elapsed().as_secs_f64()))
 }
 
 /// `--format view3d`: one row per View3D surface (combined pieces merged, obstructions left

@@ -5,9 +5,9 @@
 //! binary (crate `dejavu`), so no system font or fontconfig is needed; the SVG names the
 //! `sans-serif` family and leaves the font to the viewer.
 
-use radiosity::export::{write_atomic, ExportError, OutputError};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use radiosity::export::{write_atomic, ExportError, OutputError};
 use std::path::{Path, PathBuf};
 use std::sync::Once;
 

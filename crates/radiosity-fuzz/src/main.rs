@@ -6,17 +6,17 @@ mod targets;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
+use radiosity::sampling::stream;
 use radiosity_cli::alloc::Probe;
 use radiosity_cli::args::Cli;
 use radiosity_experiments::MemoryProbe;
+use rand::Rng;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use targets::{run, Target};
-use radiosity::sampling::stream;
-use rand::Rng;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+use targets::{run, Target};
 
 /// Longest a case may take.
 const HANG: Duration = Duration::from_secs(10);

@@ -4,12 +4,12 @@
 //! error after N/4 and N/2 iterations ranks overshoot ≤ progressive < gauss-seidel-0.
 
 use radiosity::color::Rgb;
-use radiosity::system::random::{reciprocal, section6, Random};
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::pipeline;
 use radiosity::scene::builtin;
 use radiosity::solve::gauss::dense_solve;
 use radiosity::solve::{relative_error, run, solve, start, Solver, SolverParams, System};
+use radiosity::system::random::{reciprocal, section6, Random};
 use radiosity::system::SparseMatrix;
 
 fn max_rel_diff(a: &[Rgb], b: &[Rgb]) -> f64 {

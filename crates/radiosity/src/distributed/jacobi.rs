@@ -16,8 +16,8 @@
 //! iteration count is rows relaxed, N a sweep, as there.
 
 use super::rows::RowBlock;
-use crate::comm::Ranks;
 use crate::color::Rgb;
+use crate::comm::Ranks;
 use crate::solve::{Info, SolverParams, System};
 use rayon::prelude::*;
 use std::time::Instant;

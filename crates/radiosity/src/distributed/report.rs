@@ -75,4 +75,3 @@ pub fn not_distributed(what: &str, why: &str) -> Error {
         "{what} does not run over several ranks ({why}); the distributed methods are solve --solver jacobi or stochastic-jacobi, form-factors and thermal"
     ))
 }
-

@@ -118,4 +118,3 @@ pub fn available_memory() -> Option<u64> {
     });
     [meminfo, cgroup, address_space].into_iter().flatten().min()
 }
-

@@ -17,19 +17,18 @@ mod system;
 mod thermal;
 mod view_factors;
 
+/// The bridge from a meshed scene to its linear system (it lives with the mesh).
+pub use crate::mesh::patch_system;
+pub use crate::observe::{Event, Observer, Stage};
 pub use memory::{available_memory, MemoryCheck, BYTES_PER_PATCH};
 pub use reference::{light_surface_means, path_surface_means, path_trace};
 pub use solve::{solve, solve_over};
 pub use system::{solve_system, trace_reference, SystemSolution, TRACE_EXACT_MAX};
 pub use thermal::{
     thermal, thermal_boundaries, thermal_default_rays, thermal_enclosure, thermal_over,
-    thermal_system,
-    Enclosure, ThermalOutcome, ThermalSettings,
+    thermal_system, Enclosure, ThermalOutcome, ThermalSettings,
 };
 pub use view_factors::{view_factors, view_factors_over, ViewFactorSettings, ViewFactors};
-/// The bridge from a meshed scene to its linear system (it lives with the mesh).
-pub use crate::mesh::patch_system;
-pub use crate::observe::{Event, Observer, Stage};
 
 use crate::accel::Bvh;
 use crate::color::Rgb;
@@ -40,7 +39,6 @@ use crate::scene::{Camera, Scene};
 use crate::solve::trace::Trace;
 use crate::solve::{ambient_term, Info, Solver, SolverParams};
 use crate::system::System;
-
 
 /// Whether every row of F is computed and stored before the solver starts, or computed when
 /// the solver asks for it ([`OnDemandRows`], O(N) memory plus a bounded cache).

@@ -1,22 +1,22 @@
 //! A scene solved: validate → mesh → hierarchy → form factors (stored or on demand) → the
 //! chosen solver; or hierarchical radiosity over the scene's pieces.
 
+use super::*;
 use crate::accel::Bvh;
 use crate::color::Rgb;
+use crate::comm::Ranks;
+use crate::distributed::rows::{self, RowBlock};
+use crate::distributed::{not_distributed, Report, DISTRIBUTED_SOLVERS};
 use crate::formfactor::{Estimator, FormFactorMethod, FormFactorStats, OnDemandRows, Storage};
 use crate::mesh::{patch_system, Mesh, MeshParams};
 use crate::observe::{Event, Observer, Stage};
 use crate::scene::Scene;
 use crate::solve::trace::Trace;
+use crate::solve::SolveError;
 use crate::solve::{Info, Solver};
 use crate::system::{Operator, System};
 use crate::Error;
 use std::time::Instant;
-use super::*;
-use crate::comm::Ranks;
-use crate::distributed::rows::{self, RowBlock};
-use crate::distributed::{not_distributed, Report, DISTRIBUTED_SOLVERS};
-use crate::solve::SolveError;
 
 /// Validate, mesh and solve `scene`, over `ranks` when given: a distributed method
 /// ([`DISTRIBUTED_SOLVERS`], uniform meshing) or any method over more than one rank runs the
@@ -347,9 +347,7 @@ fn solve_distributed(
     let bvh = Bvh::build(&mesh);
     let bvh_s = t.elapsed().as_secs_f64();
     let system = patch_system(scene, &mesh);
-    system
-        .validate()
-        .map_err(|e| located(e, scene, &mesh))?;
+    system.validate().map_err(|e| located(e, scene, &mesh))?;
     let estimator = Estimator::new(&mesh, &bvh, ff)?;
     let mut report = Report {
         transport: ranks.communicator().describe(),
@@ -371,14 +369,15 @@ fn solve_distributed(
         ranks.barrier();
         form_factors.seconds = t.elapsed().as_secs_f64();
         observer.event(Event::Stage(Stage::Solve));
-        let (b, i, sweeps) = crate::distributed::jacobi::solve(&system, &block, &params, ranks, &mut |s, _| {
-            observer.event(Event::Progress {
-                stage: Stage::Solve,
-                done: (s.unshot_fraction.max(1e-30).log10() * -1000.0).max(0.0) as u64,
-                total: (params.tolerance.max(1e-30).log10() * -1000.0).max(1.0) as u64,
+        let (b, i, sweeps) =
+            crate::distributed::jacobi::solve(&system, &block, &params, ranks, &mut |s, _| {
+                observer.event(Event::Progress {
+                    stage: Stage::Solve,
+                    done: (s.unshot_fraction.max(1e-30).log10() * -1000.0).max(0.0) as u64,
+                    total: (params.tolerance.max(1e-30).log10() * -1000.0).max(1.0) as u64,
+                });
+                true
             });
-            true
-        });
         busy += sweeps
             .iter()
             .map(|s| s.seconds - s.communication)

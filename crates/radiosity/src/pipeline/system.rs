@@ -1,13 +1,13 @@
 //! A given linear system (areas, reflectances, emissions and a stored F) solved, with its
 //! convergence trace measured against the LU solution.
 
+use super::*;
 use crate::color::Rgb;
 use crate::observe::{Event, Observer, Stage};
 use crate::solve::trace::Trace;
 use crate::solve::{Info, Solver, SolverParams};
 use crate::system::{SparseMatrix, System};
 use crate::Error;
-use super::*;
 
 /// Largest system whose trace measures the error against an LU solution.
 pub const TRACE_EXACT_MAX: usize = 5000;

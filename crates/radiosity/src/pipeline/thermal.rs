@@ -1,16 +1,16 @@
 //! Radiative heat transfer: boundary names → materials, mesh, F (memory checked first),
 //! reciprocity and closure enforced, the net-radiation solve.
 
+use super::*;
 use crate::accel::Bvh;
+use crate::comm::Ranks;
+use crate::distributed::{rows, Report};
 use crate::formfactor::Estimator;
 use crate::mesh::{Mesh, MeshParams};
 use crate::observe::{Event, Observer, Stage};
 use crate::scene::Scene;
 use crate::Error;
 use std::time::Instant;
-use super::*;
-use crate::comm::Ranks;
-use crate::distributed::{rows, Report};
 
 /// Whether a thermal problem's surfaces close an enclosure.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

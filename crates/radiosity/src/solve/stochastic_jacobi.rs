@@ -403,8 +403,8 @@ impl<'s> StochasticJacobi<'s> {
                     let batch = (rays - done).min(BATCH as u64) as usize;
                     // This rank's chunks of the batch; then everyone's hits, in chunk order.
                     let chunks = batch.div_ceil(CHUNK);
-                    let mine = &crate::comm::balance(&vec![1.0; chunks], ranks.size())
-                        [ranks.rank()];
+                    let mine =
+                        &crate::comm::balance(&vec![1.0; chunks], ranks.size())[ranks.rank()];
                     let (lo, hi) = (mine.start * CHUNK, (mine.end * CHUNK).min(batch));
                     buf[lo..hi]
                         .par_chunks_mut(CHUNK)

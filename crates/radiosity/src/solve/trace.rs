@@ -83,11 +83,7 @@ impl Trace {
         let mut text = format!("{TRACE_HEADER}\n");
         for r in &self.rows {
             let error = r.error.map_or(String::new(), |e| e.to_string());
-            let _ = writeln!(
-                text,
-                "{},{},{},{}",
-                r.iteration, r.seconds, error, r.unshot
-            );
+            let _ = writeln!(text, "{},{},{},{}", r.iteration, r.seconds, error, r.unshot);
         }
         text
     }

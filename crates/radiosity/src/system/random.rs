@@ -3,9 +3,9 @@
 //! Both are seeded: the same arguments give the same system on every machine.
 
 use super::StoredSystem;
+use super::{Entry, SparseMatrix, System};
 use crate::color::Rgb;
 use crate::sampling::{stream, uniform, Rng64};
-use super::{Entry, SparseMatrix, System};
 
 /// A random system (the same shape as any stored system).
 pub type Random = StoredSystem;
