@@ -81,37 +81,25 @@ fn reference(
 /// The scene's polygons grouped by coincidence: each group the polygons with the same
 /// vertices (as a set, to 10⁻⁶ of the scene's size) and the same side, in order.
 fn twin_groups(scene: &radiosity::scene::Scene) -> Vec<Vec<usize>> {
+    use radiosity::geom::{coincidence_key, coincidence_step, Vec3};
     use std::collections::HashMap;
-    let (mut lo, mut hi) = (
-        radiosity::geom::Vec3::splat(f32::MAX),
-        radiosity::geom::Vec3::splat(f32::MIN),
+    let step = coincidence_step(
+        scene
+            .polygons
+            .iter()
+            .flat_map(|p| p.vertices.iter().copied()),
     );
-    for p in &scene.polygons {
-        for v in &p.vertices {
-            lo = lo.min(*v);
-            hi = hi.max(*v);
-        }
-    }
-    let step = ((hi - lo).length() * 1e-6).max(f32::MIN_POSITIVE);
-    let q = |v: f32, s: f32| (v / s).round() as i64;
     let mut index: HashMap<Vec<i64>, usize> = HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (k, p) in scene.polygons.iter().enumerate() {
-        let mut corners: Vec<[i64; 3]> = p
-            .vertices
-            .iter()
-            .map(|v| [q(v.x, step), q(v.y, step), q(v.z, step)])
-            .collect();
-        corners.sort_unstable();
-        let mut key = corners.concat();
         // Newell's normal: the side the polygon faces.
         let n = p
             .vertices
             .iter()
             .zip(p.vertices.iter().cycle().skip(1))
-            .fold(radiosity::geom::Vec3::ZERO, |acc, (a, b)| acc + a.cross(*b))
+            .fold(Vec3::ZERO, |acc, (a, b)| acc + a.cross(*b))
             .normalize_or_zero();
-        key.extend([q(n.x, 1e-3), q(n.y, 1e-3), q(n.z, 1e-3)]);
+        let key = coincidence_key(p.vertices.iter().copied(), n, step);
         let g = *index.entry(key).or_insert_with(|| {
             groups.push(Vec::new());
             groups.len() - 1

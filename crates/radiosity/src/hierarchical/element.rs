@@ -104,7 +104,6 @@ impl Element {
     /// 10⁻³; only roots for which `eligible` holds are grouped.
     pub fn twins(roots: &[Element], tolerance: f32, eligible: impl Fn(usize) -> bool) -> Vec<u32> {
         use std::collections::HashMap;
-        let q = |v: f32, step: f32| (v / step).round() as i64;
         let mut first: HashMap<Vec<i64>, u32> = HashMap::new();
         let mut out: Vec<u32> = (0..roots.len() as u32).collect();
         if tolerance.is_nan() || tolerance <= 0.0 {
@@ -114,18 +113,8 @@ impl Element {
             if !eligible(i) || e.area <= 0.0 {
                 continue;
             }
-            let mut corners: Vec<[i64; 3]> = e
-                .polygon()
-                .iter()
-                .map(|p| [q(p.x, tolerance), q(p.y, tolerance), q(p.z, tolerance)])
-                .collect();
-            corners.sort_unstable();
-            let mut key: Vec<i64> = corners.concat();
-            key.extend([
-                q(e.normal.x, 1e-3),
-                q(e.normal.y, 1e-3),
-                q(e.normal.z, 1e-3),
-            ]);
+            let key =
+                crate::geom::coincidence_key(e.polygon().iter().copied(), e.normal, tolerance);
             out[i] = *first.entry(key).or_insert(i as u32);
         }
         out

@@ -46,34 +46,15 @@ const STEPS: f64 = (1u64 << 24) as f64;
 fn twins(s: &Surfaces<'_>) -> Vec<Vec<u32>> {
     use std::collections::HashMap;
     let mesh = s.mesh;
-    let (mut lo, mut hi) = (
-        crate::geom::Vec3::splat(f32::MAX),
-        crate::geom::Vec3::splat(f32::MIN),
-    );
-    for v in &mesh.vertices {
-        lo = lo.min(*v);
-        hi = hi.max(*v);
-    }
-    let step = ((hi - lo).length() * 1e-6).max(f32::MIN_POSITIVE);
-    let q = |v: f32, s: f32| (v / s).round() as i64;
+    let step = crate::geom::coincidence_step(mesh.vertices.iter().copied());
     let mut groups: HashMap<Vec<i64>, Vec<u32>> = HashMap::new();
     for (i, p) in mesh.patches.iter().enumerate() {
-        let mut corners: Vec<[i64; 3]> = p
+        let corners = p
             .vertices
             .iter()
             .filter(|&&v| v != crate::mesh::Patch::NONE)
-            .map(|&v| {
-                let v = mesh.vertices[v as usize];
-                [q(v.x, step), q(v.y, step), q(v.z, step)]
-            })
-            .collect();
-        corners.sort_unstable();
-        let mut key = corners.concat();
-        key.extend([
-            q(p.normal.x, 1e-3),
-            q(p.normal.y, 1e-3),
-            q(p.normal.z, 1e-3),
-        ]);
+            .map(|&v| mesh.vertices[v as usize]);
+        let key = crate::geom::coincidence_key(corners, p.normal, step);
         groups.entry(key).or_default().push(i as u32);
     }
     let mut out = vec![Vec::new(); mesh.patches.len()];
