@@ -45,9 +45,6 @@ fn once(scene: &radiosity::scene::Scene, settings: &Settings, ranks: &Ranks<'_>)
 pub fn run(a: &RanksArgs) -> Result<()> {
     crate::positive(&[("--runs", a.runs), ("--patches", a.patches)])?;
     let scene_name = a.scene.as_str();
-    if !(a.solve.tolerance > 0.0 && a.solve.tolerance < 1.0) {
-        anyhow::bail!("--tolerance {}: must be in (0, 1)", a.solve.tolerance);
-    }
     let scene = radiosity_cli::load_scene(scene_name, a.solve.one_sided)?;
     let serial = Ranks::new(&Serial);
     let world = radiosity_cli::ranks::current().unwrap_or(&serial);
@@ -90,6 +87,7 @@ pub fn run(a: &RanksArgs) -> Result<()> {
             },
             ..Settings::default()
         };
+        settings.params.validate()?;
         // One rank: rank 0 alone, the others waiting.
         let baseline = if k > 1 {
             let mut t = 0.0;

@@ -45,14 +45,6 @@ pub fn form_factor_numbers(resolution: u32, samples: u32, rays: Option<u32>) -> 
     Ok(())
 }
 
-/// The solve's default tolerance (unshot fraction of the emitted energy).
-pub const DEFAULT_TOLERANCE: f64 = 0.01;
-
-/// `render`'s default tolerance: measured on the Cornell box (256×256, 16 × 16-pixel blocks
-/// against a solve to 1e-5), the display ambient term's bias is at most 28 % of a block at
-/// 0.01, 2.8 % at 0.001 and 0.8 % at 0.0003, for 3 % more CPU time than at 0.01.
-pub const PICTURE_TOLERANCE: f64 = 3e-4;
-
 /// Library settings from the shared solve options.
 pub fn settings(a: &SolveArgs) -> Result<Settings> {
     let mesh = mesh_params(a.patches, a.max_edge, MeshParams::default())?;
@@ -70,9 +62,9 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
     };
     form_factors.validate().map_err(flag_error)?;
     let tolerance = a.tolerance.unwrap_or(if a.picture {
-        PICTURE_TOLERANCE
+        SolverParams::PICTURE_TOLERANCE
     } else {
-        DEFAULT_TOLERANCE
+        SolverParams::default().tolerance
     });
     let hierarchical = match a.solver.0 {
         Some(_) => None,
@@ -142,15 +134,20 @@ pub fn flag_of(e: &(dyn std::error::Error + 'static)) -> Option<&'static str> {
         });
     }
     if let Some(SolveError::Parameter { parameter, .. }) = e.downcast_ref() {
-        return Some(match parameter {
-            SolverParameter::Tolerance => "--tolerance",
-            SolverParameter::Omega => "--omega",
-            SolverParameter::Photons => "--photons",
-            SolverParameter::IterationRays => "--iteration-rays",
-            SolverParameter::GatherRays => "--gather-rays",
-        });
+        return Some(solver_flag(*parameter));
     }
     None
+}
+
+/// The option of a solver parameter.
+fn solver_flag(p: SolverParameter) -> &'static str {
+    match p {
+        SolverParameter::Tolerance => "--tolerance",
+        SolverParameter::Omega => "--omega",
+        SolverParameter::Photons => "--photons",
+        SolverParameter::IterationRays => "--iteration-rays",
+        SolverParameter::GatherRays => "--gather-rays",
+    }
 }
 
 /// The options that answer a library error about memory, for a hint after the message.
@@ -182,23 +179,7 @@ pub fn solver_params(
     gather_rays: u32,
     seed: u64,
 ) -> Result<SolverParams> {
-    if !(0.0..1.0).contains(&tolerance) {
-        bail!("--tolerance {tolerance}: must be in [0, 1)");
-    }
-    if !(omega > 0.0 && omega < 2.0) {
-        bail!("--omega {omega}: must be in (0, 2)");
-    }
-    if photons == 0 {
-        bail!("--photons 0: at least one photon per shot is needed");
-    }
-    if iteration_rays == 0 {
-        bail!("--iteration-rays 0: at least one ray per patch and iteration is needed");
-    }
-    let most = radiosity::solve::stochastic_jacobi::MAX_GATHER_RAYS;
-    if gather_rays > most {
-        bail!("--gather-rays {gather_rays}: at most {most} rays a patch");
-    }
-    Ok(SolverParams {
+    let params = SolverParams {
         tolerance,
         max_iterations: max_iterations.unwrap_or(u64::MAX),
         omega,
@@ -207,7 +188,19 @@ pub fn solver_params(
         gather_rays,
         seed,
         ..Default::default()
-    })
+    };
+    params.validate().map_err(|e| match e {
+        radiosity::solve::SolveError::Parameter {
+            parameter,
+            value,
+            range,
+        } => anyhow::anyhow!(
+            "{} {value}: must be in {range} ({parameter})",
+            solver_flag(parameter)
+        ),
+        e => e.into(),
+    })?;
+    Ok(params)
 }
 
 fn vec3(flag: &str, s: &str) -> Result<Vec3> {
