@@ -1,6 +1,7 @@
 //! The harness's command line: one subcommand per measurement, each with its own flags.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use radiosity::solve::SolverParams;
 use radiosity_cli::args::SolverArg;
 use std::path::PathBuf;
 
@@ -133,13 +134,13 @@ pub struct SolveFlags {
     #[arg(long, value_name = "M", value_enum, default_value = "progressive")]
     pub solver: SolverArg,
     /// Stop at this fraction of the emitted energy unshot.
-    #[arg(long, value_name = "F", default_value_t = 0.01)]
+    #[arg(long, value_name = "F", default_value_t = SolverParams::default().tolerance)]
     pub tolerance: f64,
     /// `stochastic-jacobi`: rays per patch and iteration.
-    #[arg(long, value_name = "N", default_value_t = 16)]
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().iteration_rays)]
     pub iteration_rays: u32,
     /// `stochastic-jacobi`: rays per patch of the final gathering iteration (0: none).
-    #[arg(long, value_name = "N", default_value_t = 0)]
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().gather_rays)]
     pub gather_rays: u32,
 }
 
@@ -227,7 +228,7 @@ pub struct HierarchicalArgs {
     #[arg(long = "solve-seeds", value_name = "S,S,…", value_delimiter = ',', num_args = 1.., default_value = "1")]
     pub solve_seeds: Vec<u64>,
     /// The uniform solves stop at this fraction of the emitted energy unshot.
-    #[arg(long, value_name = "F", default_value_t = 0.01)]
+    #[arg(long, value_name = "F", default_value_t = SolverParams::default().tolerance)]
     pub tolerance: f64,
     /// The reference surface means (surfaces.csv); made when absent.
     #[arg(long, value_name = "surfaces.csv")]

@@ -7,6 +7,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use radiosity::formfactor::{FormFactorMethod, Storage};
 use radiosity::pipeline::Rows;
 use radiosity::solve::Solver;
+use radiosity::solve::SolverParams;
 use std::path::PathBuf;
 
 /// A solver named on the command line (`--solver`).
@@ -480,22 +481,22 @@ pub struct SolveSystemArgs {
     #[arg(long, value_name = "K", help_heading = SOLVER)]
     pub max_iterations: Option<u64>,
     /// Stop when the unshot energy is at most this fraction of the emitted energy.
-    #[arg(long, value_name = "T", default_value_t = 0.01, help_heading = SOLVER)]
+    #[arg(long, value_name = "T", default_value_t = SolverParams::default().tolerance, help_heading = SOLVER)]
     pub tolerance: f64,
     /// Relaxation factor ω of `sor`.
-    #[arg(long, value_name = "W", default_value_t = 1.1, help_heading = SOLVER)]
+    #[arg(long, value_name = "W", default_value_t = SolverParams::default().omega, help_heading = SOLVER)]
     pub omega: f64,
     /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
-    #[arg(long, value_name = "N", default_value_t = 1000, help_heading = SOLVER)]
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().photons, help_heading = SOLVER)]
     pub photons: u32,
     /// `stochastic-jacobi`: rays per patch in each iteration (all patches shoot N × this many
     /// rays, each patch's share in proportion to its unshot power).
-    #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().iteration_rays, help_heading = SOLVER)]
     pub iteration_rays: u32,
     /// `stochastic-jacobi`: rays per patch of a final regular gathering iteration (Bekaert's,
     /// with the constant control variate); 0, the default, for none: on RenderPark's hospital
     /// it made the result noisier per patch and per surface at any count tried. At most 2²⁰.
-    #[arg(long, value_name = "N", default_value_t = 0, help_heading = SOLVER)]
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().gather_rays, help_heading = SOLVER)]
     pub gather_rays: u32,
     /// Seed of `stochastic`.
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = SOLVER)]
@@ -551,19 +552,19 @@ pub struct SolveArgs {
     #[arg(long, value_name = "K", help_heading = SOLVER)]
     pub max_iterations: Option<u64>,
     /// Relaxation factor ω of `sor`.
-    #[arg(long, value_name = "W", default_value_t = 1.1, help_heading = SOLVER)]
+    #[arg(long, value_name = "W", default_value_t = SolverParams::default().omega, help_heading = SOLVER)]
     pub omega: f64,
     /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
-    #[arg(long, value_name = "N", default_value_t = 1000, help_heading = SOLVER)]
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().photons, help_heading = SOLVER)]
     pub photons: u32,
     /// `stochastic-jacobi`: rays per patch in each iteration (all patches shoot N × this many
     /// rays, each patch's share in proportion to its unshot power).
-    #[arg(long, value_name = "N", default_value_t = 16, help_heading = SOLVER)]
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().iteration_rays, help_heading = SOLVER)]
     pub iteration_rays: u32,
     /// `stochastic-jacobi`: rays per patch of a final regular gathering iteration (Bekaert's,
     /// with the constant control variate); 0, the default, for none: on RenderPark's hospital
     /// it made the result noisier per patch and per surface at any count tried. At most 2²⁰.
-    #[arg(long, value_name = "N", default_value_t = 0, help_heading = SOLVER)]
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().gather_rays, help_heading = SOLVER)]
     pub gather_rays: u32,
     /// `hierarchical`: refine a link when the power it may misplace exceeds this fraction of
     /// the emitted power.
