@@ -4,14 +4,25 @@
 //! patches ([`mesh`]), a bounding-volume hierarchy makes them ray-castable ([`accel`]), form
 //! factors are estimated ([`formfactor`]) and the radiosity system is solved ([`solve`]); the
 //! result is rendered ([`render`]) or written out ([`export`]). [`pipeline`] runs the stages in
-//! order.
+//! order, one entry point a use:
+//!
+//! | to | call |
+//! |---|---|
+//! | solve a scene | [`pipeline::solve`] (over MPI ranks: [`pipeline::solve_over`]) |
+//! | make a picture | [`pipeline::Solution::render_gather`], [`pipeline::Solution::render`] |
+//! | bake light into a mesh | [`export::bake::write`] |
+//! | view factors | [`pipeline::view_factors`] |
+//! | radiative heat transfer | [`pipeline::thermal`] |
+//! | solve a given system | [`pipeline::solve_system`] |
+//!
+//! `use radiosity::prelude::*;` brings the types these take.
 //!
 //! ```
-//! use radiosity::{mesh::MeshParams, pipeline, scene::builtin};
+//! use radiosity::prelude::*;
 //!
 //! let scene = builtin::furnace();
-//! let settings = pipeline::Settings { mesh: MeshParams::Patches(200), ..Default::default() };
-//! let solution = pipeline::solve(&scene, &settings, &radiosity::observe::Silent).unwrap();
+//! let settings = Settings { mesh: MeshParams::Patches(200), ..Default::default() };
+//! let solution = solve(&scene, &settings, &Silent).unwrap();
 //! // Closed furnace: every patch's radiosity is near E/(1 − ρ) = 2 in the green channel.
 //! let mean: f64 = solution.radiosity.iter().map(|b| b.g).sum::<f64>() / solution.radiosity.len() as f64;
 //! assert!((mean - 2.0).abs() < 0.1);
@@ -45,6 +56,23 @@ pub mod system;
 pub mod thermal;
 
 pub use color::Rgb;
+
+/// The types a program solving, rendering, baking or computing view factors and heat transfer
+/// starts from.
+pub mod prelude {
+    pub use crate::color::Rgb;
+    pub use crate::formfactor::{FormFactorMethod, Params as FormFactorParams};
+    pub use crate::mesh::MeshParams;
+    pub use crate::observe::{Observer, Silent};
+    pub use crate::pipeline::{
+        solve, solve_system, thermal, view_factors, Settings, Solution, ThermalSettings,
+        ViewFactorSettings,
+    };
+    pub use crate::render::RenderParams;
+    pub use crate::scene::{builtin, Camera, Scene};
+    pub use crate::solve::{Solver, SolverParams};
+    pub use crate::Error;
+}
 
 /// Any failure of the library's stages.
 #[derive(Debug, thiserror::Error)]

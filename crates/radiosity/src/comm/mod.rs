@@ -8,7 +8,7 @@
 //! typed helpers and counts the traffic; [`balance`] splits work into contiguous blocks by
 //! cost, the same on every rank.
 
-pub mod local;
+mod local;
 
 pub use local::Local;
 

@@ -82,6 +82,29 @@ impl BakeFormat {
 }
 
 /// Write `bake` to `path` in the format its extension names (`.glb`, `.gltf`, `.ply`).
+///
+/// ```
+/// use radiosity::export::bake::{write, Bake};
+/// use radiosity::prelude::*;
+///
+/// let scene = builtin::cornell();
+/// let s = solve(&scene, &Settings { mesh: MeshParams::Patches(300), ..Default::default() }, &Silent).unwrap();
+/// let vertex = s.vertex_display_radiosity();
+/// let path = std::env::temp_dir().join(format!("radiosity-doc-{}.glb", std::process::id()));
+/// let bake = Bake {
+///     scene: &scene,
+///     mesh: &s.mesh,
+///     vertex_radiosity: &vertex,
+///     scale: s.auto_exposure(),
+///     camera: Some(s.default_camera(&scene)),
+/// };
+/// write(&path, &bake).unwrap();
+/// // A binary glTF: its magic, then version 2.
+/// let bytes = std::fs::read(&path).unwrap();
+/// assert_eq!(&bytes[..4], b"glTF");
+/// assert_eq!(u32::from_le_bytes(bytes[4..8].try_into().unwrap()), 2);
+/// std::fs::remove_file(&path).unwrap();
+/// ```
 pub fn write(path: &Path, bake: &Bake) -> Result<(), ExportError> {
     match BakeFormat::from_path(path) {
         Some(BakeFormat::Ply) => write_ply(path, bake),

@@ -15,18 +15,18 @@
 //! matrix physical, [`summary()`] describes one, [`quadrature`] spreads points over a patch.
 //! This module produces linear systems and knows nothing of the solvers.
 
-pub mod analytic;
+pub(crate) mod analytic;
 pub mod closed_form;
-pub mod enforce;
-pub mod estimator;
-pub mod hemicube;
-pub mod hemisphere;
+pub(crate) mod enforce;
+pub(crate) mod estimator;
+pub(crate) mod hemicube;
+pub(crate) mod hemisphere;
 pub mod monte_carlo;
-pub mod on_demand;
+pub(crate) mod on_demand;
 pub mod projection;
-pub mod quadrature;
+pub(crate) mod quadrature;
 pub mod summary;
-pub mod tetrahedron;
+pub(crate) mod tetrahedron;
 
 pub use crate::system::Entry;
 pub use enforce::{aggregate, enforce, Enforce};

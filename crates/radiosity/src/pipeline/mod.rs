@@ -209,7 +209,22 @@ impl Solution {
     }
 
     /// Render by final gather over the solution's radiosity (no ambient term):
-    /// [`crate::render::gather`].
+    /// [`crate::render::gather`]. The picture `radiosity render` makes by default.
+    ///
+    /// ```
+    /// use radiosity::prelude::*;
+    ///
+    /// let scene = builtin::cornell();
+    /// let settings = Settings { mesh: MeshParams::Patches(500), ..Default::default() };
+    /// let s = solve(&scene, &settings, &Silent).unwrap();
+    /// let params = RenderParams { width: 24, height: 24, samples_per_pixel: 1, ..Default::default() };
+    /// let gather = radiosity::render::gather::GatherParams { cache_samples: 64, ..Default::default() };
+    /// let image = s.render_gather(&s.default_camera(&scene), &params, gather, &Silent);
+    /// assert_eq!(image.pixels.len(), 24 * 24);
+    /// // Light reaches the camera: the box is lit, and no pixel is negative or NaN.
+    /// assert!(image.pixels.iter().all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));
+    /// assert!(image.pixels.iter().any(|p| p[1] > 0.0));
+    /// ```
     pub fn render_gather(
         &self,
         camera: &Camera,
@@ -233,6 +248,18 @@ impl Solution {
     }
 
     /// Render the display radiosity, Gouraud-interpolated within surfaces.
+    ///
+    /// ```
+    /// use radiosity::prelude::*;
+    ///
+    /// let scene = builtin::furnace();
+    /// let s = solve(&scene, &Settings { mesh: MeshParams::Patches(200), ..Default::default() }, &Silent).unwrap();
+    /// let params = RenderParams { width: 16, height: 16, ..Default::default() };
+    /// let image = s.render(&s.default_camera(&scene), &params, &Silent);
+    /// // Inside the furnace every wall has B = E/(1 − ρ) = 2 (green), a radiance of 2/π.
+    /// let want = 2.0 / std::f32::consts::PI;
+    /// assert!(image.pixels.iter().all(|p| (p[1] - want).abs() < 0.1 * want), "{:?}", &image.pixels[..4]);
+    /// ```
     pub fn render(&self, camera: &Camera, params: &RenderParams, observer: &dyn Observer) -> Image {
         let vertex = vertex_radiosity(&self.mesh, &self.display_radiosity());
         render(&self.mesh, &self.bvh, &vertex, camera, params, observer)

@@ -220,6 +220,23 @@ pub fn thermal_system(
 /// Solve a radiative heat-transfer problem on `scene`: `boundary_of` (from
 /// [`thermal_boundaries`]) gives each material's boundary in `boundaries`. Meshes, computes
 /// F (memory checked first), enforces reciprocity (and closure when closed), solves.
+///
+/// ```
+/// use radiosity::prelude::*;
+/// use radiosity::thermal::{Boundary, Condition};
+///
+/// // The furnace is a closed box (with a box inside): held at one temperature, every
+/// // surface emits what it absorbs, so no net power flows.
+/// let scene = builtin::furnace();
+/// let boundaries = [Boundary { emissivity: 0.8, condition: Condition::Temperature(500.0) }];
+/// let boundary_of = vec![Some(0); scene.materials.len()];
+/// let mut settings = ThermalSettings { default_rays: false, ..Default::default() };
+/// settings.form_factors.rays = 20_000;
+/// let out = thermal(&scene, &boundary_of, &boundaries, &settings, &Silent).unwrap();
+/// let (area, power, _) = out.per_boundary[0];
+/// let emitted = area * 0.8 * 5.670374419e-8 * 500f64.powi(4);
+/// assert!(power.abs() < 1e-6 * emitted);
+/// ```
 pub fn thermal(
     scene: &Scene,
     boundary_of: &[Option<u32>],

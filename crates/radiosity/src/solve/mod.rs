@@ -16,8 +16,10 @@ pub mod jacobi;
 pub mod overshoot;
 pub mod overshoot_ambient;
 pub mod progressive;
-pub mod relaxation;
-pub mod select;
+pub(crate) mod relaxation;
+// Three of its methods serve only its tests.
+#[cfg_attr(not(test), allow(dead_code))]
+pub(crate) mod select;
 pub mod sor;
 pub mod southwell;
 pub mod stochastic;
