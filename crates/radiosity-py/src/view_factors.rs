@@ -1,0 +1,92 @@
+//! View factors: the form-factor matrix of a scene as CSR arrays (SciPy's `csr_matrix` is
+//! made of them on the Python side).
+
+use crate::convert::{method_by_name, value_error};
+use crate::scene::Scene;
+use numpy::ndarray::Array1;
+use numpy::{IntoPyArray, PyArray1};
+use pyo3::prelude::*;
+use radiosity::formfactor::Params as FormFactorParams;
+use radiosity::mesh::{Mesh, MeshParams};
+use radiosity::system::SparseMatrix;
+
+/// View factors of a scene: (data, indices, indptr, shape, areas) of the CSR matrix F, rows
+/// per patch (or per input face with `faces=True`).
+#[pyfunction]
+#[pyo3(signature = (scene, method = "monte-carlo", patches = None, faces = false, rays = 1_000_000, resolution = 128, samples = 16, seed = 1))]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+pub(crate) fn form_factors_csr(
+    py: Python<'_>,
+    scene: &Scene,
+    method: &str,
+    patches: Option<usize>,
+    faces: bool,
+    rays: u32,
+    resolution: u32,
+    samples: u32,
+    seed: u64,
+) -> PyResult<(
+    Py<PyArray1<f32>>,
+    Py<PyArray1<u32>>,
+    Py<PyArray1<u64>>,
+    (usize, usize),
+    Py<PyArray1<f64>>,
+)> {
+    let params = FormFactorParams {
+        method: method_by_name(method)?,
+        resolution,
+        samples,
+        rays,
+        seed,
+        ..FormFactorParams::default()
+    };
+    params.validate().map_err(value_error)?;
+    let mesh_params = match (faces, patches) {
+        (true, _) => MeshParams::Faces,
+        (false, Some(0)) => return Err(value_error("patches: at least one patch is needed")),
+        (false, Some(n)) => MeshParams::Patches(n),
+        (false, None) => MeshParams::default(),
+    };
+    let s = &scene.inner;
+    let (matrix, area) = py
+        .allow_threads(|| -> Result<(SparseMatrix, Vec<f64>), String> {
+            s.validate_geometry().map_err(|e| e.to_string())?;
+            let mesh = Mesh::build(s, mesh_params).map_err(|e| e.to_string())?;
+            let bvh = radiosity::accel::Bvh::build(&mesh);
+            let est = radiosity::formfactor::Estimator::new(&mesh, &bvh, params)
+                .map_err(|e| e.to_string())?;
+            let m = est.sparse_matrix();
+            let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
+            if faces {
+                let group: Vec<u32> = mesh.patches.iter().map(|p| p.surface).collect();
+                Ok(radiosity::formfactor::aggregate(
+                    &m,
+                    &area,
+                    &group,
+                    s.polygons.len(),
+                ))
+            } else {
+                Ok((m, area))
+            }
+        })
+        .map_err(value_error)?;
+    let n = matrix.n();
+    let mut data = Vec::with_capacity(matrix.nnz());
+    let mut indices = Vec::with_capacity(matrix.nnz());
+    let mut indptr = Vec::with_capacity(n + 1);
+    indptr.push(0u64);
+    for i in 0..n {
+        for &(j, f) in matrix.row_entries(i) {
+            indices.push(j);
+            data.push(f);
+        }
+        indptr.push(indices.len() as u64);
+    }
+    Ok((
+        Array1::from(data).into_pyarray(py).unbind(),
+        Array1::from(indices).into_pyarray(py).unbind(),
+        Array1::from(indptr).into_pyarray(py).unbind(),
+        (n, n),
+        Array1::from(area).into_pyarray(py).unbind(),
+    ))
+}
