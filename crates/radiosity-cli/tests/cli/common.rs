@@ -143,7 +143,9 @@ pub fn test_scene(name: &str) -> PathBuf {
 }
 
 /// A file of the scenes in `../shared/scenes` beside the repository (RenderPark's MGF scenes,
-/// View3D's examples); failing, naming the folder, when it is absent.
+/// View3D's examples); failing, naming the folder, when it is absent. The tests that read
+/// them are `#[ignore]`d, so that `cargo test` needs only the repository: `--include-ignored`
+/// runs them.
 pub fn shared_scene(path: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
     assert!(
