@@ -6,7 +6,7 @@ use radiosity::export::{write_patch_table, PatchRow};
 use radiosity::formfactor::{aggregate, enforce, summary, Enforce, Params, Storage};
 use radiosity::geom::Vec3;
 use radiosity::io::{matrix_market, FileFormat};
-use radiosity::mesh::{check_planar, Mesh, MeshParams};
+use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::observe::Event;
 use radiosity::pipeline::{view_factors_over, ViewFactorSettings};
 use radiosity::scene::{vector_area, vs3, Scene};
@@ -73,11 +73,6 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         Some(v) => v.scene.clone(),
         None => crate::load_scene(&a.scene, false)?,
     };
-    // View factors need geometry, not light.
-    scene.validate_geometry()?;
-    if faces {
-        check_planar(&scene)?;
-    }
     let params = Params {
         method,
         resolution: a.resolution,

@@ -252,11 +252,6 @@ pub(crate) fn solve(
     if patches == 0 {
         return Err(value_error("patches: at least one patch is needed"));
     }
-    if !(tolerance.is_finite() && tolerance > 0.0) {
-        return Err(value_error(format!(
-            "tolerance {tolerance}: must be a positive number"
-        )));
-    }
     // `hierarchical` is a method of scenes, not of linear systems: it has its own parameters.
     let hierarchical = (solver == "hierarchical").then(|| radiosity::hierarchical::Params {
         link_error,
@@ -304,6 +299,7 @@ pub(crate) fn solve(
         ..Settings::default()
     };
     settings.form_factors.validate().map_err(value_error)?;
+    settings.params.validate().map_err(value_error)?;
     let observer = Progress::new(progress);
     let run = |s: &RScene| pipeline::solve(s, &settings, &observer);
     let result = match threads {

@@ -79,11 +79,6 @@ pub(crate) fn solve_system_csr<'py>(
     };
     let mut f = SparseMatrix::from_rows(rows);
     let solver = solver_by_name(solver)?;
-    if !(tolerance.is_finite() && tolerance > 0.0) {
-        return Err(value_error(format!(
-            "tolerance {tolerance}: must be a positive number"
-        )));
-    }
     let params = SolverParams {
         tolerance,
         max_iterations: max_iterations.unwrap_or_else(|| {
@@ -92,6 +87,7 @@ pub(crate) fn solve_system_csr<'py>(
         seed,
         ..SolverParams::default()
     };
+    params.validate().map_err(value_error)?;
     let observer = Progress::new(progress);
     let out = py.allow_threads(|| {
         pipeline::solve_system(&system, &mut f, solver, &params, trace, &observer)

@@ -7,7 +7,10 @@ use numpy::ndarray::Array1;
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use radiosity::formfactor::Params as FormFactorParams;
-use radiosity::mesh::{Mesh, MeshParams};
+use radiosity::formfactor::Storage;
+use radiosity::mesh::MeshParams;
+use radiosity::observe::Silent;
+use radiosity::pipeline::{view_factors, ViewFactorSettings};
 use radiosity::system::SparseMatrix;
 
 /// View factors of a scene: (data, indices, indptr, shape, areas) of the CSR matrix F, rows
@@ -48,25 +51,20 @@ pub(crate) fn form_factors_csr(
         (false, None) => MeshParams::default(),
     };
     let s = &scene.inner;
+    let settings = ViewFactorSettings {
+        mesh: mesh_params,
+        form_factors: params,
+        storage: Storage::Sparse,
+        memory_limit: 0,
+    };
     let (matrix, area) = py
         .allow_threads(|| -> Result<(SparseMatrix, Vec<f64>), String> {
-            s.validate_geometry().map_err(|e| e.to_string())?;
-            let mesh = Mesh::build(s, mesh_params).map_err(|e| e.to_string())?;
-            let bvh = radiosity::accel::Bvh::build(&mesh);
-            let est = radiosity::formfactor::Estimator::new(&mesh, &bvh, params)
-                .map_err(|e| e.to_string())?;
-            let m = est.sparse_matrix();
-            let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
+            let vf = view_factors(s, &settings, None, &Silent).map_err(|e| e.to_string())?;
             if faces {
-                let group: Vec<u32> = mesh.patches.iter().map(|p| p.surface).collect();
-                Ok(radiosity::formfactor::aggregate(
-                    &m,
-                    &area,
-                    &group,
-                    s.polygons.len(),
-                ))
+                Ok(vf.per_face(s).expect("computed in this process"))
             } else {
-                Ok((m, area))
+                let area = vf.areas();
+                Ok((vf.matrix.expect("computed in this process"), area))
             }
         })
         .map_err(value_error)?;

@@ -10,6 +10,22 @@ use radiosity::pipeline::{self, Settings};
 use radiosity::scene::builtin;
 use radiosity::solve::{Solver, SolverParams};
 
+/// The scene pipeline over `ranks`, with the run's report.
+fn over(
+    scene: &radiosity::scene::Scene,
+    s: &radiosity::pipeline::Settings,
+    ranks: &Ranks<'_>,
+) -> Result<
+    (
+        radiosity::pipeline::Solution,
+        radiosity::distributed::Report,
+    ),
+    radiosity::Error,
+> {
+    let (sol, report) = radiosity::pipeline::solve_over(scene, s, Some(ranks), &Silent)?;
+    Ok((sol, report.expect("the run went over the ranks")))
+}
+
 fn settings(solver: Solver, patches: usize) -> Settings {
     Settings {
         mesh: MeshParams::Patches(patches),
@@ -34,7 +50,7 @@ fn jacobi_is_the_same_bytes_on_any_number_of_ranks_and_agrees_with_lu() {
         .map(|&k| {
             Local::run(k, |c| {
                 let ranks = Ranks::new(c);
-                let (sol, report) = distributed::solve::solve(&scene, &s, &ranks, &Silent).unwrap();
+                let (sol, report) = over(&scene, &s, &ranks).unwrap();
                 assert_eq!(report.blocks.len(), k);
                 assert!(sol.info.converged);
                 sol.radiosity
@@ -85,7 +101,7 @@ fn stochastic_jacobi_over_ranks_is_the_serial_run_byte_for_byte() {
         for k in [1, 2, 4] {
             let runs = Local::run(k, |c| {
                 let ranks = Ranks::new(c);
-                let (sol, report) = distributed::solve::solve(&scene, &s, &ranks, &Silent).unwrap();
+                let (sol, report) = over(&scene, &s, &ranks).unwrap();
                 // Every rank sent its share of the hits.
                 assert!(report.traffic.iter().all(|t| t.bytes_sent > 0));
                 (sol.radiosity, sol.info.absorbed, sol.info.escaped)
@@ -138,7 +154,7 @@ fn sequential_methods_are_refused_over_ranks() {
     ] {
         let errors = Local::run(2, |c| {
             let ranks = Ranks::new(c);
-            distributed::solve::solve(&scene, &settings(solver, 50), &ranks, &Silent)
+            over(&scene, &settings(solver, 50), &ranks)
                 .err()
                 .map(|e| e.to_string())
         });
@@ -225,12 +241,12 @@ fn thermal_over_ranks_is_the_same_bytes_and_agrees_with_another_solver() {
             for k in [1, 2, 4] {
                 let runs = Local::run(k, |c| {
                     let ranks = Ranks::new(c);
-                    let (out, _) = distributed::thermal::thermal(
+                    let (out, _) = radiosity::pipeline::thermal_over(
                         &scene,
                         &boundary_of,
                         &boundaries,
                         &settings(linear),
-                        &ranks,
+                        Some(&ranks),
                         &Silent,
                     )
                     .unwrap();

@@ -10,7 +10,19 @@ use std::process::{Command, Output};
 
 /// The `radiosity` binary of this package, as a command to add arguments to.
 pub fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_radiosity"))
+    Command::new(crate::BIN)
+}
+
+/// The `radiosity` command itself, beside the binary under test (cargo builds every binary of
+/// the workspace into one folder).
+pub fn radiosity() -> Command {
+    Command::new(Path::new(crate::BIN).with_file_name("radiosity"))
+}
+
+/// Run `radiosity ARGS` in `dir` and return its stdout, failing with its stderr.
+pub fn radiosity_ok(args: &[&str], dir: &Path) -> String {
+    let out = radiosity().args(args).current_dir(dir).output().unwrap();
+    succeed(&out)
 }
 
 /// A fresh scratch folder for one test.

@@ -554,3 +554,33 @@ fn hostile_inputs_get_one_line_errors_quickly() {
         assert_fails(&out, &needles, &dir, &keep);
     }
 }
+
+/// More hostile-input classes: a face whose repeated vertex makes a zero-area patch is named
+/// by its file and line; a missing file gives the operating system's message once; the
+/// summary reports resident memory first.
+#[test]
+fn located_errors_os_messages_once_and_resident_memory() {
+    let dir = scratch("hostile2");
+    write(&dir, "l.mtl", "newmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+    write(
+        &dir,
+        "deg.obj",
+        "mtllib l.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl light\nf 1 2 4 3\nf 1 2 2 3\n",
+    );
+    fails(
+        &["solve", "deg.obj", "--patches", "100", "-o", "x.csv"],
+        &dir,
+        &["deg.obj:8", "area 0"],
+        &["l.mtl", "deg.obj"],
+    );
+    let out = run(&["solve", "missing.obj", "-o", "x.csv"], &dir);
+    let err = stderr(&out);
+    assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
+    assert!(err.contains("cannot read missing.obj"), "{err}");
+    let out = run(
+        &["solve", "furnace", "--patches", "50", "-o", "x.csv"],
+        &dir,
+    );
+    let text = stdout(&out);
+    assert!(text.contains("memory      peak resident"), "{text}");
+}

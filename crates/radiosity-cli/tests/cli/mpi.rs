@@ -222,3 +222,55 @@ fn launched_by_mpirun_without_the_feature_is_refused() {
         succeed(&o);
     }
 }
+
+/// Issue 21: the sequential methods and the commands that do not distribute refuse clearly
+/// over several ranks, naming the distributed alternatives, and write nothing.
+#[test]
+#[cfg_attr(
+    not(feature = "mpi"),
+    ignore = "needs the mpi feature (cargo test --features mpi) and Open MPI's mpirun"
+)]
+fn mpi_refuses_what_does_not_distribute() {
+    #[cfg(feature = "mpi")]
+    {
+        let dir = scratch("mpi-refuse");
+        for (args, needles) in [
+            (
+                vec!["solve", "cornell", "--solver", "progressive", "-o", "x.csv"],
+                vec!["--solver progressive", "stochastic-jacobi"],
+            ),
+            (
+                vec!["solve", "cornell", "--solver", "southwell", "-o", "x.csv"],
+                vec!["southwell", "jacobi"],
+            ),
+            (
+                vec![
+                    "solve",
+                    "cornell",
+                    "--solver",
+                    "hierarchical",
+                    "-o",
+                    "x.csv",
+                ],
+                vec!["hierarchical", "stochastic-jacobi"],
+            ),
+            (
+                vec!["render", "cornell", "-o", "x.png"],
+                vec!["render", "without mpirun"],
+            ),
+        ] {
+            let o = mpirun(2, &args, &dir);
+            let err = stderr(&o);
+            assert!(!o.status.success(), "{args:?} succeeded");
+            let lines: Vec<&str> = err
+                .lines()
+                .filter(|l| l.starts_with("radiosity: error"))
+                .collect();
+            assert_eq!(lines.len(), 1, "{args:?}: {err}");
+            for n in needles {
+                assert!(lines[0].contains(n), "'{}' lacks '{n}'", lines[0]);
+            }
+            assert!(!dir.join("x.csv").exists() && !dir.join("x.png").exists());
+        }
+    }
+}

@@ -104,6 +104,11 @@ pub fn view_factors_over(
     ranks: Option<&Ranks<'_>>,
     observer: &dyn Observer,
 ) -> Result<(ViewFactors, Option<Report>), Error> {
+    // View factors need geometry, not light; one patch a face needs planar faces.
+    scene.validate_geometry()?;
+    if settings.mesh == MeshParams::Faces {
+        crate::mesh::check_planar(scene)?;
+    }
     let t = Instant::now();
     let start = ranks.map(Ranks::traffic);
     let limit = match settings.memory_limit {

@@ -618,6 +618,7 @@ mod tests {
     }
 
     #[test]
+    #[ignore = "needs View3D's examples in ../shared/scenes/view3d (run with --include-ignored, as .ci/run does)"]
     fn both_forms_of_pinney_bean_give_the_same_surfaces() {
         let a = load(&scenes().join("pinney-bean-test-4.vs3")).unwrap();
         let b = load(&scenes().join("pinney-bean-test-4-f3a.vs3")).unwrap();

@@ -1,11 +1,10 @@
-//! `radiosity bench`, every mode: `--hierarchical` against its reference, `--scale` and its
-//! `--bookkeeping` against `solve` run alone, `--rays` and its Embree backend, and the refusal
-//! to run over several MPI ranks. Uses only `common`.
+//! `radiosity-bench`, every mode: `hierarchical` against its reference, `scale` and its
+//! `--bookkeeping` against `radiosity solve` run alone, `rays` and its Embree backend.
 
 use crate::common::*;
 use std::path::Path;
 
-/// `bench --hierarchical SCENE`: the reference surface means are made (by the light tracer
+/// `radiosity-bench hierarchical SCENE`: the reference surface means are made (by the light tracer
 /// unless `--reference-tracer path`) and written as `surface,b_r,b_g,b_b,se_r,se_g,se_b`, one
 /// row a polygon; the table gives each method's errors against them and the reference's own
 /// noise floor; a second run reads the file instead of tracing again.
@@ -15,8 +14,7 @@ fn bench_hierarchical_makes_and_reads_its_reference() {
     for tracer in ["light", "path"] {
         let file = format!("{tracer}.csv");
         let args = [
-            "bench",
-            "--hierarchical",
+            "hierarchical",
             "cornell",
             "--link-errors",
             "1e-3",
@@ -57,8 +55,7 @@ fn bench_hierarchical_makes_and_reads_its_reference() {
     // `--solve-seeds`: a row a seed, each its own draw.
     let text = run_ok(
         &[
-            "bench",
-            "--hierarchical",
+            "hierarchical",
             "cornell",
             "--link-errors",
             "1e-3",
@@ -81,15 +78,11 @@ fn bench_hierarchical_makes_and_reads_its_reference() {
     );
 }
 
-/// Run `bench --scale cornell --sizes 200,800` with `extra` options; its output and the
+/// Run `radiosity-bench scale cornell --sizes 200,800` with `extra` options; its output and the
 /// table's rows (the lines of fourteen numbers, "—" read as NaN).
 fn bench_scale_cornell(extra: &[&str], dir: &Path) -> (String, Vec<Vec<f64>>) {
     let text = run_ok(
-        &[
-            &["bench", "--scale", "cornell", "--sizes", "200,800"],
-            extra,
-        ]
-        .concat(),
+        &[&["scale", "cornell", "--sizes", "200,800"], extra].concat(),
         dir,
     );
     let rows: Vec<Vec<f64>> = text
@@ -108,7 +101,7 @@ fn bench_scale_cornell(extra: &[&str], dir: &Path) -> (String, Vec<Vec<f64>>) {
 
 /// What `solve cornell --patches SIZE --tolerance 0.05` prints.
 fn cornell_alone(size: &str, dir: &Path) -> String {
-    run_ok(
+    radiosity_ok(
         &[
             "solve",
             "cornell",
@@ -123,7 +116,7 @@ fn cornell_alone(size: &str, dir: &Path) -> String {
     )
 }
 
-/// The exponent `name` on `bench --scale`'s last line; `None` where it reads "—".
+/// The exponent `name` on `radiosity-bench scale`'s last line; `None` where it reads "—".
 fn scale_exponent(text: &str, name: &str) -> Option<f64> {
     let line = text
         .lines()
@@ -133,7 +126,7 @@ fn scale_exponent(text: &str, name: &str) -> Option<f64> {
     line[at..].split(',').next().unwrap().trim().parse().ok()
 }
 
-/// `bench --scale`: each size is solved by a fresh `radiosity solve`, and the table reports its
+/// `radiosity-bench scale`: each size is solved by a fresh `radiosity solve`, and the table reports its
 /// patches, rays and iterations exactly as that command, run alone, reports them (they depend
 /// on the seed only); its stages fit inside the wall time measured around the child; the
 /// exponent of the rays is the slope through the table's own two points. Bad sizes are refused
@@ -183,14 +176,14 @@ fn bench_scale_reports_each_solve_and_fits_its_exponents() {
     let rays = scale_exponent(&text, "rays").unwrap();
     assert!((rays - slope).abs() <= 0.005 + 1e-9, "{text}: {slope}");
     for bad in ["0", "200,0"] {
-        let out = run(&["bench", "--scale", "cornell", "--sizes", bad], &dir);
+        let out = run(&["scale", "cornell", "--sizes", bad], &dir);
         let err = stderr(&out);
         assert!(!out.status.success() && err.contains("--sizes"), "{err}");
         assert_eq!(err.trim().lines().count(), 1, "{err}");
     }
 }
 
-/// `bench --scale … --bookkeeping`: each size is solved once, which fills the row cache, and
+/// `radiosity-bench scale … --bookkeeping`: each size is solved once, which fills the row cache, and
 /// then again on the cached rows. On the Cornell box at 5 % no row is estimated twice, so the
 /// solves on the cached rows take exactly the shots of `solve` run alone, and the rows counted
 /// are the rows it reports; every shot updates at least one receiver. A method that does not
@@ -200,8 +193,7 @@ fn bench_bookkeeping_replays_the_solve_on_cached_rows() {
     let dir = scratch("bench-bookkeeping");
     let text = run_ok(
         &[
-            "bench",
-            "--scale",
+            "scale",
             "cornell",
             "--sizes",
             "800",
@@ -245,8 +237,7 @@ fn bench_bookkeeping_replays_the_solve_on_cached_rows() {
     assert!(row[2] >= row[1] && row[6] > 0.0, "{text}");
     let out = run(
         &[
-            "bench",
-            "--scale",
+            "scale",
             "cornell",
             "--sizes",
             "200",
@@ -265,13 +256,13 @@ fn bench_bookkeeping_replays_the_solve_on_cached_rows() {
 }
 
 /// Stochastic Jacobi casts its rays inside its solve: `solve` says how much of the solve
-/// stage they took, and `bench --scale` counts them with the rows, so that its `solve s`
+/// stage they took, and `radiosity-bench scale` counts them with the rows, so that its `solve s`
 /// column is everything but rays for every method.
 #[test]
 fn stochastic_jacobi_reports_its_rays_apart_from_its_bookkeeping() {
     let dir = scratch("sj-rays");
     let args = ["--solver", "stochastic-jacobi", "--tolerance", "0.05"];
-    let said = run_ok(
+    let said = radiosity_ok(
         &[
             &["solve", "cornell", "--patches", "800", "--out", "s.csv"],
             &args[..],
@@ -304,14 +295,13 @@ fn stochastic_jacobi_reports_its_rays_apart_from_its_bookkeeping() {
     assert!(scale_exponent(&text, "rows").is_some(), "{text}");
 }
 
-/// `bench --rays SCENE`: the form-factor ray workload on a scene, with its figures.
+/// `radiosity-bench rays SCENE`: the form-factor ray workload on a scene, with its figures.
 #[test]
 fn bench_rays_on_a_scene() {
     let dir = scratch("bench-rays");
     let text = run_ok(
         &[
-            "bench",
-            "--rays",
+            "rays",
             "cornell",
             "--rays",
             "20000",
@@ -387,7 +377,7 @@ fn bench_rays_on_a_scene() {
     assert!(hits_differing(cmp) <= 20, "{cmp}");
 }
 
-/// The count of rays in a `bench --rays` comparison line `… hits differ on K of N rays …`.
+/// The count of rays in a `radiosity-bench rays` comparison line `… hits differ on K of N rays …`.
 fn hits_differing(line: &str) -> usize {
     line.split("differ on ")
         .nth(1)
@@ -403,9 +393,7 @@ fn hits_differing(line: &str) -> usize {
 fn embree_agrees_with_the_bvh_hit_for_hit() {
     let dir = scratch("bench-embree");
     let text = run_ok(
-        &[
-            "bench", "--rays", "cornell", "--rays", "200000", "--runs", "1",
-        ],
+        &["rays", "cornell", "--rays", "200000", "--runs", "1"],
         &dir,
     );
     let line = text
@@ -421,62 +409,9 @@ fn embree_agrees_with_the_bvh_hit_for_hit() {
 fn embree_backend_needs_the_feature() {
     let dir = scratch("bench-no-embree");
     fails(
-        &["bench", "--rays", "cornell", "--backend", "embree"],
+        &["rays", "cornell", "--backend", "embree"],
         &dir,
         &["--backend embree", "--features embree"],
         &[],
     );
-}
-
-/// Issue 21: the sequential methods and the commands that do not distribute refuse clearly
-/// over several ranks, naming the distributed alternatives, and write nothing.
-#[test]
-#[cfg_attr(
-    not(feature = "mpi"),
-    ignore = "needs the mpi feature (cargo test --features mpi) and Open MPI's mpirun"
-)]
-fn mpi_refuses_what_does_not_distribute() {
-    #[cfg(feature = "mpi")]
-    {
-        let dir = scratch("mpi-refuse");
-        for (args, needles) in [
-            (
-                vec!["solve", "cornell", "--solver", "progressive", "-o", "x.csv"],
-                vec!["--solver progressive", "stochastic-jacobi"],
-            ),
-            (
-                vec!["solve", "cornell", "--solver", "southwell", "-o", "x.csv"],
-                vec!["southwell", "jacobi"],
-            ),
-            (
-                vec![
-                    "solve",
-                    "cornell",
-                    "--solver",
-                    "hierarchical",
-                    "-o",
-                    "x.csv",
-                ],
-                vec!["hierarchical", "stochastic-jacobi"],
-            ),
-            (
-                vec!["render", "cornell", "-o", "x.png"],
-                vec!["render", "without mpirun"],
-            ),
-            (vec!["bench", "--rays", "cornell"], vec!["bench", "--ranks"]),
-        ] {
-            let o = mpirun(2, &args, &dir);
-            let err = stderr(&o);
-            assert!(!o.status.success(), "{args:?} succeeded");
-            let lines: Vec<&str> = err
-                .lines()
-                .filter(|l| l.starts_with("radiosity: error"))
-                .collect();
-            assert_eq!(lines.len(), 1, "{args:?}: {err}");
-            for n in needles {
-                assert!(lines[0].contains(n), "'{}' lacks '{n}'", lines[0]);
-            }
-            assert!(!dir.join("x.csv").exists() && !dir.join("x.png").exists());
-        }
-    }
 }
