@@ -13,7 +13,7 @@ use crate::args::{HierarchicalArgs, ReferenceTracer};
 use anyhow::{bail, Context, Result};
 use radiosity::hierarchical::Params as HierarchicalParams;
 use radiosity::mesh::MeshParams;
-use radiosity::pipeline::{self, Settings, Solution};
+use radiosity::pipeline::{self, Settings, Solution, Uniform};
 use radiosity::Rgb;
 use std::path::Path;
 use std::time::Instant;
@@ -219,16 +219,13 @@ pub fn run(a: &HierarchicalArgs) -> Result<()> {
     };
     for &e in a.link_errors.as_deref().unwrap_or(&[1e-4, 3e-5, 1e-5]) {
         for &seed in seeds {
-            let settings = Settings {
-                hierarchical: Some(HierarchicalParams {
-                    link_error: e,
-                    tolerance,
-                    max_passes: a.passes.unwrap_or(HierarchicalParams::default().max_passes),
-                    seed,
-                    ..Default::default()
-                }),
+            let settings = Settings::from(HierarchicalParams {
+                link_error: e,
+                tolerance,
+                max_passes: a.passes.unwrap_or(HierarchicalParams::default().max_passes),
+                seed,
                 ..Default::default()
-            };
+            });
             let t = Instant::now();
             let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent)?;
             let wall = t.elapsed().as_secs_f64();
@@ -238,13 +235,14 @@ pub fn run(a: &HierarchicalArgs) -> Result<()> {
     }
     for &n in a.sizes.as_deref().unwrap_or(&[]) {
         for &seed in seeds {
-            let mut settings = Settings {
+            let mut u = Uniform {
                 mesh: MeshParams::Patches(n),
-                ..Default::default()
+                ..Uniform::default()
             };
-            settings.form_factors.rays = a.uniform_rays;
-            settings.form_factors.seed = seed;
-            settings.params.tolerance = tolerance;
+            u.form_factors.rays = a.uniform_rays;
+            u.form_factors.seed = seed;
+            u.params.tolerance = tolerance;
+            let settings = Settings::from(u);
             let t = Instant::now();
             let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent)?;
             let wall = t.elapsed().as_secs_f64();

@@ -13,7 +13,7 @@ use radiosity::formfactor::{
 use radiosity::geom::Ray;
 use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
-use radiosity::pipeline::{self, Settings};
+use radiosity::pipeline::{self, Settings, Uniform};
 use radiosity::sampling::stream;
 use radiosity::scene::builtin;
 use radiosity::solve::{Solver, SolverParams};
@@ -124,10 +124,10 @@ pub fn run(a: &CornellArgs) -> Result<()> {
         a.runs,
         count
     );
-    let settings = Settings {
+    let settings = Settings::from(Uniform {
         mesh: MeshParams::Patches(a.patches),
-        ..Default::default()
-    };
+        ..Uniform::default()
+    });
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..a.runs {
@@ -139,7 +139,7 @@ pub fn run(a: &CornellArgs) -> Result<()> {
     let s = last.expect("at least one run");
     println!(
         "converge to {:.0}% unshot: {:.3} s (median of {}; {} patches, {} shots, {} rays, form factors {:.3} s)",
-        100.0 * settings.params.tolerance,
+        100.0 * settings.tolerance(),
         median(times),
         a.runs,
         s.mesh.len(),

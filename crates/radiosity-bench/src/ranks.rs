@@ -7,7 +7,7 @@ use radiosity::distributed::{Ranks, Report, Serial};
 use radiosity::formfactor::Params;
 use radiosity::mesh::MeshParams;
 use radiosity::observe::Silent;
-use radiosity::pipeline::Settings;
+use radiosity::pipeline::{Settings, Uniform};
 use radiosity::solve::{Solver, SolverParams};
 use std::time::Instant;
 
@@ -75,19 +75,20 @@ pub fn run(a: &RanksArgs) -> Result<()> {
         "effic."
     );
     for solver in [Solver::Jacobi, Solver::StochasticJacobi] {
-        let settings = Settings {
+        let params = SolverParams {
+            tolerance: a.solve.tolerance,
+            iteration_rays: a.solve.iteration_rays,
+            gather_rays: a.solve.gather_rays,
+            ..SolverParams::default()
+        };
+        params.validate()?;
+        let settings = Settings::from(Uniform {
             mesh: MeshParams::Patches(a.patches),
             form_factors: Params::shooting(),
             solver,
-            params: SolverParams {
-                tolerance: a.solve.tolerance,
-                iteration_rays: a.solve.iteration_rays,
-                gather_rays: a.solve.gather_rays,
-                ..SolverParams::default()
-            },
-            ..Settings::default()
-        };
-        settings.params.validate()?;
+            params,
+            ..Uniform::default()
+        });
         // One rank: rank 0 alone, the others waiting.
         let baseline = if k > 1 {
             let mut t = 0.0;

@@ -152,7 +152,7 @@ pub fn load_scene(name: &str, one_sided: bool) -> Result<Scene> {
 fn solve_scene(a: &SolveArgs) -> Result<(Scene, Solution, Option<radiosity::distributed::Report>)> {
     let settings = settings::settings(a)?;
     let scene = load_scene(&a.scene, a.one_sided)?;
-    let progress = report::Progress::new(settings.params.tolerance);
+    let progress = report::Progress::new(settings.tolerance());
     let solution = pipeline::solve_over(&scene, &settings, ranks::current(), &progress);
     progress.finish();
     let (solution, distributed) = solution?;
@@ -293,7 +293,7 @@ fn render(mut a: RenderArgs) -> Result<()> {
         let scene = load_scene(&a.solve.scene, a.solve.one_sided)?;
         let camera = settings::camera(default_camera_unsolved(&scene), &a.camera)?;
         let t = Instant::now();
-        let progress = report::Progress::new(settings.params.tolerance);
+        let progress = report::Progress::new(settings.tolerance());
         let image = pipeline::path_trace(&scene, &camera, &params, &progress);
         progress.finish();
         let image = image?;
@@ -334,7 +334,7 @@ fn render(mut a: RenderArgs) -> Result<()> {
     let (scene, solution, _) = solve_scene(&a.solve)?;
     let camera = settings::camera(solution.default_camera(&scene), &a.camera)?;
     let t = Instant::now();
-    let progress = report::Progress::new(settings.params.tolerance);
+    let progress = report::Progress::new(settings.tolerance());
     let image = match integrator {
         IntegratorArg::Gather => solution.render_gather(
             &camera,

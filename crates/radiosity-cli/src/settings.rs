@@ -8,7 +8,7 @@ use radiosity::hierarchical::{
     HierarchicalError, Parameter as HierarchicalParameter, Params as HierarchicalParams,
 };
 use radiosity::mesh::MeshParams;
-use radiosity::pipeline::Settings;
+use radiosity::pipeline::{Settings, Uniform};
 use radiosity::scene::Camera;
 use radiosity::solve::Solver;
 use radiosity::solve::{Parameter as SolverParameter, SolveError, SolverParams};
@@ -96,23 +96,26 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
             Some(p)
         }
     };
-    Ok(Settings {
-        mesh,
-        form_factors,
-        rows: a.rows.into(),
-        solver: a.solver.0.unwrap_or(Solver::Progressive),
-        params: solver_params(
-            tolerance,
-            a.max_iterations,
-            a.omega,
-            a.photons,
-            a.iteration_rays,
-            a.gather_rays,
-            a.seed,
-        )?,
-        memory_limit: 0,
-        trace: a.trace.is_some(),
-        hierarchical,
+    // Every solver flag is checked, whichever method reads it.
+    let params = solver_params(
+        tolerance,
+        a.max_iterations,
+        a.omega,
+        a.photons,
+        a.iteration_rays,
+        a.gather_rays,
+        a.seed,
+    )?;
+    Ok(match hierarchical {
+        Some(p) => Settings::from(p),
+        None => Settings::from(Uniform {
+            mesh,
+            form_factors,
+            rows: a.rows.into(),
+            solver: a.solver.0.unwrap_or(Solver::Progressive),
+            params,
+            trace: a.trace.is_some(),
+        }),
     })
 }
 

@@ -13,7 +13,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use radiosity::formfactor::Params as FormFactorParams;
 use radiosity::mesh::MeshParams;
-use radiosity::pipeline::{self, Settings};
+use radiosity::pipeline::{self, Settings, Uniform};
 use radiosity::scene::Scene as RScene;
 use radiosity::solve::{Solver, SolverParams};
 
@@ -269,8 +269,7 @@ pub(crate) fn solve(
             ));
         }
     }
-    let settings = Settings {
-        hierarchical,
+    let uniform = Uniform {
         mesh: MeshParams::Patches(patches),
         form_factors: FormFactorParams {
             method: method_by_name(form_factor_method)?,
@@ -296,10 +295,15 @@ pub(crate) fn solve(
             ..SolverParams::default()
         },
         trace,
-        ..Settings::default()
+        ..Uniform::default()
     };
-    settings.form_factors.validate().map_err(value_error)?;
-    settings.params.validate().map_err(value_error)?;
+    // Every argument is checked, whichever method reads it.
+    uniform.form_factors.validate().map_err(value_error)?;
+    uniform.params.validate().map_err(value_error)?;
+    let settings = match hierarchical {
+        Some(p) => Settings::from(p),
+        None => Settings::from(uniform),
+    };
     let observer = Progress::new(progress);
     let run = |s: &RScene| pipeline::solve(s, &settings, &observer);
     let result = match threads {

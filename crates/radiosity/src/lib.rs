@@ -21,7 +21,7 @@
 //! use radiosity::prelude::*;
 //!
 //! let scene = builtin::furnace();
-//! let settings = Settings { mesh: MeshParams::Patches(200), ..Default::default() };
+//! let settings = Settings::from(Uniform { mesh: MeshParams::Patches(200), ..Default::default() });
 //! let solution = solve(&scene, &settings, &Silent).unwrap();
 //! // Closed furnace: every patch's radiosity is near E/(1 − ρ) = 2 in the green channel.
 //! let mean: f64 = solution.radiosity.iter().map(|b| b.g).sum::<f64>() / solution.radiosity.len() as f64;
@@ -65,8 +65,8 @@ pub mod prelude {
     pub use crate::mesh::MeshParams;
     pub use crate::observe::{Observer, Silent};
     pub use crate::pipeline::{
-        solve, solve_system, thermal, view_factors, Settings, Solution, ThermalSettings,
-        ViewFactorSettings,
+        solve, solve_system, thermal, view_factors, Method, Settings, Solution, ThermalSettings,
+        Uniform, ViewFactorSettings,
     };
     pub use crate::render::RenderParams;
     pub use crate::scene::{builtin, Camera, Scene};

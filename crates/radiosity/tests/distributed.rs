@@ -2,11 +2,11 @@
 // number of ranks, and the same answer as the serial methods. (The MPI transport itself is
 // tested by the CLI's tests under `mpirun`.)
 
-use radiosity::distributed::{self, rows, Local, Ranks};
+use radiosity::distributed::{rows, Local, Ranks};
 use radiosity::formfactor::{Estimator, Params, Storage};
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::observe::Silent;
-use radiosity::pipeline::{self, Settings};
+use radiosity::pipeline::{self, Settings, Uniform};
 use radiosity::scene::builtin;
 use radiosity::solve::{Solver, SolverParams};
 
@@ -26,8 +26,8 @@ fn over(
     Ok((sol, report.expect("the run went over the ranks")))
 }
 
-fn settings(solver: Solver, patches: usize) -> Settings {
-    Settings {
+fn uniform(solver: Solver, patches: usize) -> Uniform {
+    Uniform {
         mesh: MeshParams::Patches(patches),
         form_factors: Params::monte_carlo(4000, 11),
         solver,
@@ -37,8 +37,12 @@ fn settings(solver: Solver, patches: usize) -> Settings {
             seed: 5,
             ..SolverParams::default()
         },
-        ..Settings::default()
+        ..Uniform::default()
     }
+}
+
+fn settings(solver: Solver, patches: usize) -> Settings {
+    Settings::from(uniform(solver, patches))
 }
 
 #[test]
@@ -69,10 +73,10 @@ fn jacobi_is_the_same_bytes_on_any_number_of_ranks_and_agrees_with_lu() {
     // their index), solved by Gauss elimination.
     let lu = pipeline::solve(
         &scene,
-        &Settings {
+        &Settings::from(Uniform {
             solver: Solver::Gauss,
-            ..s
-        },
+            ..uniform(Solver::Jacobi, 300)
+        }),
         &Silent,
     )
     .unwrap();
@@ -89,14 +93,14 @@ fn jacobi_is_the_same_bytes_on_any_number_of_ranks_and_agrees_with_lu() {
 fn stochastic_jacobi_over_ranks_is_the_serial_run_byte_for_byte() {
     let scene = builtin::cornell();
     for gather_rays in [0, 16] {
-        let s = Settings {
+        let s = Settings::from(Uniform {
             params: SolverParams {
                 tolerance: 0.01,
                 gather_rays,
-                ..settings(Solver::StochasticJacobi, 400).params
+                ..uniform(Solver::StochasticJacobi, 400).params
             },
-            ..settings(Solver::StochasticJacobi, 400)
-        };
+            ..uniform(Solver::StochasticJacobi, 400)
+        });
         let serial = pipeline::solve(&scene, &s, &Silent).unwrap();
         for k in [1, 2, 4] {
             let runs = Local::run(k, |c| {

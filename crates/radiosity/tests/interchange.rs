@@ -6,7 +6,7 @@ use radiosity::color::{srgb_to_linear, Rgb};
 use radiosity::export::bake::{self, Bake};
 use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
-use radiosity::pipeline::{self, Settings, Solution};
+use radiosity::pipeline::{self, Settings, Solution, Uniform};
 use radiosity::render::vertex_radiosity;
 use radiosity::scene::{self, builtin, vector_area, Polygon, Scene};
 use radiosity::solve::Solver;
@@ -164,14 +164,14 @@ fn ply_ascii_and_big_endian_agree_on_geometry_and_read_colours() {
 }
 
 fn settings(mesh: MeshParams, seed: u64) -> Settings {
-    let mut s = Settings {
+    let mut u = Uniform {
         mesh,
         solver: Solver::Gauss,
-        ..Default::default()
+        ..Uniform::default()
     };
-    s.form_factors.seed = seed;
-    s.form_factors.rays = 2000;
-    s
+    u.form_factors.seed = seed;
+    u.form_factors.rays = 2000;
+    Settings::from(u)
 }
 
 fn solve(scene: &Scene, settings: &Settings) -> Solution {

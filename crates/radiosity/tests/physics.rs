@@ -8,7 +8,7 @@ use radiosity::color::Rgb;
 use radiosity::formfactor::monte_carlo::{estimate_row, RowScratch};
 use radiosity::geom::Vec3;
 use radiosity::mesh::{Mesh, MeshParams};
-use radiosity::pipeline::{self, Settings};
+use radiosity::pipeline::{self, Settings, Uniform};
 use radiosity::scene::{builtin, Material, Polygon, Scene};
 use radiosity::solve::SolverParams;
 
@@ -160,7 +160,7 @@ fn rows_are_sorted_and_do_not_depend_on_the_buffers_history() {
 }
 
 fn furnace_solution(rays: u32, patches: usize) -> pipeline::Solution {
-    let settings = Settings {
+    let settings = Settings::from(Uniform {
         mesh: MeshParams::Patches(patches),
         form_factors: radiosity::formfactor::Params {
             rays,
@@ -169,10 +169,10 @@ fn furnace_solution(rays: u32, patches: usize) -> pipeline::Solution {
         },
         params: SolverParams {
             tolerance: 1e-7,
-            ..Default::default()
+            ..SolverParams::default()
         },
-        ..Default::default()
-    };
+        ..Uniform::default()
+    });
     pipeline::solve(&builtin::furnace(), &settings, &radiosity::observe::Silent).unwrap()
 }
 
@@ -235,10 +235,10 @@ fn furnace_gives_e_over_one_minus_rho() {
 /// absorbed power recomputed from the radiosities, Σ (1 − ρ_j)/ρ_j (B_j − E_j) A_j, agrees.
 #[test]
 fn energy_balance_in_the_cornell_box() {
-    let settings = Settings {
+    let settings = Settings::from(Uniform {
         mesh: MeshParams::Patches(1500),
-        ..Default::default()
-    };
+        ..Uniform::default()
+    });
     let s = pipeline::solve(&builtin::cornell(), &settings, &radiosity::observe::Silent).unwrap();
     let i = s.info;
     assert!(i.converged && i.unshot_fraction <= 0.01);
@@ -284,10 +284,10 @@ fn results_do_not_depend_on_the_thread_count() {
             .build()
             .unwrap();
         pool.install(|| {
-            let settings = Settings {
+            let settings = Settings::from(Uniform {
                 mesh: MeshParams::Patches(800),
-                ..Default::default()
-            };
+                ..Uniform::default()
+            });
             let scene = builtin::cornell();
             let s = pipeline::solve(&scene, &settings, &radiosity::observe::Silent).unwrap();
             let params = radiosity::render::RenderParams {
@@ -324,12 +324,12 @@ fn solved(
     };
     pipeline::solve(
         scene,
-        &Settings {
+        &Settings::from(Uniform {
             mesh: MeshParams::Patches(patches),
             solver,
             params,
-            ..Settings::default()
-        },
+            ..Uniform::default()
+        }),
         &radiosity::observe::Silent,
     )
     .unwrap()

@@ -88,7 +88,7 @@ impl BakeFormat {
 /// use radiosity::prelude::*;
 ///
 /// let scene = builtin::cornell();
-/// let s = solve(&scene, &Settings { mesh: MeshParams::Patches(300), ..Default::default() }, &Silent).unwrap();
+/// let s = solve(&scene, &Settings::from(Uniform { mesh: MeshParams::Patches(300), ..Default::default() }), &Silent).unwrap();
 /// let vertex = s.vertex_display_radiosity();
 /// let path = std::env::temp_dir().join(format!("radiosity-doc-{}.glb", std::process::id()));
 /// let bake = Bake {

@@ -55,9 +55,20 @@ pub enum Rows {
     OnDemand,
 }
 
-/// Everything that decides a solution.
+/// How a scene is solved: each method with the settings it reads, and nothing it would ignore.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Settings {
+pub enum Method {
+    /// Cut every surface into patches, estimate form factors (stored or on demand) and run a
+    /// linear-system solver.
+    Uniform(Uniform),
+    /// Hierarchical radiosity with clustering ([`crate::hierarchical`]): adaptive elements and
+    /// links over the scene's pieces, solved by its own gather–push–pull iteration.
+    Hierarchical(crate::hierarchical::Params),
+}
+
+/// A uniform solve: the mesh, the form factors and the linear-system solver.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Uniform {
     /// How to cut surfaces into patches.
     pub mesh: MeshParams,
     /// Form factors: the method and its parameters.
@@ -68,19 +79,12 @@ pub struct Settings {
     pub solver: Solver,
     /// Its parameters (tolerance, iterations, ω, photons, seed, memory).
     pub params: SolverParams,
-    /// Refuse jobs whose estimated memory exceeds this many bytes (0: the machine's available
-    /// memory).
-    pub memory_limit: u64,
     /// Record a convergence trace ([`Solution::trace`]); every row of F is then stored first,
     /// so that the error can be measured against the LU solution of the very matrix solved.
     pub trace: bool,
-    /// Solve by hierarchical radiosity with these parameters instead of meshing uniformly and
-    /// running `solver` ([`crate::hierarchical`]): `mesh`, `form_factors`, `rows` and `solver`
-    /// are then unused.
-    pub hierarchical: Option<crate::hierarchical::Params>,
 }
 
-impl Default for Settings {
+impl Default for Uniform {
     fn default() -> Self {
         Self {
             mesh: MeshParams::default(),
@@ -88,14 +92,12 @@ impl Default for Settings {
             rows: Rows::Auto,
             solver: Solver::Progressive,
             params: SolverParams::default(),
-            memory_limit: 0,
             trace: false,
-            hierarchical: None,
         }
     }
 }
 
-impl Settings {
+impl Uniform {
     /// True when every row of F is computed and stored before the solver starts.
     pub fn stores_rows(&self) -> bool {
         self.trace
@@ -105,6 +107,69 @@ impl Settings {
                 Rows::Stored => true,
                 Rows::OnDemand => false,
             }
+    }
+}
+
+/// Everything that decides a solution: the method, and the memory it may use.
+///
+/// ```
+/// use radiosity::pipeline::{Method, Settings, Uniform};
+/// use radiosity::mesh::MeshParams;
+///
+/// let uniform = Settings::from(Uniform { mesh: MeshParams::Patches(500), ..Default::default() });
+/// let hierarchical = Settings::from(radiosity::hierarchical::Params::default());
+/// assert!(matches!(uniform.method, Method::Uniform(_)));
+/// assert!(matches!(hierarchical.method, Method::Hierarchical(_)));
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Settings {
+    /// How the scene is solved.
+    pub method: Method,
+    /// Refuse jobs whose estimated memory exceeds this many bytes (0: the machine's available
+    /// memory).
+    pub memory_limit: u64,
+}
+
+impl Default for Method {
+    fn default() -> Self {
+        Method::Uniform(Uniform::default())
+    }
+}
+
+impl From<Uniform> for Settings {
+    fn from(u: Uniform) -> Self {
+        Settings {
+            method: Method::Uniform(u),
+            memory_limit: 0,
+        }
+    }
+}
+
+impl From<crate::hierarchical::Params> for Settings {
+    fn from(p: crate::hierarchical::Params) -> Self {
+        Settings {
+            method: Method::Hierarchical(p),
+            memory_limit: 0,
+        }
+    }
+}
+
+impl Settings {
+    /// The uniform method's settings, if that is the method.
+    pub fn uniform(&self) -> Option<&Uniform> {
+        match &self.method {
+            Method::Uniform(u) => Some(u),
+            Method::Hierarchical(_) => None,
+        }
+    }
+
+    /// The fraction of the emitted energy left unshot (or unconverged) at which the method
+    /// stops.
+    pub fn tolerance(&self) -> f64 {
+        match &self.method {
+            Method::Uniform(u) => u.params.tolerance,
+            Method::Hierarchical(p) => p.tolerance,
+        }
     }
 }
 
@@ -146,7 +211,7 @@ pub struct Solution {
     pub form_factors: FormFactorStats,
     /// Time per stage.
     pub timings: Timings,
-    /// The convergence trace, when [`Settings::trace`] asked for one.
+    /// The convergence trace, when [`Uniform::trace`] asked for one.
     pub trace: Option<Trace>,
     /// The element hierarchy and its links, when solved by hierarchical radiosity (the
     /// patches are then its leaves: patch `k` is element `leaves[k]`).
@@ -215,7 +280,7 @@ impl Solution {
     /// use radiosity::prelude::*;
     ///
     /// let scene = builtin::cornell();
-    /// let settings = Settings { mesh: MeshParams::Patches(500), ..Default::default() };
+    /// let settings = Settings::from(Uniform { mesh: MeshParams::Patches(500), ..Default::default() });
     /// let s = solve(&scene, &settings, &Silent).unwrap();
     /// let params = RenderParams { width: 24, height: 24, samples_per_pixel: 1, ..Default::default() };
     /// let gather = radiosity::render::gather::GatherParams { cache_samples: 64, ..Default::default() };
@@ -253,7 +318,7 @@ impl Solution {
     /// use radiosity::prelude::*;
     ///
     /// let scene = builtin::furnace();
-    /// let s = solve(&scene, &Settings { mesh: MeshParams::Patches(200), ..Default::default() }, &Silent).unwrap();
+    /// let s = solve(&scene, &Settings::from(Uniform { mesh: MeshParams::Patches(200), ..Default::default() }), &Silent).unwrap();
     /// let params = RenderParams { width: 16, height: 16, ..Default::default() };
     /// let image = s.render(&s.default_camera(&scene), &params, &Silent);
     /// // Inside the furnace every wall has B = E/(1 − ρ) = 2 (green), a radiance of 2/π.

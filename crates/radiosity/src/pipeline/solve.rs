@@ -31,8 +31,9 @@ pub fn solve_over(
     match ranks {
         Some(r)
             if r.size() > 1
-                || (settings.hierarchical.is_none()
-                    && DISTRIBUTED_SOLVERS.contains(&settings.solver)) =>
+                || settings
+                    .uniform()
+                    .is_some_and(|u| DISTRIBUTED_SOLVERS.contains(&u.solver)) =>
         {
             solve_distributed(scene, settings, r, observer).map(|(s, report)| (s, Some(report)))
         }
@@ -51,26 +52,27 @@ pub fn solve(
         0 => available_memory().unwrap_or(u64::MAX),
         l => l,
     };
-    if let Some(params) = &settings.hierarchical {
-        return solve_hierarchical(scene, params, limit, observer);
-    }
-    let store = settings.stores_rows();
+    let u = match &settings.method {
+        Method::Hierarchical(params) => return solve_hierarchical(scene, params, limit, observer),
+        Method::Uniform(u) => u,
+    };
+    let store = u.stores_rows();
     let memory = MemoryCheck {
         limit,
         stored_rows: store,
-        rays: settings.form_factors.rays,
+        rays: u.form_factors.rays,
     };
     let check = |patches: u64| memory.check(patches);
-    memory.before_meshing(scene, settings.mesh)?;
+    memory.before_meshing(scene, u.mesh)?;
     observer.event(Event::Stage(Stage::Mesh));
     let t = Instant::now();
-    let mesh = Mesh::build(scene, settings.mesh)?;
+    let mesh = Mesh::build(scene, u.mesh)?;
     let mesh_s = t.elapsed().as_secs_f64();
     let needed = check(mesh.len() as u64)?;
     // Gauss' dense matrix is refused before any form factor is computed.
-    if settings.solver == Solver::Gauss {
+    if u.solver == Solver::Gauss {
         let dense = crate::solve::gauss::bytes_needed(mesh.len());
-        let allowed = settings.params.memory_limit.min(limit - needed);
+        let allowed = u.params.memory_limit.min(limit - needed);
         if dense > allowed {
             return Err(crate::solve::SolveError::TooLarge {
                 solver: Solver::Gauss,
@@ -82,11 +84,11 @@ pub fn solve(
             .into());
         }
     }
-    let mut ff = settings.form_factors;
+    let mut ff = u.form_factors;
     ff.cache_bytes = ff.cache_bytes.min(((limit - needed) / 2) as usize);
     // Parameters are checked before any work.
     ff.validate()?;
-    let mut params = settings.params;
+    let mut params = u.params;
     params.memory_limit = params.memory_limit.min(limit - needed);
 
     observer.event(Event::Stage(Stage::Bvh));
@@ -111,7 +113,7 @@ pub fn solve(
         form_factors.rows = mesh.len() as u64;
         form_factors.seconds = t.elapsed().as_secs_f64();
         observer.event(Event::Matrix(&stored, &system));
-        if settings.trace {
+        if u.trace {
             trace = Some(Trace::new(
                 trace_reference(&system, &stored, observer),
                 &system.emission,
@@ -122,7 +124,7 @@ pub fn solve(
         on_demand.insert(OnDemandRows::new(estimator))
     };
     observer.event(Event::Stage(Stage::Solve));
-    let mut solver = crate::solve::start(settings.solver, &system, source, &params)?;
+    let mut solver = crate::solve::start(u.solver, &system, source, &params)?;
     let info = crate::solve::run(&mut *solver, source, &params, false, &mut |s, sv| {
         if let Some(t) = trace.as_mut() {
             t.record(s, sv);
@@ -154,7 +156,7 @@ pub fn solve(
         system,
         radiosity,
         unshot,
-        method: settings.solver,
+        method: u.solver,
         info,
         form_factors,
         trace,
@@ -298,19 +300,22 @@ fn solve_distributed(
     ranks: &Ranks<'_>,
     observer: &dyn Observer,
 ) -> Result<(Solution, Report), Error> {
-    if settings.hierarchical.is_some() {
+    let u = match &settings.method {
+        Method::Hierarchical(_) => {
+            return Err(not_distributed(
+                "hierarchical radiosity",
+                "its links are refined and solved on one machine",
+            ))
+        }
+        Method::Uniform(u) => u,
+    };
+    if !DISTRIBUTED_SOLVERS.contains(&u.solver) {
         return Err(not_distributed(
-            "hierarchical radiosity",
-            "its links are refined and solved on one machine",
-        ));
-    }
-    if !DISTRIBUTED_SOLVERS.contains(&settings.solver) {
-        return Err(not_distributed(
-            &format!("--solver {}", settings.solver),
+            &format!("--solver {}", u.solver),
             "it relaxes one row, or shoots one patch, after another",
         ));
     }
-    if settings.trace {
+    if u.trace {
         return Err(not_distributed(
             "a convergence trace",
             "it needs the LU solution of the whole matrix",
@@ -322,26 +327,26 @@ fn solve_distributed(
         0 => available_memory().unwrap_or(u64::MAX),
         l => l,
     };
-    let jacobi = settings.solver == Solver::Jacobi;
+    let jacobi = u.solver == Solver::Jacobi;
     // Rows are split over the ranks: each stores about 1/size of them.
     let memory = MemoryCheck {
         limit: limit.saturating_mul(ranks.size() as u64),
         stored_rows: jacobi,
-        rays: settings.form_factors.rays,
+        rays: u.form_factors.rays,
     };
-    memory.before_meshing(scene, settings.mesh)?;
+    memory.before_meshing(scene, u.mesh)?;
     observer.event(Event::Stage(Stage::Mesh));
     let t = Instant::now();
-    let mesh = Mesh::build(scene, settings.mesh)?;
+    let mesh = Mesh::build(scene, u.mesh)?;
     let mesh_s = t.elapsed().as_secs_f64();
     let needed = memory.check(mesh.len() as u64)?;
-    let mut ff = settings.form_factors;
+    let mut ff = u.form_factors;
     let per_rank = needed / ranks.size() as u64;
     ff.cache_bytes = ff
         .cache_bytes
         .min((limit.saturating_sub(per_rank) / 2) as usize);
     ff.validate()?;
-    let params = settings.params;
+    let params = u.params;
     observer.event(Event::Stage(Stage::Bvh));
     let t = Instant::now();
     let bvh = Bvh::build(&mesh);
@@ -435,7 +440,7 @@ fn solve_distributed(
             system,
             radiosity,
             unshot,
-            method: settings.solver,
+            method: u.solver,
             info,
             form_factors,
             trace: None,

@@ -58,9 +58,6 @@ fn exact_leaf_solution(s: &pipeline::Solution) -> pipeline::SystemSolution {
 }
 
 fn solve(scene: &Scene, params: Params) -> pipeline::Solution {
-    let settings = Settings {
-        hierarchical: Some(params),
-        ..Default::default()
-    };
+    let settings = Settings::from(params);
     pipeline::solve(scene, &settings, &crate::observe::Silent).unwrap()
 }
