@@ -25,11 +25,9 @@ const TRIPS_BUDGET: Duration = Duration::from_millis(200);
 /// `None` on a machine of one core.
 ///
 /// Shooting methods hand half of a shot's receivers to the other core and read back what it
-/// wrote, so that their bookkeeping depends on this latency as no other stage does. On the
-/// 2-core virtual machine of docs/benchmarks.md it is 45–140 ns at some times and 350–460 ns
-/// at others (the host places the two virtual cores on cores that share a cache or not, and
-/// moves them), and the bookkeeping of the same solve took up to 50 % longer at the high
-/// value (hospital, 400,555 patches: 1.35 s against 2.01 s).
+/// wrote, so that their bookkeeping depends on this latency as no other stage does. On a
+/// virtual machine it can change from minute to minute, as the host places the virtual cores
+/// on cores that share a cache or not (docs/notes/workbench.md).
 fn cross_core_round_trip() -> Option<f64> {
     if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
         return None;

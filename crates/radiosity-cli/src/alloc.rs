@@ -4,11 +4,11 @@
 //! allocation; the engine's hot loops do not allocate.
 //!
 //! On Linux it also asks for transparent huge pages (`madvise(MADV_HUGEPAGE)`) for the whole
-//! 2 MiB pages inside every allocation of at least [`HUGE`] bytes: the per-patch arrays, the
+//! 2 MiB pages inside every allocation of at least `HUGE` bytes: the per-patch arrays, the
 //! mesh and the BVH, which the solvers and the ray caster read at random. With 4 KiB pages
-//! nearly every such read at 10⁵–10⁶ patches also misses the TLB; with them the hospital at
-//! 400k patches solves 17 % faster (progressive, rays 14 %, its bookkeeping 25 %). Where the
-//! system's setting is `never`, the advice is ignored; where it is `always`, it changes nothing. With the optional Embree binding
+//! nearly every such read at 10⁵–10⁶ patches also misses the TLB, and with huge pages far
+//! fewer do (docs/notes/workbench.md). Where the system's setting is `never`, the advice is
+//! ignored; where it is `always`, it changes nothing. With the optional Embree binding
 //! (`embree.rs`), this is the only unsafe code in the project: `GlobalAlloc` is an unsafe trait.
 #![allow(unsafe_code)]
 

@@ -353,8 +353,8 @@ pub fn threads(t: Option<usize>) -> Result<()> {
 /// shot's rays in parallel, then its receivers' bookkeeping, 10⁵–10⁶ times) pays for every
 /// parallel step started from outside the pool: the caller queues the work, wakes a worker and
 /// sleeps until it is done. Started from a worker, the step is pushed on the worker's own queue
-/// and the other workers take from it while still spinning. Hospital at 100k patches, progressive:
-/// 10.9 → 8.9 s wall, the same output.
+/// and the other workers take from it while still spinning: the same output, sooner
+/// (docs/notes/workbench.md).
 pub fn on_worker<T: Send>(f: impl FnOnce() -> T + Send) -> T {
     rayon::scope(|_| f())
 }

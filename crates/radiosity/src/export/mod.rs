@@ -115,11 +115,12 @@ pub fn write_patches_csv(
     radiosity: &[Rgb],
 ) -> Result<(), ExportError> {
     // Rows are formatted in parallel, a block of them into one string each, then written in
-    // order: at a million patches the shortest round-trip formatting of 18 numbers a row is
-    // a second of one core, the part of a solve that would not scale with threads. A group
-    // of blocks at a time, so that the text held is bounded (two groups, some 20 MB), not
-    // the whole file; a group is written while the next is formatted, so that the copy into
-    // the file does not wait for the formatting nor the formatting for the copy.
+    // order: at a million patches the shortest round-trip formatting of 18 numbers a row,
+    // done serially, would be a part of a solve that does not scale with threads
+    // (docs/notes/library.md). A group of blocks at a time, so that the text held is bounded
+    // (two groups, some 20 MB), not the whole file; a group is written while the next is
+    // formatted, so that the copy into the file does not wait for the formatting nor the
+    // formatting for the copy.
     const BLOCK: usize = 4096;
     const GROUP: usize = 16 * BLOCK;
     let format = |first: usize, patches: &[crate::mesh::Patch], radiosity: &[Rgb]| {

@@ -108,8 +108,8 @@ pub fn estimate_row(
     }
     // Count hits per patch, and mark the patches hit in a two-level bitmap, whose set bits
     // read in order are the row's patches sorted: the hit patches of a row are a few
-    // hundred of up to millions, and sorting them cost more than the marks (hospital,
-    // 400k patches: about 2 % of the wall time, on one thread).
+    // hundred of up to millions, and sorting them cost more than the marks
+    // (docs/notes/library.md).
     let n_patches = mesh.len();
     if scratch.counts.len() < n_patches {
         scratch.counts.resize(n_patches, 0);

@@ -125,9 +125,9 @@ impl<'a> OnDemandRows<'a> {
             self.stats.cached_bytes += bytes;
             self.stats.cached_rows += 1;
             // The row was estimated into exactly its length ([`Estimator::row_with`]): kept
-            // as it is, not copied. A copy cost 3–4 µs a row at 4 × 10⁵–10⁶ patches (hospital,
-            // progressive), most of it the first touch of the cache's fresh memory, which the
-            // estimator now pays as it writes the row, inside this row's time.
+            // as it is, not copied. A copy cost most of its time in the first touch of the
+            // cache's fresh memory (docs/notes/library.md), which the estimator pays as it
+            // writes the row, inside this row's time.
             self.cache[i] = Some(Cached {
                 entries: std::mem::take(&mut self.current).into_boxed_slice(),
                 rays: need,

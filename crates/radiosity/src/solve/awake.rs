@@ -3,14 +3,15 @@
 //!
 //! Shooting methods alternate 10⁵–10⁶ times between a short parallel step (a row's rays, a
 //! shot's receivers) and a short serial one (choosing the next shooter). An idle rayon worker
-//! offers its core to the operating system between two looks for work (a `sched_yield` of
-//! about 0.4 µs here) and sleeps after a few tens of microseconds, and a thread waiting for a
-//! stolen job does the same; against halves of 2–5 µs that cost a fifth to a half of each
-//! join. While a [`KeepAwake`] lives, the other workers never sleep, and the first of them
-//! polls a [`Slot`] between everything else it does: [`join`] posts the second half there, does
-//! the first, and then either takes the second back (if the helper has not started it) or
-//! spins until the helper is done. Each half is done by exactly one thread and the results are
-//! returned in the same order, so nothing computed depends on who did what.
+//! offers its core to the operating system between two looks for work (a `sched_yield`) and
+//! sleeps after a few tens of microseconds, and a thread waiting for a stolen job does the
+//! same; against halves of a few microseconds that is a large part of each join
+//! (docs/notes/solvers.md). While a [`KeepAwake`] lives, the other workers never sleep, and
+//! the first of them polls a [`Slot`] between everything else it does: [`join`] posts the
+//! second half there, does the first, and then either takes the second back (if the helper
+//! has not started it) or spins until the helper is done. Each half is done by exactly one
+//! thread and the results are returned in the same order, so nothing computed depends on who
+//! did what.
 //!
 //! Besides the ray caster's and [`crate::hint`]'s, the library's only unsafe code: a posted
 //! half borrows from the poster's stack, which the helper may use only while [`join`] waits
@@ -103,11 +104,7 @@ pub(crate) fn can_split() -> bool {
 /// worker being busy with the outer half. A panic in either half is resumed here once both
 /// are finished.
 ///
-/// Hospital, 4 × 10⁵ patches, progressive refinement, its bookkeeping alone (`radiosity bench
-/// --scale … --bookkeeping`, every row cached), two threads, alternating: 1.95–2.00 s through
-/// `rayon::join`, 1.77–1.80 s through the slot; then, with a pool of two no longer splitting
-/// a half again and each thread asking for its own first receivers, 1.59–1.68 s (one thread:
-/// 2.35–2.38 s).
+/// The slot hands a half over faster than `rayon::join`'s queues (docs/notes/solvers.md).
 pub(crate) fn join<A, B, RA, RB>(a: A, b: B) -> (RA, RB)
 where
     A: FnOnce() -> RA + Send,
@@ -185,8 +182,9 @@ fn run_posted(slot: &Slot) -> bool {
 }
 
 /// How long the helper polls its slot without finding work before it offers its core to the
-/// operating system once: long against the 1–10 µs between two shots, so that while shots
-/// follow one another the helper seldom sits in a system call when a half is posted.
+/// operating system once: long against the time between two shots (docs/notes/solvers.md),
+/// so that while shots follow one another the helper seldom sits in a system call when a half
+/// is posted.
 const SPIN: Duration = Duration::from_micros(40);
 
 /// While it lives, the other workers of the caller's thread pool look for work without ever
@@ -200,8 +198,7 @@ const SPIN: Duration = Duration::from_micros(40);
 ///
 /// Shooting methods alternate 10⁵–10⁶ times between a short parallel step and a short serial
 /// one; an idle rayon worker sleeps after a few tens of microseconds, so that most parallel
-/// steps found the other worker asleep. Hospital, 400k patches, progressive: bookkeeping
-/// 8.9–10.5 → 7.9–9.3 s when the workers were first kept awake (three runs each, alternating).
+/// steps would find the other worker asleep (docs/notes/solvers.md).
 pub(crate) struct KeepAwake {
     stop: Arc<AtomicBool>,
     /// This thread's helper before this guard, put back when it is dropped.

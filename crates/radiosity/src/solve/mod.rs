@@ -294,9 +294,9 @@ pub struct SolverParams {
 }
 
 impl SolverParams {
-    /// The tolerance of a solve made for a picture (`radiosity render`): measured on the
-    /// Cornell box, the display ambient term's bias is then below 1 % of a 16 × 16-pixel block
-    /// for 3 % more CPU time than at the default 0.01 (docs/notes/2026-11-27-performance.md).
+    /// The tolerance of a solve made for a picture (`radiosity render`): on the Cornell box the
+    /// display ambient term's bias is then below 1 % of a 16 × 16-pixel block, for little more
+    /// CPU time than at the default 0.01 (docs/notes/solvers.md).
     pub const PICTURE_TOLERANCE: f64 = 3e-4;
 
     /// Check every parameter against its range, before any work: the tolerance in [0, 1),
@@ -429,9 +429,9 @@ pub fn start<'s>(
 ///
 /// Call it from a worker of a rayon pool (`ThreadPool::install`, or `rayon::scope` for the
 /// global pool) when the method takes many short steps: each parallel step started from
-/// outside the pool wakes a worker and puts the caller to sleep until it is done. Progressive
-/// refinement on the hospital at 100k patches (35,000 rows of ~1,500 rays, 90,000 shots) ran
-/// 19 % longer that way; the results are the same either way.
+/// outside the pool wakes a worker and puts the caller to sleep until it is done, a cost that
+/// shows at tens of thousands of shots (docs/notes/solvers.md); the results are the same
+/// either way.
 pub fn run(
     solver: &mut dyn SolverState,
     source: &mut dyn Operator,

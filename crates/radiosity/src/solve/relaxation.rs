@@ -130,9 +130,8 @@ enum Select {
 /// serve all three.
 ///
 /// The first two are kept as one 4-vector, `Σ (ρ_j, 1) F_ji A_j`, which a receiver adds with
-/// one multiply and one add of four lanes: hospital at 10⁵ patches, progressive refinement's
-/// bookkeeping alone on one thread took 15 % less time without the two sums at all, and their
-/// shuffling into vectors was most of that.
+/// one multiply and one add of four lanes: the two sums were a large part of a receiver's
+/// update, and shuffling them into vectors most of it (docs/notes/solvers.md).
 #[derive(Clone, Copy, Debug, Default)]
 struct Sums {
     /// Σ ρ_j F_ji A_j per channel, then Σ F_ji A_j.
@@ -183,12 +182,10 @@ impl std::ops::Add for Sums {
 }
 
 /// Per patch, the [`Sums::fa`] of the last row it shot with an id ([`Column::id`]), under
-/// that id: a row shot again (most shots reuse a cached row: 64 % on the hospital at 10⁵
-/// patches) gives the same sums, added in the same order, so they are kept rather than added
-/// again by every receiver. Hospital, 10⁵ patches, progressive refinement's bookkeeping alone
-/// on one thread: 15 % less time with no receiver adding them (4.24–4.50 against 5.09–5.27 ns
-/// an update, four alternating runs); keeping them, 4.74–4.97 against 5.37–5.71 ns. 40 bytes a
-/// patch, from the first row with an id on.
+/// that id: a row shot again (most shots reuse a cached row) gives the same sums, added in the
+/// same order, so they are kept rather than added again by every receiver, which saves most
+/// of what the sums cost an update (docs/notes/solvers.md). 40 bytes a patch, from the first
+/// row with an id on.
 #[derive(Clone, Debug, Default)]
 struct RowSums {
     /// `(id, fa)`, `u64::MAX` for none.
@@ -238,24 +235,17 @@ struct Span<'a> {
 }
 
 /// A span of more receivers than this is halved ([`halve`]), and the halves are updated by two
-/// threads at once when a second one is free: 3–5 µs of work at 10⁵–10⁶ patches. On the
-/// hospital at 400k patches the bookkeeping alone (`radiosity bench --scale … --bookkeeping`,
-/// two threads, alternating) took 1.59–1.62 s with spans of 512, 1.65–1.70 with 256 and
-/// 1.65–1.68 with 128; before the halves went through [`super::awake::join`], spans of 128
-/// were much slower than 512 (docs/benchmarks.md).
+/// threads at once when a second one is free: a few microseconds of work at 10⁵–10⁶ patches,
+/// long enough for the hand-over to pay (512 did better than 128 or 256: docs/notes/solvers.md).
 const SPAN: usize = 512;
 
 // A span short enough to update is one [`Setter`] can take.
 const _: () = assert!(SPAN <= Nodes::CHUNK);
 
 /// How many receivers ahead of the one being updated [`update`] asks the cache for: enough
-/// misses in flight to cover a trip to memory, where the records outgrow the last-level cache
-/// (hospital, 400k patches, whole solves in four alternating rounds on 2026-11-26: bookkeeping
-/// 3.5–4.4 s with 32 ahead, 3.9–5.5 s with 8). At 10⁶ patches (64 MB of records) one
-/// thread's updates wait on memory even 32 ahead: bookkeeping alone on one thread,
-/// alternating, 5.54–5.81 s with 64 (three runs) against 5.90–7.07 s with 32 (five; 128:
-/// 7.03 s, 96 alike with 64); at 10⁵ patches, where the records stay in the cache, 8 to 64
-/// ahead are alike.
+/// misses in flight to cover a trip to memory where the records outgrow the last-level cache
+/// (at 10⁶ patches, 64 MB of records, one thread's updates still wait on memory 32 ahead);
+/// where they stay in the cache, any of 8 to 64 ahead does (docs/notes/solvers.md).
 const AHEAD: usize = 64;
 
 /// Where a span of receivers (its column entries, its first patch `first`) is halved: at the
@@ -444,18 +434,15 @@ impl Tree for () {
 /// [`AHEAD`] entries on from `column`'s first, running past its end into the entries that
 /// this thread updates next (the next leaf of a long span), so that their first receivers
 /// are asked for too; only the last [`AHEAD`] receivers of a thread's span, already asked
-/// for, go without. Until 2026-11-27 (eighth session) the look-ahead stopped at each leaf's
-/// end, and every leaf after a span's first began with [`AHEAD`] receivers not asked for:
-/// hospital at 10⁶ patches, bookkeeping alone on one thread, 5.72 / 5.67 s then, 5.03 /
-/// 4.88 s since.
+/// for, go without. A look-ahead that stopped at each leaf's end left every leaf after a
+/// span's first beginning with [`AHEAD`] receivers not asked for (docs/notes/solvers.md).
 ///
 /// Everything the loop reads besides the column and the records is in locals, and the look-
 /// ahead zips the column with itself, so that the compiler keeps bases and bounds in
 /// registers. At 10⁵ patches the loop is bound by the core more than by memory (at 10⁶, on one
-/// thread, by memory: [`AHEAD`]): a 32-byte record of
-/// `f32`s, half the lines, was slower for its conversions; 16, 32 or 64 receivers ahead
-/// made no difference at 10⁵ patches; and a receiver that did not add the row's sums
-/// ([`RowSums`]) took 15 % less time.
+/// thread, by memory: [`AHEAD`]): a 32-byte record of `f32`s, half the lines, was slower for
+/// its conversions, how far ahead receivers are asked for makes no difference there, and the
+/// row's sums are a large part of an update ([`RowSums`]; docs/notes/solvers.md).
 #[inline(always)]
 fn run<const RESIDUAL: bool, const FA: bool, const RECIPROCAL: bool, const TREE: bool>(
     delta: Rgb,
@@ -762,8 +749,8 @@ impl<'s> Relaxation<'s> {
         // (never more than the emitted): they are recomputed, an O(N) pass, once that bound
         // could reach a millionth of the unshot energy left, and at most every 8N updates.
         // Far from convergence that is rare (at 10⁶ patches and 1.5 % unshot, every 10⁸
-        // updates: the pass read 64 MB every 8 × 10⁶ before); near a tight tolerance it is
-        // every 8N updates, as before.
+        // updates rather than every 8N = 8 × 10⁶, each pass reading 64 MB); near a tight
+        // tolerance it is every 8N updates (docs/notes/solvers.md).
         if self.updates > 8 * self.cells.len() as u64 + 1024
             && self.updates as f64 * f64::EPSILON * self.emitted_total > 1e-6 * self.abs_unshot
         {
@@ -783,9 +770,8 @@ impl<'s> Relaxation<'s> {
     pub fn relax(&mut self, i: usize, omega: f64, source: &mut dyn Operator) -> bool {
         if matches!(self.select, Select::Energy(_) | Select::Residual(_)) {
             // The shooter's key falls, and its block of the max-tree is scanned again
-            // ([`Self::set_r`]): its 64 records are asked for now, while the row is found
-            // (hospital, 400,555 patches, bookkeeping alone on two threads: a median of
-            // 1.51 s in five alternating runs, 1.65 s without).
+            // ([`Self::set_r`]): its 64 records are asked for now, while the row is found, so
+            // that their misses overlap the search (docs/notes/solvers.md).
             let first = MaxTree::block_start(i);
             let lines = (self.cells.len() - first).min(MaxTree::BLOCK);
             hint::prefetch(self.cells[first..].as_ptr(), lines);

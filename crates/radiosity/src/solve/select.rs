@@ -10,10 +10,8 @@ use crate::color::Rgb;
 /// Keys a leaf block of the tree holds. A key that rises changes its block's node only when it
 /// beats the block's largest, which the bigger the block the rarer it is, and each change is
 /// carried up the tree; a block whose largest key falls is scanned again (once per shot, the
-/// shooter's). Hospital at 400k patches, progressive refinement: a shot's receivers changed their
-/// block's node in 13 % of updates with 8 keys a block and in 3.6 % with 64, and the
-/// bookkeeping alone (`radiosity bench --scale … --bookkeeping`, two threads, alternating)
-/// took 2.41–2.51 s with 8 and 1.95–2.00 s with 64.
+/// shooter's). Blocks of 64 change their node far more rarely than blocks of 8, which more
+/// than pays for the longer scan (docs/notes/solvers.md).
 const BLOCK: usize = 64;
 
 /// Something that holds a key of the max-tree: the key itself, or a patch's record with the
@@ -433,10 +431,8 @@ impl Setter<'_> {
     /// [`Self::set`] where the caller knows the key's value before, `old`: a key that rises
     /// (a receiver's, in progressive refinement always) changes its block's node only if it
     /// beats it, which is decided without the block's other keys and the checks that a
-    /// falling key needs. Hospital at 10⁵ patches, progressive refinement's bookkeeping
-    /// alone (`radiosity bench --scale … --bookkeeping`, one thread, five rounds alternating):
-    /// a median of 6.06 ns an update with this and one loop per case in
-    /// [`super::relaxation`], 6.29 ns before.
+    /// falling key needs (measured with one loop per case in [`super::relaxation`]:
+    /// docs/notes/solvers.md).
     #[inline(always)]
     pub fn set_from<K: Keyed>(&mut self, keys: &mut [K], i: usize, old: f64, key: f64) {
         let k = i - self.first;

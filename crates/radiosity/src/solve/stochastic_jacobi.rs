@@ -34,17 +34,15 @@
 //! variance and the first iteration's arrivals, and is reported
 //! ([`super::Info::estimated_error`]).
 //!
-//! **Why not by default.** On RenderPark's hospital (99,999 patches) the gathering made B
-//! noisier, not smoother: between two seeds, 4.1 % per input polygon (area-weighted L1) with
-//! 16 gathering rays a patch against 0.61 % without, 21 % per patch against 7.4 %; with 640
-//! rays a patch still 0.81 % per polygon. The light there comes from a few bright surfaces
-//! beside the lamps; a gathering ray picks its direction by the cosine alone and seldom meets
-//! them, while every ray of the shooting iterations carries the same power wherever it lands.
-//! On the Cornell box the two were about even. Without it, B is the shooting iterations'
-//! estimate, and its standard error follows from each patch's arrivals: nearly a Poisson
-//! process of rays of about equal power w̄, so that what arrived, S, has a variance of about
-//! S ρ w̄ / A (it leaves out the noise an iteration inherits
-//! from the one before, which the reflectances damp).
+//! **Why not by default.** On RenderPark's hospital the gathering made B noisier, not smoother,
+//! at every ray count tried (docs/notes/solvers.md). The light there comes from a few bright
+//! surfaces beside the lamps; a gathering ray picks its direction by the cosine alone and
+//! seldom meets them, while every ray of the shooting iterations carries the same power
+//! wherever it lands. On the Cornell box the two were about even. Without it, B is the
+//! shooting iterations' estimate, and its standard error follows from each patch's arrivals:
+//! nearly a Poisson process of rays of about equal power w̄, so that what arrived, S, has a
+//! variance of about S ρ w̄ / A (it leaves out the noise an iteration inherits from the one
+//! before, which the reflectances damp).
 //!
 //! **Determinism.** Rays are traced in chunks of [`CHUNK`], each with its own random stream keyed
 //! by (seed, iteration, chunk); hits are reduced in chunk order, so B does not depend on the
@@ -74,9 +72,8 @@ const BATCH: usize = 1 << 20;
 pub const MAX_GATHER_RAYS: u32 = 1 << 20;
 /// Gathering rays a group of patches casts together in the final iteration.
 const GATHER_RAYS: usize = 256;
-/// How many rays ahead of the one being reduced its receiver is asked for from memory
-/// (hospital, 10⁶ patches, measured on a trial layout that also read one line a ray: the
-/// reduction took 0.33 s with 16, 0.27 s with 48).
+/// How many rays ahead of the one being reduced its receiver is asked for from memory: enough
+/// misses in flight to cover a trip to memory at 10⁶ patches (docs/notes/solvers.md).
 const AHEAD: usize = 48;
 /// Stream tag of the final gathering iteration.
 const GATHER: u64 = u64::MAX;
