@@ -130,7 +130,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             LinearSolverArg::Iterative => LinearSolver::Iterative,
             LinearSolverArg::Jacobi => LinearSolver::Jacobi,
         },
-        memory_limit: 0,
+        memory_limit: radiosity::pipeline::MemoryLimit::Available,
     };
     let bar = indicatif::ProgressBar::new(0);
     bar.set_style(

@@ -93,7 +93,7 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         mesh: mesh_params,
         form_factors: params,
         storage,
-        memory_limit: 0,
+        memory_limit: radiosity::pipeline::MemoryLimit::Available,
     };
     let computed = view_factors_over(
         &scene,

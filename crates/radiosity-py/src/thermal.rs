@@ -145,7 +145,7 @@ pub(crate) fn thermal<'py>(
                 )))
             }
         },
-        memory_limit: 0,
+        memory_limit: radiosity::pipeline::MemoryLimit::Available,
     };
     settings.form_factors.validate().map_err(value_error)?;
     let ts: Vec<Boundary> = named.iter().map(|n| n.1).collect();

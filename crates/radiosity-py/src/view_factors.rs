@@ -55,7 +55,7 @@ pub(crate) fn form_factors_csr(
         mesh: mesh_params,
         form_factors: params,
         storage: Storage::Sparse,
-        memory_limit: 0,
+        memory_limit: radiosity::pipeline::MemoryLimit::Available,
     };
     let (matrix, area) = py
         .allow_threads(|| -> Result<(SparseMatrix, Vec<f64>), String> {

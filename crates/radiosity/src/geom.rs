@@ -123,6 +123,36 @@ pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
     )
 }
 
+/// The key under which coincident polygons meet (*twins*: a scene that includes an object
+/// twice, a wall on a wall): the corners as a set, each rounded to a grid of `step`, and the
+/// unit normal rounded to 10⁻³, so that only polygons facing the same way coincide. The one
+/// definition the hierarchical solver, the light tracer and the benchmarks group by.
+pub fn coincidence_key(
+    corners: impl IntoIterator<Item = Vec3>,
+    normal: Vec3,
+    step: f32,
+) -> Vec<i64> {
+    let q = |v: f32, s: f32| (v / s).round() as i64;
+    let mut c: Vec<[i64; 3]> = corners
+        .into_iter()
+        .map(|p| [q(p.x, step), q(p.y, step), q(p.z, step)])
+        .collect();
+    c.sort_unstable();
+    let mut key = c.concat();
+    key.extend([q(normal.x, 1e-3), q(normal.y, 1e-3), q(normal.z, 1e-3)]);
+    key
+}
+
+/// The grid step for [`coincidence_key`] over `points`: 10⁻⁶ of their bounding box's diagonal.
+pub fn coincidence_step(points: impl IntoIterator<Item = Vec3>) -> f32 {
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for v in points {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    ((hi - lo).length() * 1e-6).max(f32::MIN_POSITIVE)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -154,34 +184,4 @@ mod tests {
         assert!(Aabb::EMPTY.is_empty());
         assert_eq!(Aabb::EMPTY.surface_area(), 0.0);
     }
-}
-
-/// The key under which coincident polygons meet (*twins*: a scene that includes an object
-/// twice, a wall on a wall): the corners as a set, each rounded to a grid of `step`, and the
-/// unit normal rounded to 10⁻³, so that only polygons facing the same way coincide. The one
-/// definition the hierarchical solver, the light tracer and the benchmarks group by.
-pub fn coincidence_key(
-    corners: impl IntoIterator<Item = Vec3>,
-    normal: Vec3,
-    step: f32,
-) -> Vec<i64> {
-    let q = |v: f32, s: f32| (v / s).round() as i64;
-    let mut c: Vec<[i64; 3]> = corners
-        .into_iter()
-        .map(|p| [q(p.x, step), q(p.y, step), q(p.z, step)])
-        .collect();
-    c.sort_unstable();
-    let mut key = c.concat();
-    key.extend([q(normal.x, 1e-3), q(normal.y, 1e-3), q(normal.z, 1e-3)]);
-    key
-}
-
-/// The grid step for [`coincidence_key`] over `points`: 10⁻⁶ of their bounding box's diagonal.
-pub fn coincidence_step(points: impl IntoIterator<Item = Vec3>) -> f32 {
-    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-    for v in points {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    ((hi - lo).length() * 1e-6).max(f32::MIN_POSITIVE)
 }

@@ -15,18 +15,18 @@
 //! matrix physical, [`summary()`] describes one, [`quadrature`] spreads points over a patch.
 //! This module produces linear systems and knows nothing of the solvers.
 
-pub(crate) mod analytic;
+pub mod analytic;
 pub mod closed_form;
-pub(crate) mod enforce;
-pub(crate) mod estimator;
-pub(crate) mod hemicube;
-pub(crate) mod hemisphere;
+pub mod enforce;
+pub mod estimator;
+pub mod hemicube;
+pub mod hemisphere;
 pub mod monte_carlo;
-pub(crate) mod on_demand;
+pub mod on_demand;
 pub mod projection;
-pub(crate) mod quadrature;
+pub mod quadrature;
 pub mod summary;
-pub(crate) mod tetrahedron;
+pub mod tetrahedron;
 
 pub use crate::system::Entry;
 pub use enforce::{aggregate, enforce, Enforce};

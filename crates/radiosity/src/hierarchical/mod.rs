@@ -118,10 +118,10 @@
 //! The result is the leaf elements with their radiosity ([`output`] turns them into a mesh
 //! whose vertex colours are continuous across T-vertices).
 
-pub(crate) mod cluster;
-pub(crate) mod element;
-pub(crate) mod kernel;
-pub(crate) mod output;
+pub mod cluster;
+pub mod element;
+pub mod kernel;
+pub mod output;
 
 /// The solve: gather–push–pull iterations.
 mod iteration;

@@ -118,3 +118,26 @@ pub fn available_memory() -> Option<u64> {
     });
     [meminfo, cgroup, address_space].into_iter().flatten().min()
 }
+
+/// How much memory a job may use: the one setting every pipeline reads ([`super::Settings`],
+/// [`super::ThermalSettings`], [`super::ViewFactorSettings`]); each pipeline hands its stages
+/// (a solver, the thermal solve, hierarchical refinement) their budgets in bytes from it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MemoryLimit {
+    /// What this process may still use when the job starts ([`available_memory`]; no limit
+    /// where that is unknown).
+    #[default]
+    Available,
+    /// At most this many bytes.
+    Bytes(u64),
+}
+
+impl MemoryLimit {
+    /// The limit in bytes, now.
+    pub fn bytes(self) -> u64 {
+        match self {
+            MemoryLimit::Available => available_memory().unwrap_or(u64::MAX),
+            MemoryLimit::Bytes(b) => b,
+        }
+    }
+}

@@ -5,10 +5,9 @@
 //!
 //! One file a pipeline: [`solve`](solve()) (a scene, uniform or hierarchical), [`solve_system`]
 //! (a given system), [`thermal`](thermal()) (radiative heat transfer), [`view_factors`]
-//! (a view-factor matrix), the references ([`path_trace`], surface means); [`memory`] is the
+//! (a view-factor matrix), the references ([`path_trace`], surface means); [`MemoryCheck`] is the
 //! one memory model every pipeline checks a job against. Each takes the ranks of a distributed
-//! run where it can run over several ([`crate::comm::Ranks`]; [`crate::comm::Ranks::serial`]
-//! for one process).
+//! run where it can run over several ([`crate::comm::Ranks`]; `None` for one process).
 
 mod memory;
 mod reference;
@@ -20,7 +19,7 @@ mod view_factors;
 /// The bridge from a meshed scene to its linear system (it lives with the mesh).
 pub use crate::mesh::patch_system;
 pub use crate::observe::{Event, Observer, Stage};
-pub use memory::{available_memory, MemoryCheck, BYTES_PER_PATCH};
+pub use memory::{available_memory, MemoryCheck, MemoryLimit, BYTES_PER_PATCH};
 pub use reference::{light_surface_means, path_surface_means, path_trace};
 pub use solve::{solve, solve_over};
 pub use system::{solve_system, trace_reference, SystemSolution, TRACE_EXACT_MAX};
@@ -41,7 +40,7 @@ use crate::solve::{ambient_term, Info, Solver, SolverParams};
 use crate::system::System;
 
 /// Whether every row of F is computed and stored before the solver starts, or computed when
-/// the solver asks for it ([`OnDemandRows`], O(N) memory plus a bounded cache).
+/// the solver asks for it ([`crate::formfactor::OnDemandRows`], O(N) memory plus a bounded cache).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Rows {
     /// On demand for the shooting solvers with Monte Carlo form factors; stored otherwise.
@@ -125,9 +124,8 @@ impl Uniform {
 pub struct Settings {
     /// How the scene is solved.
     pub method: Method,
-    /// Refuse jobs whose estimated memory exceeds this many bytes (0: the machine's available
-    /// memory).
-    pub memory_limit: u64,
+    /// Refuse jobs whose estimated memory exceeds this.
+    pub memory_limit: MemoryLimit,
 }
 
 impl Default for Method {
@@ -140,7 +138,7 @@ impl From<Uniform> for Settings {
     fn from(u: Uniform) -> Self {
         Settings {
             method: Method::Uniform(u),
-            memory_limit: 0,
+            memory_limit: MemoryLimit::Available,
         }
     }
 }
@@ -149,7 +147,7 @@ impl From<crate::hierarchical::Params> for Settings {
     fn from(p: crate::hierarchical::Params) -> Self {
         Settings {
             method: Method::Hierarchical(p),
-            memory_limit: 0,
+            memory_limit: MemoryLimit::Available,
         }
     }
 }

@@ -48,10 +48,7 @@ pub fn solve(
     observer: &dyn Observer,
 ) -> Result<Solution, Error> {
     scene.validate()?;
-    let limit = match settings.memory_limit {
-        0 => available_memory().unwrap_or(u64::MAX),
-        l => l,
-    };
+    let limit = settings.memory_limit.bytes();
     let u = match &settings.method {
         Method::Hierarchical(params) => return solve_hierarchical(scene, params, limit, observer),
         Method::Uniform(u) => u,
@@ -323,10 +320,7 @@ fn solve_distributed(
     }
     scene.validate()?;
     let start = ranks.traffic();
-    let limit = match settings.memory_limit {
-        0 => available_memory().unwrap_or(u64::MAX),
-        l => l,
-    };
+    let limit = settings.memory_limit.bytes();
     let jacobi = u.solver == Solver::Jacobi;
     // Rows are split over the ranks: each stores about 1/size of them.
     let memory = MemoryCheck {

@@ -44,8 +44,8 @@ pub struct ThermalSettings {
     pub enclosure_hint: Option<bool>,
     /// Dense or iterative.
     pub linear: crate::thermal::LinearSolver,
-    /// Bytes the job may use (0: the machine's available memory).
-    pub memory_limit: u64,
+    /// Refuse jobs whose estimated memory exceeds this.
+    pub memory_limit: MemoryLimit,
 }
 
 impl Default for ThermalSettings {
@@ -59,7 +59,7 @@ impl Default for ThermalSettings {
             enclosure: Enclosure::Auto,
             enclosure_hint: None,
             linear: crate::thermal::LinearSolver::Auto,
-            memory_limit: 0,
+            memory_limit: MemoryLimit::Available,
         }
     }
 }
@@ -263,10 +263,7 @@ pub fn thermal_over(
 ) -> Result<(ThermalOutcome, Option<Report>), Error> {
     scene.validate_geometry()?;
     let start = ranks.map(Ranks::traffic);
-    let limit = match settings.memory_limit {
-        0 => available_memory().unwrap_or(u64::MAX),
-        l => l,
-    };
+    let limit = settings.memory_limit.bytes();
     let mut params = settings.form_factors;
     let check = |p: &crate::formfactor::Params| MemoryCheck::stored_matrix(p, limit);
     if settings.default_rays {

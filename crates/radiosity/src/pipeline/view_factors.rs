@@ -14,7 +14,7 @@ use crate::system::SparseMatrix;
 use crate::Error;
 use std::time::Instant;
 
-use super::{available_memory, MemoryCheck};
+use super::{MemoryCheck, MemoryLimit};
 
 /// What decides a view-factor matrix.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -25,9 +25,8 @@ pub struct ViewFactorSettings {
     pub form_factors: Params,
     /// Dense or sparse accumulation of each row.
     pub storage: Storage,
-    /// Refuse jobs whose stored matrix would exceed this many bytes (0: the memory this
-    /// process may still use, [`available_memory`]).
-    pub memory_limit: u64,
+    /// Refuse jobs whose stored matrix would exceed this.
+    pub memory_limit: MemoryLimit,
 }
 
 impl Default for ViewFactorSettings {
@@ -36,7 +35,7 @@ impl Default for ViewFactorSettings {
             mesh: MeshParams::default(),
             form_factors: Params::default(),
             storage: Storage::Auto,
-            memory_limit: 0,
+            memory_limit: MemoryLimit::Available,
         }
     }
 }
@@ -111,10 +110,7 @@ pub fn view_factors_over(
     }
     let t = Instant::now();
     let start = ranks.map(Ranks::traffic);
-    let limit = match settings.memory_limit {
-        0 => available_memory().unwrap_or(u64::MAX),
-        l => l,
-    };
+    let limit = settings.memory_limit.bytes();
     let mut params = settings.form_factors;
     MemoryCheck::stored_matrix(&params, limit).before_meshing(scene, settings.mesh)?;
     let mesh = Mesh::build(scene, settings.mesh)?;

@@ -19,7 +19,7 @@ pub mod baked;
 pub mod camera;
 pub mod compare;
 pub mod gather;
-pub(crate) mod light;
+pub mod light;
 pub mod particle;
 pub mod path;
 

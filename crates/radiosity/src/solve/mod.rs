@@ -16,7 +16,7 @@ pub mod jacobi;
 pub mod overshoot;
 pub mod overshoot_ambient;
 pub mod progressive;
-pub(crate) mod relaxation;
+pub mod relaxation;
 // Three of its methods serve only its tests.
 #[cfg_attr(not(test), allow(dead_code))]
 pub(crate) mod select;
