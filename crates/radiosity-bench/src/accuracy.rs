@@ -240,7 +240,7 @@ pub fn run(a: &HierarchicalArgs) -> Result<()> {
                 ..Uniform::default()
             };
             u.form_factors.rays = a.uniform_rays;
-            u.form_factors.seed = seed;
+            u.set_seed(seed);
             u.params.tolerance = tolerance;
             let settings = Settings::from(u);
             let t = Instant::now();

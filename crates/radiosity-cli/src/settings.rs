@@ -57,7 +57,6 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
         resolution: a.resolution,
         samples: a.samples,
         rays: a.rays,
-        seed: a.seed,
         ..FormFactorParams::shooting()
     };
     form_factors.validate().map_err(flag_error)?;
@@ -80,7 +79,6 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
                 max_passes: a.passes,
                 tolerance,
                 max_iterations: a.max_iterations.unwrap_or(defaults.max_iterations),
-                seed: a.seed,
                 ..defaults
             };
             if a.min_area == Some(0.0) {
@@ -106,7 +104,7 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
         a.gather_rays,
         a.seed,
     )?;
-    Ok(match hierarchical {
+    let mut settings = match hierarchical {
         Some(p) => Settings::from(p),
         None => Settings::from(Uniform {
             mesh,
@@ -116,7 +114,9 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
             params,
             trace: a.trace.is_some(),
         }),
-    })
+    };
+    settings.set_seed(a.seed);
+    Ok(settings)
 }
 
 /// The option a library parameter error is about, for messages that name it.

@@ -256,7 +256,6 @@ pub(crate) fn solve(
     let hierarchical = (solver == "hierarchical").then(|| radiosity::hierarchical::Params {
         link_error,
         tolerance,
-        seed,
         max_iterations: max_iterations
             .unwrap_or(radiosity::hierarchical::Params::default().max_iterations),
         ..Default::default()
@@ -276,7 +275,6 @@ pub(crate) fn solve(
             rays,
             resolution,
             samples,
-            seed,
             ..FormFactorParams::shooting()
         },
         solver: if hierarchical.is_some() {
@@ -287,7 +285,6 @@ pub(crate) fn solve(
         params: SolverParams {
             tolerance,
             max_iterations: max_iterations.unwrap_or(u64::MAX),
-            seed,
             omega,
             photons,
             iteration_rays,
@@ -300,10 +297,11 @@ pub(crate) fn solve(
     // Every argument is checked, whichever method reads it.
     uniform.form_factors.validate().map_err(value_error)?;
     uniform.params.validate().map_err(value_error)?;
-    let settings = match hierarchical {
+    let mut settings = match hierarchical {
         Some(p) => Settings::from(p),
         None => Settings::from(uniform),
     };
+    settings.set_seed(seed);
     let observer = Progress::new(progress);
     let run = |s: &RScene| pipeline::solve(s, &settings, &observer);
     let result = match threads {

@@ -97,6 +97,12 @@ impl Default for Uniform {
 }
 
 impl Uniform {
+    /// Seed every random stream of a uniform solve: the form-factor rows' and the solver's.
+    pub fn set_seed(&mut self, seed: u64) {
+        self.form_factors.seed = seed;
+        self.params.seed = seed;
+    }
+
     /// True when every row of F is computed and stored before the solver starts.
     pub fn stores_rows(&self) -> bool {
         self.trace
@@ -153,6 +159,24 @@ impl From<crate::hierarchical::Params> for Settings {
 }
 
 impl Settings {
+    /// Seed every random stream the method draws from (form-factor rows, photons, visibility
+    /// samples, cluster estimates): the one seed of a run. A solution depends on it and on
+    /// nothing else random, not even the thread count.
+    pub fn set_seed(&mut self, seed: u64) {
+        match &mut self.method {
+            Method::Uniform(u) => u.set_seed(seed),
+            Method::Hierarchical(p) => p.seed = seed,
+        }
+    }
+
+    /// The seed of the method's random streams ([`Settings::set_seed`]).
+    pub fn seed(&self) -> u64 {
+        match &self.method {
+            Method::Uniform(u) => u.params.seed,
+            Method::Hierarchical(p) => p.seed,
+        }
+    }
+
     /// The uniform method's settings, if that is the method.
     pub fn uniform(&self) -> Option<&Uniform> {
         match &self.method {
