@@ -51,7 +51,7 @@ pub fn run(a: &RanksArgs) -> Result<()> {
     let k = world.size();
     let threads = rayon::current_num_threads();
     println!(
-        "bench --ranks {}: {} patches asked, {k} rank{} × {threads} thread{} ({})",
+        "radiosity-bench ranks {}: {} patches asked, {k} rank{} × {threads} thread{} ({})",
         scene.place(),
         a.patches,
         if k == 1 { "" } else { "s" },

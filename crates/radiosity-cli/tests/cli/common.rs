@@ -179,7 +179,8 @@ pub fn shared_renderpark(name: &str) -> PathBuf {
     shared_scene(&format!("renderpark/{name}"))
 }
 
-/// `mpirun -np K radiosity ARGS` in `dir` (as root too; oversubscribed, one thread a rank).
+/// `mpirun -np K BIN ARGS` (the binary under test) in `dir` (as root too; oversubscribed, one
+/// thread a rank).
 #[cfg(feature = "mpi")]
 pub fn mpirun(k: usize, args: &[&str], dir: &Path) -> Output {
     Command::new("mpirun")
@@ -189,7 +190,7 @@ pub fn mpirun(k: usize, args: &[&str], dir: &Path) -> Output {
             "-np",
             &k.to_string(),
         ])
-        .arg(env!("CARGO_BIN_EXE_radiosity"))
+        .arg(crate::BIN)
         .args(args)
         .args(["--threads", "1"])
         .current_dir(dir)
