@@ -47,6 +47,7 @@ pub mod io;
 pub mod loc;
 pub mod mesh;
 pub mod observe;
+pub mod photometry;
 pub mod pipeline;
 pub mod render;
 pub mod sampling;

@@ -1,0 +1,722 @@
+//! Luminaire photometry: how much light a luminaire sends in each direction, read from the two
+//! file formats lighting makers publish, for lighting design (luminaires as light sources).
+//!
+//! # The formats
+//!
+//! - **IES LM-63** (`.ies`), the North American format, in its revisions 1986 (no header line),
+//!   1991 (`IESNA91`), 1995 (`IESNA:LM-63-1995`), 2002 (`IESNA:LM-63-2002`) and 2019
+//!   (`IES:LM-63-2019`): keyword lines (`[MANUFAC] …`), a `TILT=` line, then numbers separated by
+//!   blanks, commas or line ends, wrapped anywhere: the counts, multipliers and the luminous
+//!   opening, the vertical and horizontal angles, and the candela table. Read by
+//!   [`parse_ies`]; the fields and their order are as LM-63-2002 lays them out (described by
+//!   AGi32's Photometric Toolbox manual, `docs.agi32.com/PhotometricToolbox`, "IESNA LM-63
+//!   Format") and as Ian Ashdown describes the 1986 and 1991 variants (ltblight.com, "Appendix C
+//!   – IES-NA data interchange format").
+//! - **EULUMDAT** (`.ldt`), the European format: a fixed layout of one field a line (maker,
+//!   type and symmetry indicators, counts, names, dimensions in millimetres, lamp sets, direct
+//!   ratios), then the C angles, the γ angles and the intensities in cd/klm of lamp flux for the
+//!   C-planes the symmetry leaves. Read by [`parse_ldt`]; the layout is the one tabulated at
+//!   `www.helios32.com/Eulumdat.htm` and in AGi32's manual ("EULUMDAT File Format").
+//!
+//! [`read`] reads either from a file, by its extension (case-insensitive), decoding Latin-1
+//! where the bytes are not UTF-8 (real files are Latin-1) and taking CRLF, LF or CR line ends.
+//!
+//! # The C-γ coordinate system
+//!
+//! Every distribution is held in type C coordinates (CIE's C-γ system; IES "type C"): γ is the
+//! angle from the photometric nadir (γ = 0 straight down out of the luminaire, 90° horizontal,
+//! 180° straight up); the C-planes are half-planes hinged on the nadir–zenith axis, C = 0 the
+//! reference half-plane (along the luminaire's length, for a linear one), C increasing
+//! counter-clockwise seen from above (LM-63-2002 defines type C horizontal angles as
+//! counter-clockwise; EULUMDAT's C angles turn the same way).
+//!
+//! In the luminaire's own frame, as [`Photometry::intensity_dir`] and
+//! [`Photometry::direction`] use it: the nadir is **−z**, C = 0 (γ = 90°) is **+x**, C = 90°
+//! (γ = 90°) is **+y**; so a direction `(x, y, z)` has γ = acos(−z/|d|) and C = atan2(y, x).
+//! The luminous opening's length lies along x, its width along y, its height along z.
+//!
+//! Types B and A (LM-63 photometric types 2 and 3) turn the polar axis through 90°: in type B
+//! the planes share a horizontal axis (floodlights), in type A a vertical axis with angles
+//! counted from the horizontal (automotive lamps); their horizontal angles turn clockwise.
+//! Converting them needs a resampling onto a C-γ grid and the choice of which luminaire axis
+//! the other systems' axes map to; that is not done yet: an IES file of type B or A is read and
+//! checked whole, then refused with an error saying that type B/A photometry is not supported
+//! for lighting yet (see [`parse_ies`]). EULUMDAT is always C-γ. [`PhotometricType`] keeps
+//! the kind so that a later conversion can record where a table came from.
+//!
+//! # What is applied
+//!
+//! [`Photometry::candela`] holds absolute candela for the luminaire as the file rates it:
+//! IES values times the candela multiplier and the ballast factor (and, for the 1986 and 1991
+//! revisions, the ballast-lamp photometric factor, a field later revisions leave to "future
+//! use"); EULUMDAT values (cd/klm) times the first lamp set's total flux / 1000 and the
+//! conversion factor. An IES tilt table (`TILT=INCLUDE`) is read and checked but not applied
+//! (the luminaire is taken at the tilt it was measured at). Symmetric tables are expanded to
+//! the full circle of C-planes, 0° to 360° both included.
+//!
+//! [`Photometry::flux`] integrates the table over the sphere (exact for distributions linear
+//! in cos γ between tabulated angles: a constant and a cosine law come out exactly), and
+//! [`Photometry::flux_mismatch`] compares it with the flux the file states; a mismatch past
+//! 5 % is also noted in [`Photometry::warnings`].
+
+mod ies;
+mod ldt;
+#[cfg(test)]
+mod tests;
+
+pub use ies::parse_ies;
+pub use ldt::parse_ldt;
+
+use std::borrow::Cow;
+use std::fmt;
+use std::path::Path;
+
+/// Largest photometric file read, bytes. Real files are a few kilobytes to a few hundred (a
+/// 0.5° × 1° full table of 361 × 361 values is about 1 MiB); anything far past that is not one.
+pub const MAX_FILE_BYTES: usize = 16 << 20;
+
+/// Most values a candela table may hold (C-planes × γ angles, as stored in the file): counts
+/// past this are refused before anything is allocated.
+pub const MAX_TABLE_VALUES: usize = 10_000_000;
+
+/// Share of the stated flux past which [`Photometry::warnings`] notes that the integrated flux
+/// differs.
+pub const FLUX_WARNING: f64 = 0.05;
+
+/// Tolerance on angles, degrees: two angles closer than this are the same angle.
+const ANGLE_EPS: f64 = 1e-9;
+
+/// The goniometer coordinate system a table was measured in (LM-63's "photometric type").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhotometricType {
+    /// Type C: C-planes through the vertical axis, γ from the nadir (IES type 1; all of
+    /// EULUMDAT).
+    C,
+    /// Type B: planes through a horizontal axis (IES type 2; floodlights).
+    B,
+    /// Type A: planes through a vertical axis, angles from the horizontal (IES type 3;
+    /// automotive lamps).
+    A,
+}
+
+impl fmt::Display for PhotometricType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            PhotometricType::C => "C",
+            PhotometricType::B => "B",
+            PhotometricType::A => "A",
+        })
+    }
+}
+
+/// The luminous opening: the emitting area's size, metres, in the luminaire's frame (length
+/// along x, the C0 direction; width along y, the C90 direction; height along z).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Opening {
+    /// Extent along y (C90–C270), metres; the diameter when `round`.
+    pub width_m: f64,
+    /// Extent along x (C0–C180), metres; the diameter when `round`.
+    pub length_m: f64,
+    /// Extent along z, metres.
+    pub height_m: f64,
+    /// True for a round opening (IES: a negative width or length; EULUMDAT: a luminous width
+    /// of 0 with a non-zero diameter).
+    pub round: bool,
+}
+
+/// A luminaire's luminous intensity distribution, in C-γ coordinates over the full sphere of
+/// C-planes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Photometry {
+    /// The C-plane angles, degrees, increasing from 0 to 360 (both included: the last plane
+    /// closes the circle), after expanding the file's symmetry.
+    pub c_angles: Vec<f64>,
+    /// The γ angles, degrees, increasing, within 0..=180 (0 = nadir); the table's range, which
+    /// need not be the whole 0..=180: outside it the intensity is 0.
+    pub gamma_angles: Vec<f64>,
+    /// Intensities, candela, one row per C-plane (`c_angles.len()` rows) and one column per γ
+    /// angle: the value at `c_angles[i]`, `gamma_angles[j]` is `candela[i * gamma_angles.len()
+    /// + j]`. Absolute: the file's multipliers, lamp flux and ballast factor applied.
+    pub candela: Vec<f64>,
+    /// The file's rated lamp lumens (IES: number of lamps × lumens per lamp; EULUMDAT: the
+    /// first lamp set's total flux, which for absolute photometry is the luminaire's), or
+    /// `None` for IES absolute photometry (lumens −1).
+    pub lumens: Option<f64>,
+    /// The luminaire flux the file states or implies, lumens, which the integrated
+    /// [`Photometry::flux`] should match: IES, `lumens` × ballast factor (a luminaire's
+    /// efficiency is not in IES files, so for relative photometry this is an upper bound);
+    /// EULUMDAT, lamp flux × light output ratio × conversion factor. `None` when the file
+    /// states none.
+    pub rated_flux: Option<f64>,
+    /// The coordinate system the file was measured in (always C for tables this module
+    /// returns today; see the module documentation).
+    pub kind: PhotometricType,
+    /// The luminous opening.
+    pub opening: Opening,
+    /// The file's name, as given to the parser.
+    pub source: String,
+    /// What was read but is doubtful or not applied, one line each.
+    pub warnings: Vec<String>,
+}
+
+/// Why a photometric file could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum PhotometryError {
+    /// The file could not be read (the operating system's reason is the source).
+    #[error("{file}: cannot read the file")]
+    Io {
+        /// The file's name.
+        file: String,
+        /// The operating system's reason.
+        source: std::io::Error,
+    },
+    /// The file's name ends in neither `.ies` nor `.ldt`.
+    #[error("{file}: not a photometric file name (expected the extension .ies or .ldt)")]
+    UnknownExtension {
+        /// The file's name.
+        file: String,
+    },
+    /// A problem at a line of the file.
+    #[error("{file}:{line}: {message}")]
+    Invalid {
+        /// The file's name.
+        file: String,
+        /// The line, 1-based.
+        line: usize,
+        /// What is wrong, one line.
+        message: String,
+    },
+}
+
+impl PhotometryError {
+    /// The line the problem is at (1-based), for problems in the file's text.
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            PhotometryError::Invalid { line, .. } => Some(*line),
+            _ => None,
+        }
+    }
+}
+
+/// An error at `line` of `file`.
+pub(crate) fn invalid(file: &str, line: usize, message: impl Into<String>) -> PhotometryError {
+    let message: String = message.into();
+    PhotometryError::Invalid {
+        file: file.to_string(),
+        line: line.max(1),
+        // One line whatever the message quotes.
+        message: message.replace(['\n', '\r'], " "),
+    }
+}
+
+/// Read a photometric file: IES LM-63 for `.ies`, EULUMDAT for `.ldt` (case-insensitive).
+/// Errors name the file by its name (not the whole path) and the line.
+pub fn read(path: &Path) -> Result<Photometry, PhotometryError> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string());
+    let format = Format::of(&name)
+        .ok_or_else(|| PhotometryError::UnknownExtension { file: name.clone() })?;
+    let io = |source| PhotometryError::Io {
+        file: name.clone(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if meta.len() > MAX_FILE_BYTES as u64 {
+        return Err(too_large(&name));
+    }
+    let bytes = crate::io::read_input(path).map_err(io)?;
+    format.parse(&bytes, &name)
+}
+
+/// Parse a photometric file already in memory; `name`'s extension (`.ies` or `.ldt`,
+/// case-insensitive) tells the format. The bytes are decoded as by [`decode`].
+pub fn parse_bytes(bytes: &[u8], name: &str) -> Result<Photometry, PhotometryError> {
+    let format = Format::of(name).ok_or_else(|| PhotometryError::UnknownExtension {
+        file: name.to_string(),
+    })?;
+    format.parse(bytes, name)
+}
+
+/// A file's bytes as text: UTF-8 when they are valid UTF-8 (a byte-order mark dropped), else
+/// Latin-1 (ISO 8859-1, each byte the character of that code), which is what photometric
+/// files written on Windows are.
+pub fn decode(bytes: &[u8]) -> Cow<'_, str> {
+    match std::str::from_utf8(bytes) {
+        Ok(text) => Cow::Borrowed(text.strip_prefix('\u{feff}').unwrap_or(text)),
+        Err(_) => Cow::Owned(bytes.iter().map(|&b| b as char).collect()),
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Format {
+    Ies,
+    Ldt,
+}
+
+impl Format {
+    fn of(name: &str) -> Option<Format> {
+        let ext = Path::new(name).extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "ies" => Some(Format::Ies),
+            "ldt" => Some(Format::Ldt),
+            _ => None,
+        }
+    }
+
+    fn parse(self, bytes: &[u8], name: &str) -> Result<Photometry, PhotometryError> {
+        if bytes.len() > MAX_FILE_BYTES {
+            return Err(too_large(name));
+        }
+        let text = decode(bytes);
+        match self {
+            Format::Ies => parse_ies(&text, name),
+            Format::Ldt => parse_ldt(&text, name),
+        }
+    }
+}
+
+fn too_large(name: &str) -> PhotometryError {
+    invalid(
+        name,
+        1,
+        format!(
+            "larger than {} MiB: not a photometric file",
+            MAX_FILE_BYTES >> 20
+        ),
+    )
+}
+
+/// The checks both parsers start with: not too large, not empty. Returns the text without a
+/// byte-order mark.
+pub(crate) fn prepare<'a>(text: &'a str, name: &str) -> Result<&'a str, PhotometryError> {
+    if text.len() > MAX_FILE_BYTES {
+        return Err(too_large(name));
+    }
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if text.trim().is_empty() {
+        return Err(invalid(name, 1, "empty file"));
+    }
+    Ok(text)
+}
+
+impl Photometry {
+    /// The intensity, candela, towards C = `c_deg`, γ = `gamma_deg` (degrees): bilinear
+    /// interpolation in (C, γ) between the tabulated angles, so it never leaves the range of
+    /// the four values around it; C is periodic over 360°; γ outside the table's range gives
+    /// 0 (a table of 0..=90 sends nothing upwards). Non-finite angles give 0.
+    pub fn intensity(&self, c_deg: f64, gamma_deg: f64) -> f64 {
+        let (c, g) = (&self.c_angles, &self.gamma_angles);
+        let (nc, ng) = (c.len(), g.len());
+        if !c_deg.is_finite()
+            || !gamma_deg.is_finite()
+            || nc == 0
+            || ng == 0
+            || self.candela.len() != nc * ng
+        {
+            return 0.0;
+        }
+        if gamma_deg < g[0] - ANGLE_EPS || gamma_deg > g[ng - 1] + ANGLE_EPS {
+            return 0.0;
+        }
+        let (j, tg) = locate(g, gamma_deg.clamp(g[0], g[ng - 1]));
+        let (i, tc) = locate(c, c_deg.rem_euclid(360.0));
+        let at = |i: usize, j: usize| self.candela[i * ng + j];
+        let (j1, i1) = ((j + 1).min(ng - 1), (i + 1).min(nc - 1));
+        let lo = lerp(at(i, j), at(i, j1), tg);
+        let hi = lerp(at(i1, j), at(i1, j1), tg);
+        lerp(lo, hi, tc)
+    }
+
+    /// The intensity, candela, towards `dir` in the luminaire's frame (nadir −z, C0 +x, C90
+    /// +y; need not be unit length). A zero or non-finite direction gives 0.
+    pub fn intensity_dir(&self, dir: [f64; 3]) -> f64 {
+        match angles_of(dir) {
+            Some((c, gamma)) => self.intensity(c, gamma),
+            None => 0.0,
+        }
+    }
+
+    /// The unit direction, in the luminaire's frame, of C = `c_deg`, γ = `gamma_deg`: the
+    /// inverse of the mapping [`Photometry::intensity_dir`] uses.
+    pub fn direction(c_deg: f64, gamma_deg: f64) -> [f64; 3] {
+        let (c, g) = (c_deg.to_radians(), gamma_deg.to_radians());
+        [g.sin() * c.cos(), g.sin() * c.sin(), -g.cos()]
+    }
+
+    /// The angles (C, γ), degrees, of a direction in the luminaire's frame, C in [0, 360);
+    /// `None` for a zero or non-finite direction. Straight down and straight up have C = 0.
+    pub fn angles(dir: [f64; 3]) -> Option<(f64, f64)> {
+        angles_of(dir)
+    }
+
+    /// The luminous flux, lumens, the table sends out: Σ over the cells of the (C, γ) grid
+    /// of the mean of the four corner intensities times the cell's exact solid angle
+    /// (cos γ₁ − cos γ₂)·ΔC (ΔC in radians; over a full zone, 2π(cos γ₁ − cos γ₂)·ΔC/360°).
+    /// That is the trapezoid rule in C and in cos γ: exact for any distribution linear in
+    /// cos γ between tabulated angles, a constant (4π I) and a cosine law (π I₀ over the lower
+    /// hemisphere) included, whatever the angle step. It differs from the integral of
+    /// [`Photometry::intensity`], which is linear in γ, by O(Δγ²).
+    pub fn flux(&self) -> f64 {
+        let (c, g) = (&self.c_angles, &self.gamma_angles);
+        let (nc, ng) = (c.len(), g.len());
+        if nc < 2 || ng < 2 || self.candela.len() != nc * ng {
+            return 0.0;
+        }
+        let cos: Vec<f64> = g.iter().map(|a| a.to_radians().cos()).collect();
+        let mut total = 0.0;
+        for i in 0..nc - 1 {
+            let dc = (c[i + 1] - c[i]).to_radians();
+            let (lo, hi) = (
+                &self.candela[i * ng..(i + 1) * ng],
+                &self.candela[(i + 1) * ng..(i + 2) * ng],
+            );
+            let mut zone = 0.0;
+            for j in 0..ng - 1 {
+                zone += (cos[j] - cos[j + 1]) * (lo[j] + lo[j + 1] + hi[j] + hi[j + 1]);
+            }
+            total += dc * zone / 4.0;
+        }
+        total
+    }
+
+    /// |[`flux`](Photometry::flux) − stated| / stated, where stated is
+    /// [`rated_flux`](Photometry::rated_flux) (the file's lumens times its multipliers), or
+    /// `None` when the file states no flux (IES absolute photometry).
+    pub fn flux_mismatch(&self) -> Option<f64> {
+        let rated = self.rated_flux.filter(|r| *r > 0.0 && r.is_finite())?;
+        Some((self.flux() - rated).abs() / rated)
+    }
+
+    /// The largest tabulated intensity, candela.
+    pub fn max_intensity(&self) -> f64 {
+        self.candela.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// The intensities of C-plane `i` (`c_angles[i]`), one a γ angle.
+    pub fn plane(&self, i: usize) -> &[f64] {
+        let ng = self.gamma_angles.len();
+        self.candela
+            .get(i * ng..(i + 1) * ng)
+            .unwrap_or(&self.candela[..0])
+    }
+}
+
+fn angles_of(dir: [f64; 3]) -> Option<(f64, f64)> {
+    let [x, y, z] = dir;
+    let len = (x * x + y * y + z * z).sqrt();
+    if len == 0.0 || !len.is_finite() {
+        return None;
+    }
+    let gamma = (-z / len).clamp(-1.0, 1.0).acos().to_degrees();
+    let c = y.atan2(x).to_degrees().rem_euclid(360.0);
+    // rem_euclid can round a tiny negative angle up to 360 itself.
+    Some((if c >= 360.0 { 0.0 } else { c }, gamma))
+}
+
+/// The interval `[xs[k], xs[k + 1]]` holding `x` (clamped to the ends) and where in it `x` is,
+/// 0..=1. `xs` is increasing and not empty.
+fn locate(xs: &[f64], x: f64) -> (usize, f64) {
+    let n = xs.len();
+    if n < 2 {
+        return (0, 0.0);
+    }
+    let k = xs.partition_point(|&v| v <= x).saturating_sub(1).min(n - 2);
+    let width = xs[k + 1] - xs[k];
+    let t = if width > 0.0 {
+        ((x - xs[k]) / width).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (k, t)
+}
+
+/// (1 − t)·a + t·b, kept within [min(a, b), max(a, b)] whatever the rounding.
+fn lerp(a: f64, b: f64, t: f64) -> f64 {
+    ((1.0 - t) * a + t * b).clamp(a.min(b), a.max(b))
+}
+
+/// How the stored C-planes cover the circle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Symmetry {
+    /// One plane for all (rotationally symmetric).
+    Rotational,
+    /// Planes 0..=90, mirrored about C0–C180 and C90–C270.
+    Quadrant,
+    /// Planes 0..=180, mirrored about the C0–C180 plane: I(C) = I(360° − C).
+    AboutC0,
+    /// Planes 90..=270, mirrored about the C90–C270 plane: I(C) = I(180° − C).
+    AboutC90,
+    /// Planes given over the whole circle.
+    None,
+}
+
+/// What a parser hands over to be expanded into a [`Photometry`].
+pub(crate) struct Table {
+    pub symmetry: Symmetry,
+    /// The stored planes' C angles (increasing).
+    pub c_angles: Vec<f64>,
+    /// The γ angles (increasing).
+    pub gamma_angles: Vec<f64>,
+    /// Stored planes × γ angles, candela (already scaled).
+    pub candela: Vec<f64>,
+    pub lumens: Option<f64>,
+    pub rated_flux: Option<f64>,
+    pub opening: Opening,
+    pub warnings: Vec<String>,
+}
+
+impl Table {
+    /// Expand the symmetry to C-planes over 0..=360 and note a flux mismatch.
+    pub(crate) fn into_photometry(self, source: &str) -> Photometry {
+        let ng = self.gamma_angles.len();
+        let (c_angles, candela) = expand(self.symmetry, &self.c_angles, &self.candela, ng);
+        let mut photometry = Photometry {
+            c_angles,
+            gamma_angles: self.gamma_angles,
+            candela,
+            lumens: self.lumens,
+            rated_flux: self.rated_flux,
+            kind: PhotometricType::C,
+            opening: self.opening,
+            source: source.to_string(),
+            warnings: self.warnings,
+        };
+        if let (Some(mismatch), Some(rated)) = (photometry.flux_mismatch(), photometry.rated_flux) {
+            if mismatch > FLUX_WARNING {
+                let flux = photometry.flux();
+                photometry.warnings.push(format!(
+                    "the table's flux, {flux:.0} lm, differs from the {rated:.0} lm the file \
+                     states by {:.1} %",
+                    100.0 * mismatch
+                ));
+            }
+        }
+        photometry
+    }
+}
+
+/// The stored planes (`angles`, rows of `ng` values in `rows`) mirrored by `symmetry` onto the
+/// whole circle: planes sorted from 0° to 360°, both ends present (equal rows, unless the file
+/// gives both 0° and 360°).
+fn expand(symmetry: Symmetry, angles: &[f64], rows: &[f64], ng: usize) -> (Vec<f64>, Vec<f64>) {
+    // (angle, stored plane) for every image of every stored plane.
+    let mut planes: Vec<(f64, usize)> = Vec::with_capacity(4 * angles.len() + 2);
+    for (k, &a) in angles.iter().enumerate() {
+        match symmetry {
+            Symmetry::Rotational => {
+                planes.push((0.0, k));
+                break;
+            }
+            Symmetry::Quadrant => {
+                planes.extend([(a, k), (180.0 - a, k), (180.0 + a, k), (360.0 - a, k)])
+            }
+            Symmetry::AboutC0 => planes.extend([(a, k), (360.0 - a, k)]),
+            Symmetry::AboutC90 => planes.extend([(a, k), ((180.0 - a).rem_euclid(360.0), k)]),
+            Symmetry::None => planes.push((a, k)),
+        }
+    }
+    planes.sort_by(|a, b| a.0.total_cmp(&b.0));
+    planes.dedup_by(|later, earlier| (later.0 - earlier.0).abs() <= ANGLE_EPS);
+    let row = |k: usize| &rows[k * ng..(k + 1) * ng];
+    let mut c_out = Vec::with_capacity(planes.len() + 2);
+    let mut out = Vec::with_capacity((planes.len() + 2) * ng);
+    let (Some(&(first, kf)), Some(&(last, kl))) = (planes.first(), planes.last()) else {
+        return (c_out, out);
+    };
+    let starts = first.abs() <= ANGLE_EPS;
+    let ends = (last - 360.0).abs() <= ANGLE_EPS;
+    // The row at 0° (= 360°) where the stored planes leave a gap across it: the planes each
+    // side, linearly (the same rule as the interpolation).
+    let wrap: Vec<f64> = match (starts, ends) {
+        (true, _) => row(kf).to_vec(),
+        (false, true) => row(kl).to_vec(),
+        (false, false) => {
+            let (before, after) = (last - 360.0, first);
+            let t = if after > before {
+                (0.0 - before) / (after - before)
+            } else {
+                0.0
+            };
+            row(kl)
+                .iter()
+                .zip(row(kf))
+                .map(|(&a, &b)| lerp(a, b, t))
+                .collect()
+        }
+    };
+    if !starts {
+        c_out.push(0.0);
+        out.extend_from_slice(&wrap);
+    }
+    for &(a, k) in &planes {
+        c_out.push(a.clamp(0.0, 360.0));
+        out.extend_from_slice(row(k));
+    }
+    if !ends {
+        c_out.push(360.0);
+        out.extend_from_slice(&wrap);
+    }
+    (c_out, out)
+}
+
+/// Lines of a text, numbered from 1: `"\r\n"`, `"\n"` and a lone `"\r"` each end one.
+#[derive(Clone)]
+pub(crate) struct Lines<'a> {
+    rest: &'a str,
+    number: usize,
+}
+
+impl<'a> Lines<'a> {
+    pub(crate) fn new(text: &'a str) -> Self {
+        Self {
+            rest: text,
+            number: 0,
+        }
+    }
+
+    /// The number of the last line handed out (0 before the first).
+    pub(crate) fn number(&self) -> usize {
+        self.number
+    }
+}
+
+impl<'a> Iterator for Lines<'a> {
+    type Item = (usize, &'a str);
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.rest.is_empty() {
+            return None;
+        }
+        self.number += 1;
+        let bytes = self.rest.as_bytes();
+        let (line, next) = match bytes.iter().position(|&b| b == b'\n' || b == b'\r') {
+            Some(i) if bytes[i] == b'\r' && bytes.get(i + 1) == Some(&b'\n') => (i, i + 2),
+            Some(i) => (i, i + 1),
+            None => (bytes.len(), bytes.len()),
+        };
+        let out = &self.rest[..line];
+        self.rest = &self.rest[next..];
+        Some((self.number, out))
+    }
+}
+
+/// The number of lines of `text` (at least 1), for errors at its end.
+pub(crate) fn last_line(text: &str) -> usize {
+    Lines::new(text).count().max(1)
+}
+
+/// Blank- (and, for IES, comma-) separated words of the lines that follow, with their line
+/// numbers. Allocates nothing.
+#[derive(Clone)]
+pub(crate) struct Words<'a> {
+    lines: Lines<'a>,
+    current: &'a str,
+    line: usize,
+    commas: bool,
+}
+
+impl<'a> Words<'a> {
+    pub(crate) fn new(lines: Lines<'a>, commas: bool) -> Self {
+        let line = lines.number();
+        Self {
+            lines,
+            current: "",
+            line,
+            commas,
+        }
+    }
+
+    fn separator(&self, c: char) -> bool {
+        c.is_whitespace() || (self.commas && c == ',')
+    }
+
+    /// How many words are left (walks a copy: O(rest of the text)).
+    pub(crate) fn remaining(&self) -> usize {
+        self.clone().count()
+    }
+}
+
+impl<'a> Iterator for Words<'a> {
+    type Item = (usize, &'a str);
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            let trimmed = self.current.trim_start_matches(|c| self.separator(c));
+            if trimmed.is_empty() {
+                let (number, line) = self.lines.next()?;
+                self.line = number;
+                self.current = line;
+                continue;
+            }
+            let end = trimmed.find(|c| self.separator(c)).unwrap_or(trimmed.len());
+            self.current = &trimmed[end..];
+            return Some((self.line, &trimmed[..end]));
+        }
+    }
+}
+
+/// A word as it may be quoted in a message: at most 24 characters, control characters escaped.
+pub(crate) fn shown(word: &str) -> String {
+    let mut out: String = word.chars().take(24).flat_map(char::escape_debug).collect();
+    if word.chars().count() > 24 {
+        out.push('…');
+    }
+    out
+}
+
+/// A finite number, or why not (`what` names the field).
+pub(crate) fn number(word: &str, what: &str) -> Result<f64, String> {
+    match word.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(format!("{what} '{}' is not a finite number", shown(word))),
+        Err(_) => Err(format!("{what} '{}' is not a number", shown(word))),
+    }
+}
+
+/// A count: a whole number from `min` to [`MAX_TABLE_VALUES`].
+pub(crate) fn count(value: f64, word: &str, what: &str, min: usize) -> Result<usize, String> {
+    if value.fract() != 0.0 {
+        return Err(format!("{what} '{}' is not a whole number", shown(word)));
+    }
+    if value < min as f64 {
+        return Err(format!("{what} is {value}: at least {min} needed"));
+    }
+    if value > MAX_TABLE_VALUES as f64 {
+        return Err(format!(
+            "{what} is {value}: more than {MAX_TABLE_VALUES} is not a photometric table"
+        ));
+    }
+    Ok(value as usize)
+}
+
+/// Check that `angles` increase strictly and lie within `lo..=hi`; `lines` are where each
+/// was read, `what` names them ("vertical angle").
+pub(crate) fn check_angles(
+    angles: &[f64],
+    lines: &[usize],
+    what: &str,
+    declared: &str,
+    lo: f64,
+    hi: f64,
+) -> Result<(), (usize, String)> {
+    for (k, &a) in angles.iter().enumerate() {
+        if a < lo - ANGLE_EPS || a > hi + ANGLE_EPS {
+            return Err((
+                lines[k],
+                format!("{what} {a} is outside {lo}..{hi} degrees"),
+            ));
+        }
+        if k > 0 && a <= angles[k - 1] {
+            return Err((
+                lines[k],
+                format!(
+                    "{what} {a} does not increase on the one before, {} ({declared})",
+                    angles[k - 1]
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
