@@ -44,11 +44,15 @@ pub enum Target {
     BoundaryCsv,
     /// A PFM image (a picture benchmark's reference).
     Pfm,
+    /// IES LM-63 photometry (a luminaire's candela table).
+    Ies,
+    /// EULUMDAT photometry.
+    Ldt,
 }
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 13] = [
+    pub const ALL: [Target; 15] = [
         Target::Obj,
         Target::Mtl,
         Target::Mgf,
@@ -62,6 +66,8 @@ impl Target {
         Target::Vs3a,
         Target::BoundaryCsv,
         Target::Pfm,
+        Target::Ies,
+        Target::Ldt,
     ];
 
     /// Its name.
@@ -80,17 +86,21 @@ impl Target {
             Target::Vs3a => "vs3a",
             Target::BoundaryCsv => "bc-csv",
             Target::Pfm => "pfm",
+            Target::Ies => "ies",
+            Target::Ldt => "ldt",
         }
     }
 }
 
 const OBJ: &str = "mtllib box.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nusemtl white\nf 1 2 3 4\nf 5 8 7 6\nusemtl light\nf 1 5 6 2\nf 2 6 7 3\nf 3 7 8 4\nf 4 8 5 1\n";
 const MTL: &str = "newmtl white\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0.5 0.5 0.5\nKe 4 4 4\n";
-const MGF: &str = "# a lit room\nm white =\n\tc\n\t\tcxy 0.33 0.33\n\trd 0.6\nm lamp =\n\tc\n\ted 100\nv a =\n\tp 0 0 0\nv b =\n\tp 1 0 0\nv c =\n\tp 1 1 0\nv d =\n\tp 0 1 0\nv e =\n\tp 0 0 1\nm white\nf a b c d\nxf -a 3 -t 0 0 0.3\nm lamp\nf a d c b\nxf\ncyl white e 0.2 a\nsph e 0.1\n";
+const MGF: &str = "# a lit room\nm white =\n\tc\n\t\tcxy 0.33 0.33\n\trd 0.6\nm lamp =\n\tc\n\ted 100\nv a =\n\tp 0 0 0\nv b =\n\tp 1 0 0\nv c =\n\tp 1 1 0\nv d =\n\tp 0 1 0\nv e =\n\tp 0 0 1\nm white\nf a b c d\nxf -a 3 -t 0 0 0.3\nm lamp\nf a d c b\nxf\ncyl e 0.2 a\nsph e 0.1\n";
 const MTX: &str = "%%MatrixMarket matrix coordinate real general\n% a closed pair\n3 3 5\n1 2 0.5\n1 3 0.5\n2 1 0.5\n2 3 0.5\n3 1 1\n";
 const CSV: &str = "area,reflectance,emission\n1,0.5,1\n1,0.5,0\n2,0.25,0\n";
 const VS3: &str = "T two forms\nC encl=1 list=2 eps=1.e-4 maxu=8\nF 3\n! a box\nV 1 0. 0. 0.\nV 2 1. 0. 0.\nV 3 1. 1. 0.\nV 4 0. 1. 0.\nV 5 0. 0. 1.\nV 6 1. 0. 1.\nV 7 1. 1. 1.\nV 8 0. 1. 1.\nS 1 1 2 3 4 0 0 0.50 floor\nS 2 1 4 8 5 0 0 0.50 xeq0\nS 3 1 5 6 2 0 0 0.50 yeq0\nS 4 7 6 5 8 0 0 0.90 top\nS 5 7 3 2 0 0 2 0.50 xeq1a ! combined\nS 6 7 2 6 0 0 2 0.50 xeq1b\nS 7 7 8 4 3 0 0 0.50 yeq1\nO 8 1 2 7 8\nEnd of data\n";
 const VS3A: &str = "T L room\nC encl=1\nF 3a\nS 1 R 0 0 0.90 s1\n  3. 0. 0. 0 90 3. 3.\nS 2 Q 0 0 0.90 s2\n  3. 0. 3. 0 180\n  2. 0. 3. 0. 3. 1. 2. 1.\nS 3 T 0 1 0.90 s3\n 0. 0. 0. 180 0 0. 0. 1. 0. 1. 1.\nO 4 R 1. 1. 1. 45 30 1. 1.\nE\n";
+const IES: &str = "IESNA:LM-63-2002\r\n[TEST] fuzz seed\r\n[MANUFAC] radiosity\r\nTILT=INCLUDE\r\n1\r\n3\r\n0 45 90\r\n1 0.9 0.8\r\n1 1000 1 5 3 1 2 0.6 -0.3 0.1\r\n1 0 0\r\n0 22.5 45 67.5 90\r\n0 90 180\r\n300 280 220 120 10\r\n310 290 230 130 12\r\n320 300 240 140 14\r\n";
+const LDT: &str = "radiosity\n1\n2\n4\n90\n5\n22.5\nreport\nfuzz seed\n1\nseed.ldt\n2026-11-28\n600\n300\n80\n580\n280\n0\n0\n0\n0\n95\n80\n1\n0\n1\n2\nLED\n4000\n3000\n80\n40\n0.5\n0.6\n0.7\n0.75\n0.8\n0.85\n0.9\n0.92\n0.95\n0.97\n0\n90\n180\n270\n0\n22.5\n45\n67.5\n90\n300\n280\n220\n120\n10\n310\n290\n230\n130\n12\n320\n300\n240\n140\n14\n";
 const BC: &str = "name,emissivity,temperature,flux\nfloor,0.9,300,\ntop,,,-20.5\n\"xeq0\",1,,\n# comment\nyeq0,0.5,0,\n";
 
 /// The outcome of a run.
@@ -135,6 +145,8 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
         Target::Vs3 => vec![s("box.vs3", VS3)],
         Target::Vs3a => vec![s("room.vs3", VS3A)],
         Target::BoundaryCsv => vec![s("bc.csv", BC)],
+        Target::Ies => vec![s("lamp.ies", IES)],
+        Target::Ldt => vec![s("lamp.ldt", LDT)],
         Target::Pfm => vec![("ref.pfm".into(), {
             let mut b = b"PF\n2 2\n-1.0\n".to_vec();
             for k in 0..12u32 {
@@ -254,6 +266,8 @@ fn parse(target: Target, dir: &Path) -> bool {
         Target::Vs3a => scene("room.vs3"),
         Target::BoundaryCsv => radiosity::thermal::read_boundary_csv(&dir.join("bc.csv")).is_ok(),
         Target::Pfm => radiosity::render::compare::read_pfm(&dir.join("ref.pfm")).is_ok(),
+        Target::Ies => radiosity::photometry::read(&dir.join("lamp.ies")).is_ok(),
+        Target::Ldt => radiosity::photometry::read(&dir.join("lamp.ldt")).is_ok(),
         Target::MatrixMarket | Target::PatchesCsv => {
             let m = matrix_market::read(&dir.join("f.mtx"));
             let p = patches_csv::read(&dir.join("p.csv"));
@@ -328,6 +342,26 @@ mod tests {
             );
         }
         let _ = std::fs::remove_dir_all(&scratch);
+    }
+
+    /// Every seed file is valid as written, so that the mutations start from a file the
+    /// parser accepts (the photometric seeds carry a tilt table, CRLF and a round opening).
+    #[test]
+    fn every_seed_file_parses_unmutated() {
+        let root = std::env::temp_dir().join(format!("radiosity-seeds-{}", std::process::id()));
+        for target in Target::ALL {
+            let dir = root.join(target.name());
+            std::fs::create_dir_all(&dir).unwrap();
+            for (name, bytes) in corpus(target, &dir) {
+                std::fs::write(dir.join(name), bytes).unwrap();
+            }
+            assert!(
+                parse(target, &dir),
+                "{}: the seed file is refused",
+                target.name()
+            );
+        }
+        let _ = std::fs::remove_dir_all(&root);
     }
 
     /// Mutations are reproducible from the seed.
