@@ -111,7 +111,7 @@ pub fn finish() {
 pub fn refuse_unless_single(what: &str) -> anyhow::Result<()> {
     if distributed() {
         anyhow::bail!(
-            "{what} does not run over several ranks; the distributed commands are solve --solver jacobi or stochastic-jacobi, form-factors, thermal and bench --ranks (run {what} without mpirun)"
+            "{what} does not run over several ranks; the distributed commands are solve --solver jacobi or stochastic-jacobi, form-factors, thermal and radiosity-bench ranks (run {what} without mpirun)"
         );
     }
     Ok(())

@@ -415,3 +415,31 @@ fn embree_backend_needs_the_feature() {
         &[],
     );
 }
+
+/// Under `mpirun` every mode but `ranks` refuses on one line and runs nothing.
+#[test]
+#[cfg_attr(
+    not(feature = "mpi"),
+    ignore = "needs the mpi feature (cargo test --features mpi) and Open MPI's mpirun"
+)]
+fn under_mpirun_only_ranks_runs() {
+    #[cfg(feature = "mpi")]
+    {
+        let dir = scratch("bench-mpi-refuse");
+        let o = mpirun(
+            2,
+            &["rays", "cornell", "--rays", "1000", "--runs", "1"],
+            &dir,
+        );
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{err}");
+        let lines: Vec<&str> = err
+            .lines()
+            .filter(|l| l.starts_with("radiosity: error"))
+            .collect();
+        assert_eq!(lines.len(), 1, "{err}");
+        for n in ["radiosity-bench (except ranks)", "radiosity-bench ranks"] {
+            assert!(lines[0].contains(n), "'{}' lacks '{n}'", lines[0]);
+        }
+    }
+}
