@@ -7,7 +7,7 @@ use radiosity::geom::Vec3;
 use radiosity::hierarchical::{
     HierarchicalError, Parameter as HierarchicalParameter, Params as HierarchicalParams,
 };
-use radiosity::mesh::MeshParams;
+use radiosity::mesh::{MeshParamError, MeshParams};
 use radiosity::pipeline::{Settings, Uniform};
 use radiosity::scene::Camera;
 use radiosity::solve::Solver;
@@ -20,15 +20,16 @@ pub fn mesh_params(
     max_edge: Option<f32>,
     default: MeshParams,
 ) -> Result<MeshParams> {
-    Ok(match (patches, max_edge) {
-        (_, Some(l)) if !(l.is_finite() && l > 0.0) => {
-            bail!("--max-edge {l}: must be a positive length")
-        }
+    let p = match (patches, max_edge) {
         (_, Some(l)) => MeshParams::MaxEdge(l),
-        (Some(0), _) => bail!("--patches 0: at least one patch is needed"),
         (Some(n), _) => MeshParams::Patches(n),
         (None, None) => default,
-    })
+    };
+    p.validate().map_err(|e| match e {
+        MeshParamError::NoPatches => anyhow::anyhow!("--patches 0: at least one patch is needed"),
+        MeshParamError::MaxEdge(l) => anyhow::anyhow!("--max-edge {l}: must be a positive length"),
+    })?;
+    Ok(p)
 }
 
 /// `--resolution`, `--samples` and `--rays` (when given) in range.

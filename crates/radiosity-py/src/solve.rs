@@ -249,9 +249,9 @@ pub(crate) fn solve(
     samples: u32,
     link_error: f64,
 ) -> PyResult<Solution> {
-    if patches == 0 {
-        return Err(value_error("patches: at least one patch is needed"));
-    }
+    MeshParams::Patches(patches)
+        .validate()
+        .map_err(value_error)?;
     // `hierarchical` is a method of scenes, not of linear systems: it has its own parameters.
     let hierarchical = (solver == "hierarchical").then(|| radiosity::hierarchical::Params {
         link_error,

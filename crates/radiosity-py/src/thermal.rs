@@ -90,16 +90,11 @@ pub(crate) fn thermal<'py>(
         },
     )?;
     let mesh = match (patches, max_edge) {
-        (_, Some(l)) if !(l.is_finite() && l > 0.0) => {
-            return Err(value_error(format!(
-                "max_edge {l}: must be a positive length"
-            )))
-        }
         (_, Some(l)) => MeshParams::MaxEdge(l),
-        (Some(0), _) => return Err(value_error("patches: at least one patch is needed")),
         (Some(n), _) => MeshParams::Patches(n),
         (None, None) => MeshParams::Faces,
     };
+    mesh.validate().map_err(value_error)?;
     if !(unit.is_finite() && unit > 0.0) {
         return Err(value_error(format!(
             "unit {unit}: metres per scene unit, > 0"

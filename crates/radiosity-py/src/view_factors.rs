@@ -46,10 +46,10 @@ pub(crate) fn form_factors_csr(
     params.validate().map_err(value_error)?;
     let mesh_params = match (faces, patches) {
         (true, _) => MeshParams::Faces,
-        (false, Some(0)) => return Err(value_error("patches: at least one patch is needed")),
         (false, Some(n)) => MeshParams::Patches(n),
         (false, None) => MeshParams::default(),
     };
+    mesh_params.validate().map_err(value_error)?;
     let s = &scene.inner;
     let settings = ViewFactorSettings {
         mesh: mesh_params,

@@ -87,6 +87,9 @@ pub enum Error {
     /// Form-factor parameters are out of range.
     #[error(transparent)]
     FormFactors(#[from] formfactor::FormFactorError),
+    /// Meshing parameters are out of range.
+    #[error(transparent)]
+    Mesh(#[from] mesh::MeshParamError),
     /// An output could not be written.
     #[error(transparent)]
     Export(#[from] export::ExportError),

@@ -40,6 +40,31 @@ impl Default for MeshParams {
     }
 }
 
+/// A meshing parameter out of its range ([`MeshParams::validate`]).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum MeshParamError {
+    /// `Patches(0)`.
+    #[error("0 patches: at least one patch is needed")]
+    NoPatches,
+    /// A largest edge that is not a finite positive length.
+    #[error("largest patch edge {0}: must be a positive length")]
+    MaxEdge(f32),
+}
+
+impl MeshParams {
+    /// Check the parameters before any work: at least one patch, a finite positive largest
+    /// edge. The one check the command line, the Python bindings and the workbench share.
+    pub fn validate(&self) -> Result<(), MeshParamError> {
+        match *self {
+            MeshParams::Patches(0) => Err(MeshParamError::NoPatches),
+            MeshParams::MaxEdge(l) if !(l.is_finite() && l > 0.0) => {
+                Err(MeshParamError::MaxEdge(l))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
 /// A patch: a planar triangle or convex quad, part of one input polygon.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Patch {

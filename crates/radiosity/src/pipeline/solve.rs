@@ -53,6 +53,7 @@ pub fn solve(
         Method::Hierarchical(params) => return solve_hierarchical(scene, params, limit, observer),
         Method::Uniform(u) => u,
     };
+    u.mesh.validate()?;
     let store = u.stores_rows();
     let memory = MemoryCheck {
         limit,
@@ -306,6 +307,7 @@ fn solve_distributed(
         }
         Method::Uniform(u) => u,
     };
+    u.mesh.validate()?;
     if !DISTRIBUTED_SOLVERS.contains(&u.solver) {
         return Err(not_distributed(
             &format!("--solver {}", u.solver),

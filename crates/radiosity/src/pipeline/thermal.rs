@@ -262,6 +262,7 @@ pub fn thermal_over(
     observer: &dyn Observer,
 ) -> Result<(ThermalOutcome, Option<Report>), Error> {
     scene.validate_geometry()?;
+    settings.mesh.validate()?;
     let start = ranks.map(Ranks::traffic);
     let limit = settings.memory_limit.bytes();
     let mut params = settings.form_factors;

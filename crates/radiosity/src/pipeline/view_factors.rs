@@ -105,6 +105,7 @@ pub fn view_factors_over(
 ) -> Result<(ViewFactors, Option<Report>), Error> {
     // View factors need geometry, not light; one patch a face needs planar faces.
     scene.validate_geometry()?;
+    settings.mesh.validate()?;
     if settings.mesh == MeshParams::Faces {
         crate::mesh::check_planar(scene)?;
     }
