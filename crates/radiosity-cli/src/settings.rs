@@ -32,18 +32,32 @@ pub fn mesh_params(
     Ok(p)
 }
 
-/// `--resolution`, `--samples` and `--rays` (when given) in range.
+/// `--resolution`, `--samples` and `--rays` (when given) in range, by the library's check.
 pub fn form_factor_numbers(resolution: u32, samples: u32, rays: Option<u32>) -> Result<()> {
-    if resolution < 2 {
-        bail!("--resolution {resolution}: at least 2 pixels along a face are needed");
+    FormFactorParams {
+        resolution,
+        samples,
+        rays: rays.unwrap_or(1),
+        ..FormFactorParams::default()
     }
-    if samples == 0 {
-        bail!("--samples 0: at least one point per patch is needed");
-    }
-    if rays == Some(0) {
-        bail!("--rays 0: at least one ray per row is needed");
-    }
-    Ok(())
+    .validate()
+    .map_err(|e| {
+        let FormFactorError::Parameter {
+            parameter,
+            value,
+            min,
+            max,
+            ..
+        } = e;
+        anyhow::anyhow!(
+            "{} {value}: must be in [{min}, {max}] ({parameter})",
+            match parameter {
+                Parameter::Resolution => "--resolution",
+                Parameter::Samples => "--samples",
+                Parameter::Rays => "--rays",
+            }
+        )
+    })
 }
 
 /// Library settings from the shared solve options.

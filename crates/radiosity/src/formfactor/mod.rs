@@ -194,7 +194,10 @@ impl Params {
             .max(1)
     }
 
-    /// Check the parameters the method uses.
+    /// Check every parameter against its range, whichever the method reads (an impossible
+    /// value is refused even where the method would ignore it): the resolution in [2, 8192],
+    /// at least one sample point and one ray a row. The one check the command line, the
+    /// Python bindings and the pipelines share.
     pub fn validate(&self) -> Result<(), FormFactorError> {
         let range = |parameter, value: u32, min: u32, max: u32| {
             if value < min || value > max {
@@ -209,16 +212,9 @@ impl Params {
                 Ok(())
             }
         };
-        match self.method {
-            FormFactorMethod::Hemicube
-            | FormFactorMethod::Tetrahedron
-            | FormFactorMethod::Hemisphere => {
-                range(Parameter::Resolution, self.resolution, 2, MAX_RESOLUTION)?;
-                range(Parameter::Samples, self.samples, 1, u32::MAX)
-            }
-            FormFactorMethod::MonteCarlo => range(Parameter::Rays, self.rays, 1, u32::MAX),
-            FormFactorMethod::Analytic => Ok(()),
-        }
+        range(Parameter::Resolution, self.resolution, 2, MAX_RESOLUTION)?;
+        range(Parameter::Samples, self.samples, 1, u32::MAX)?;
+        range(Parameter::Rays, self.rays, 1, u32::MAX)
     }
 }
 
