@@ -477,27 +477,9 @@ pub struct SolveSystemArgs {
     /// Write the convergence trace (iteration,seconds,error,unshot) to this CSV.
     #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
     pub trace: Option<PathBuf>,
-    /// Stop after this many iterations at the latest.
-    #[arg(long, value_name = "K", help_heading = SOLVER)]
-    pub max_iterations: Option<u64>,
-    /// Stop when the unshot energy is at most this fraction of the emitted energy.
-    #[arg(long, value_name = "T", default_value_t = SolverParams::default().tolerance, help_heading = SOLVER)]
-    pub tolerance: f64,
-    /// Relaxation factor ω of `sor`.
-    #[arg(long, value_name = "W", default_value_t = SolverParams::default().omega, help_heading = SOLVER)]
-    pub omega: f64,
-    /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
-    #[arg(long, value_name = "N", default_value_t = SolverParams::default().photons, help_heading = SOLVER)]
-    pub photons: u32,
-    /// `stochastic-jacobi`: rays per patch in each iteration (all patches shoot N × this many
-    /// rays, each patch's share in proportion to its unshot power).
-    #[arg(long, value_name = "N", default_value_t = SolverParams::default().iteration_rays, help_heading = SOLVER)]
-    pub iteration_rays: u32,
-    /// `stochastic-jacobi`: rays per patch of a final regular gathering iteration (Bekaert's,
-    /// with the constant control variate); 0, the default, for none: on RenderPark's hospital
-    /// it made the result noisier per patch and per surface at any count tried. At most 2²⁰.
-    #[arg(long, value_name = "N", default_value_t = SolverParams::default().gather_rays, help_heading = SOLVER)]
-    pub gather_rays: u32,
+    /// The solver's options.
+    #[command(flatten)]
+    pub flags: SolverFlags,
     /// Seed of `stochastic`.
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = SOLVER)]
     pub seed: u64,
@@ -540,32 +522,12 @@ pub struct SolveArgs {
     /// The solution method.
     #[arg(long, value_name = "M", value_enum, default_value = "progressive", help_heading = SOLVER)]
     pub solver: SceneSolverArg,
-    /// Stop when the unshot energy is at most this fraction of the emitted energy (default
-    /// 0.01; `render` 0.0003, where the display's ambient term changes no part of the Cornell
-    /// box's picture by more than 1 %).
-    #[arg(long, value_name = "F", help_heading = SOLVER)]
-    pub tolerance: Option<f64>,
+    /// The solver's options.
+    #[command(flatten)]
+    pub flags: SolverFlags,
     /// Set by `render`: the solve is for a picture (its default tolerance is tighter).
     #[arg(skip)]
     pub picture: bool,
-    /// Stop after this many iterations (shots, rows, photons) at the latest.
-    #[arg(long, value_name = "K", help_heading = SOLVER)]
-    pub max_iterations: Option<u64>,
-    /// Relaxation factor ω of `sor`.
-    #[arg(long, value_name = "W", default_value_t = SolverParams::default().omega, help_heading = SOLVER)]
-    pub omega: f64,
-    /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
-    #[arg(long, value_name = "N", default_value_t = SolverParams::default().photons, help_heading = SOLVER)]
-    pub photons: u32,
-    /// `stochastic-jacobi`: rays per patch in each iteration (all patches shoot N × this many
-    /// rays, each patch's share in proportion to its unshot power).
-    #[arg(long, value_name = "N", default_value_t = SolverParams::default().iteration_rays, help_heading = SOLVER)]
-    pub iteration_rays: u32,
-    /// `stochastic-jacobi`: rays per patch of a final regular gathering iteration (Bekaert's,
-    /// with the constant control variate); 0, the default, for none: on RenderPark's hospital
-    /// it made the result noisier per patch and per surface at any count tried. At most 2²⁰.
-    #[arg(long, value_name = "N", default_value_t = SolverParams::default().gather_rays, help_heading = SOLVER)]
-    pub gather_rays: u32,
     /// `hierarchical`: refine a link when the power it may misplace exceeds this fraction of
     /// the emitted power.
     #[arg(long, value_name = "E", default_value_t = radiosity::hierarchical::Params::default().link_error, help_heading = SOLVER)]
@@ -593,6 +555,34 @@ pub struct SolveArgs {
     /// rays, iterations, energy, seconds per stage, memory, CPU time, outputs).
     #[arg(long, value_name = "FORMAT", value_enum, default_value = "text", help_heading = OUTPUT)]
     pub report: ReportFormat,
+}
+
+/// The linear-system solver's options, shared by `solve`, `render` and `solve-system`.
+#[derive(Debug, Args)]
+pub struct SolverFlags {
+    /// Stop when the unshot energy is at most this fraction of the emitted energy (default
+    /// 0.01; `render` 0.0003, where the display's ambient term changes no part of the Cornell
+    /// box's picture by more than 1 %).
+    #[arg(long, value_name = "F", help_heading = SOLVER)]
+    pub tolerance: Option<f64>,
+    /// Stop after this many iterations (shots, rows, photons) at the latest.
+    #[arg(long, value_name = "K", help_heading = SOLVER)]
+    pub max_iterations: Option<u64>,
+    /// Relaxation factor ω of `sor`.
+    #[arg(long, value_name = "W", default_value_t = SolverParams::default().omega, help_heading = SOLVER)]
+    pub omega: f64,
+    /// `stochastic`: each photon carries 1/N of the shooter's unshot power.
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().photons, help_heading = SOLVER)]
+    pub photons: u32,
+    /// `stochastic-jacobi`: rays per patch in each iteration (all patches shoot N × this many
+    /// rays, each patch's share in proportion to its unshot power).
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().iteration_rays, help_heading = SOLVER)]
+    pub iteration_rays: u32,
+    /// `stochastic-jacobi`: rays per patch of a final regular gathering iteration (Bekaert's,
+    /// with the constant control variate); 0, the default, for none: on RenderPark's hospital
+    /// it made the result noisier per patch and per surface at any count tried. At most 2²⁰.
+    #[arg(long, value_name = "N", default_value_t = SolverParams::default().gather_rays, help_heading = SOLVER)]
+    pub gather_rays: u32,
 }
 
 /// Camera overrides.

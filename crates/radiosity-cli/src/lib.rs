@@ -168,12 +168,14 @@ fn solve_scene(a: &SolveArgs) -> Result<(Scene, Solution, Option<radiosity::dist
 fn solve_system(a: SolveSystemArgs) -> Result<()> {
     let solver = a.solver.0;
     let params = settings::solver_params(
-        a.tolerance,
-        a.max_iterations,
-        a.omega,
-        a.photons,
-        a.iteration_rays,
-        a.gather_rays,
+        a.flags
+            .tolerance
+            .unwrap_or(radiosity::solve::SolverParams::default().tolerance),
+        a.flags.max_iterations,
+        a.flags.omega,
+        a.flags.photons,
+        a.flags.iteration_rays,
+        a.flags.gather_rays,
         a.seed,
     )?;
     if FileFormat::from_path(&a.out) != Some(FileFormat::Csv) {
@@ -241,7 +243,7 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
         100.0 * info.unshot.sum() / e
     );
     println!("wrote       {}", a.out.display());
-    capped_at(a.max_iterations, info, &a.out)
+    capped_at(a.flags.max_iterations, info, &a.out)
 }
 
 fn render(mut a: RenderArgs) -> Result<()> {
@@ -408,7 +410,7 @@ fn default_camera_unsolved(scene: &Scene) -> radiosity::scene::Camera {
 /// `--max-iterations`) is an error once its result is written: a non-zero exit, and a line
 /// saying what was reached and what to change.
 fn capped(a: &SolveArgs, info: &radiosity::solve::Info, out: &std::path::Path) -> Result<()> {
-    capped_at(a.max_iterations, info, out)
+    capped_at(a.flags.max_iterations, info, out)
 }
 
 fn capped_at(

@@ -75,7 +75,7 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
         ..FormFactorParams::shooting()
     };
     form_factors.validate().map_err(flag_error)?;
-    let tolerance = a.tolerance.unwrap_or(if a.picture {
+    let tolerance = a.flags.tolerance.unwrap_or(if a.picture {
         SolverParams::PICTURE_TOLERANCE
     } else {
         SolverParams::default().tolerance
@@ -93,7 +93,7 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
                 visibility_rays: a.visibility_rays,
                 max_passes: a.passes,
                 tolerance,
-                max_iterations: a.max_iterations.unwrap_or(defaults.max_iterations),
+                max_iterations: a.flags.max_iterations.unwrap_or(defaults.max_iterations),
                 ..defaults
             };
             if a.min_area == Some(0.0) {
@@ -112,11 +112,11 @@ pub fn settings(a: &SolveArgs) -> Result<Settings> {
     // Every solver flag is checked, whichever method reads it.
     let params = solver_params(
         tolerance,
-        a.max_iterations,
-        a.omega,
-        a.photons,
-        a.iteration_rays,
-        a.gather_rays,
+        a.flags.max_iterations,
+        a.flags.omega,
+        a.flags.photons,
+        a.flags.iteration_rays,
+        a.flags.gather_rays,
         a.seed,
     )?;
     let mut settings = match hierarchical {
