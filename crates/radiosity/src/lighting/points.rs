@@ -66,9 +66,8 @@ pub fn parse_points(text: &str, name: &str) -> Result<Vec<SensorPoint>, Lighting
         for k in 0..6 {
             v[k] = photometry::number(words[k], WHAT[k]).map_err(at)?;
         }
-        let point = SensorPoint::new([v[0], v[1], v[2]], [v[3], v[4], v[5]]).ok_or_else(|| {
-            at("the direction dx dy dz is zero".into())
-        })?;
+        let point = SensorPoint::new([v[0], v[1], v[2]], [v[3], v[4], v[5]])
+            .ok_or_else(|| at("the direction dx dy dz is zero".into()))?;
         out.push(point);
     }
     Ok(out)

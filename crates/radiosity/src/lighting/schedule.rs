@@ -98,7 +98,11 @@ pub fn parse_schedule(
     };
     let names = fields(header).map_err(|m| invalid(name, hline, m))?;
     let expected: Vec<&str> = SCHEDULE_HEADER.split(',').collect();
-    if names.iter().map(String::as_str).ne(expected.iter().copied()) {
+    if names
+        .iter()
+        .map(String::as_str)
+        .ne(expected.iter().copied())
+    {
         return Err(invalid(
             name,
             hline,

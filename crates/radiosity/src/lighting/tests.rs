@@ -95,10 +95,7 @@ fn direct(points: &[SensorPoint], lums: &[Luminaire]) -> DirectResult {
 
 /// A fresh folder for one test's files.
 fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "radiosity-lighting-{tag}-{}",
-        std::process::id()
-    ));
+    let dir = std::env::temp_dir().join(format!("radiosity-lighting-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -150,7 +147,10 @@ fn lambertian_source_over_a_plane() {
         let e = direct_illuminance(&points, std::slice::from_ref(&lum), None, unit).unwrap();
         assert_eq!(e.groups, vec![String::new()]);
         for (k, (got, want)) in e.total.iter().zip(&want).enumerate() {
-            assert!(close(*got, *want, 1e-9), "unit {unit} point {k}: {got} vs {want}");
+            assert!(
+                close(*got, *want, 1e-9),
+                "unit {unit} point {k}: {got} vs {want}"
+            );
         }
         // Under the source: I₀ / h².
         assert!(close(e.total[0], i0 / (h * h), 1e-12));
@@ -180,7 +180,11 @@ fn isotropic_source_on_tilted_sensors() {
         let d = norm(v);
         let cos = (dot(n, v) / (norm(n) * d)).max(0.0);
         let want = i * cos / (d * d);
-        assert!(close(e.total[k], want, 1e-12), "{k}: {} vs {want}", e.total[k]);
+        assert!(
+            close(e.total[k], want, 1e-12),
+            "{k}: {} vs {want}",
+            e.total[k]
+        );
     }
     assert_eq!(e.total[5], 0.0);
 }
@@ -226,8 +230,16 @@ fn tilted_luminaire_matches_gram_schmidt_frame() {
     let p = sub(hint, scale(n, dot(hint, n)));
     let c0 = scale(p, 1.0 / norm(p));
     let c90 = cross(c0, n);
-    let lum = Luminaire::new("tilt", asymmetric(), [-1.0, 0.5, 4.0], aim, Some(hint), 1.5, "")
-        .unwrap();
+    let lum = Luminaire::new(
+        "tilt",
+        asymmetric(),
+        [-1.0, 0.5, 4.0],
+        aim,
+        Some(hint),
+        1.5,
+        "",
+    )
+    .unwrap();
     assert!(close_vec(lum.nadir, n) && close_vec(lum.c0, c0) && close_vec(lum.c90, c90));
     // Orthonormal and right-handed: c0 × c90 = −nadir (up).
     for (a, b) in [(lum.c0, lum.c90), (lum.c0, lum.nadir), (lum.c90, lum.nadir)] {
@@ -268,7 +280,14 @@ fn check_frame(lum: &Luminaire, world: impl Fn(f64, f64) -> [f64; 3], m: f64) {
             ];
             // Facing the luminaire, tilted by an angle about an axis across the line of sight.
             let back = scale(w, -1.0);
-            let across = cross(back, if w[2].abs() < 0.9 { [0.0, 0.0, 1.0] } else { [1.0, 0.0, 0.0] });
+            let across = cross(
+                back,
+                if w[2].abs() < 0.9 {
+                    [0.0, 0.0, 1.0]
+                } else {
+                    [1.0, 0.0, 0.0]
+                },
+            );
             let across = scale(across, 1.0 / norm(across));
             let tilt = (c + g).to_radians() * 0.25 % 1.4;
             let normal = [
@@ -279,7 +298,10 @@ fn check_frame(lum: &Luminaire, world: impl Fn(f64, f64) -> [f64; 3], m: f64) {
             points.push(sensor(p, normal));
             want.push(m * asym(c, g) * tilt.cos() / (dist * dist));
             // The intensity alone, too.
-            assert!(close(lum.intensity_towards(w), m * asym(c, g), 1e-9), "C {c} γ {g}");
+            assert!(
+                close(lum.intensity_towards(w), m * asym(c, g), 1e-9),
+                "C {c} γ {g}"
+            );
         }
     }
     let e = direct(&points, std::slice::from_ref(lum));
@@ -302,13 +324,22 @@ fn default_c0_and_refused_frames() {
     };
     assert_eq!(new([0.0; 3], None, 1.0), Err(FrameError::Aim));
     assert_eq!(new([f64::NAN, 0.0, 1.0], None, 1.0), Err(FrameError::Aim));
-    assert_eq!(new([0.0, 0.0, -1.0], Some([0.0; 3]), 1.0), Err(FrameError::C0));
+    assert_eq!(
+        new([0.0, 0.0, -1.0], Some([0.0; 3]), 1.0),
+        Err(FrameError::C0)
+    );
     assert_eq!(
         new([0.0, 0.0, -1.0], Some([0.0, 0.0, 5.0]), 1.0),
         Err(FrameError::C0ParallelToAim)
     );
-    assert_eq!(new([0.0, 0.0, -1.0], None, -0.1), Err(FrameError::Multiplier));
-    assert_eq!(new([0.0, 0.0, -1.0], None, f64::INFINITY), Err(FrameError::Multiplier));
+    assert_eq!(
+        new([0.0, 0.0, -1.0], None, -0.1),
+        Err(FrameError::Multiplier)
+    );
+    assert_eq!(
+        new([0.0, 0.0, -1.0], None, f64::INFINITY),
+        Err(FrameError::Multiplier)
+    );
     assert!(direct_illuminance(&[], &[], None, 0.0).is_err());
     assert!(direct_illuminance(&[], &[], None, f64::NAN).is_err());
 }
@@ -322,8 +353,18 @@ fn default_c0_and_refused_frames() {
 #[test]
 fn occluding_quad_blocks_the_points_behind_it() {
     let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-    let floor = vec![v(-5., -5., 0.), v(5., -5., 0.), v(5., 5., 0.), v(-5., 5., 0.)];
-    let ceiling = vec![v(-5., -5., 3.), v(-5., 5., 3.), v(5., 5., 3.), v(5., -5., 3.)];
+    let floor = vec![
+        v(-5., -5., 0.),
+        v(5., -5., 0.),
+        v(5., 5., 0.),
+        v(-5., 5., 0.),
+    ];
+    let ceiling = vec![
+        v(-5., -5., 3.),
+        v(-5., 5., 3.),
+        v(5., 5., 3.),
+        v(5., -5., 3.),
+    ];
     let blocker = vec![
         v(-0.5, -0.5, 1.5),
         v(0.5, -0.5, 1.5),
@@ -377,8 +418,16 @@ fn groups_and_multipliers() {
     let lam = lambertian(800.0);
     let asy = asymmetric();
     let mk = |name: &str, p: &Arc<Photometry>, at: [f64; 3], m: f64, g: &str| {
-        Luminaire::new(name, p.clone(), at, [0.1, 0.2, -1.0], Some([1.0, 0.3, 0.0]), m, g)
-            .unwrap()
+        Luminaire::new(
+            name,
+            p.clone(),
+            at,
+            [0.1, 0.2, -1.0],
+            Some([1.0, 0.3, 0.0]),
+            m,
+            g,
+        )
+        .unwrap()
     };
     let lums = vec![
         mk("a1", &lam, [0.0, 0.0, 3.0], 1.0, "work"),
@@ -445,7 +494,9 @@ const HEADER: &str = "name,file,x,y,z,aim_x,aim_y,aim_z,c0_x,c0_y,c0_z,multiplie
 fn schedule_dir(tag: &str) -> PathBuf {
     let dir = scratch(tag);
     std::fs::create_dir_all(dir.join("ies")).unwrap();
-    let lam = ies(&[0.0], &steps(0.0, 90.0, 5.0), |_, g| 500.0 * g.to_radians().cos());
+    let lam = ies(&[0.0], &steps(0.0, 90.0, 5.0), |_, g| {
+        500.0 * g.to_radians().cos()
+    });
     std::fs::write(dir.join("ies/a.ies"), lam).unwrap();
     let asy = ies(&steps(0.0, 360.0, 15.0), &steps(0.0, 180.0, 15.0), asym);
     std::fs::write(dir.join("b.ies"), asy).unwrap();
@@ -481,7 +532,11 @@ fn schedule_reads_two_files_relative_to_its_folder() {
     assert!(Arc::ptr_eq(&l[0].photometry, &l[2].photometry));
     assert!(!Arc::ptr_eq(&l[0].photometry, &l[1].photometry));
     assert_eq!(l[0].photometry.source, "a.ies");
-    assert!(close(l[0].intensity_towards([0.0, 0.0, -1.0]), 0.8 * 500.0, 1e-12));
+    assert!(close(
+        l[0].intensity_towards([0.0, 0.0, -1.0]),
+        0.8 * 500.0,
+        1e-12
+    ));
     // Up = y: the default aim is −y.
     let l = read_schedule(&path, Up::Y).unwrap();
     assert_eq!(l[0].nadir, [0.0, -1.0, 0.0]);
@@ -497,7 +552,11 @@ fn schedule_reads_two_files_relative_to_its_folder() {
 #[test]
 fn hostile_schedules_are_located() {
     let dir = schedule_dir("hostile");
-    std::fs::write(dir.join("bad.ies"), "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 x\n").unwrap();
+    std::fs::write(
+        dir.join("bad.ies"),
+        "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 x\n",
+    )
+    .unwrap();
     let row = "L,ies/a.ies,0,0,3,,,,,,,,";
     let cases: Vec<(String, usize, &str)> = vec![
         (String::new(), 1, "empty schedule"),
@@ -508,32 +567,120 @@ fn hostile_schedules_are_located() {
             "expected exactly",
         ),
         (format!("{HEADER},extra\n{row}\n"), 1, "expected exactly"),
-        (format!("Name{}\n{row}\n", &HEADER[4..]), 1, "expected exactly"),
+        (
+            format!("Name{}\n{row}\n", &HEADER[4..]),
+            1,
+            "expected exactly",
+        ),
         (format!("{HEADER}\n"), 1, "no luminaires"),
-        (format!("{HEADER}\nL,ies/a.ies,0,0,3,,,,,,,\n"), 2, "12 fields"),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,0,3,,,,,,,\n"),
+            2,
+            "12 fields",
+        ),
         (format!("{HEADER}\n{row},\n"), 2, "14 fields"),
-        (format!("{HEADER}\nL,ies/a.ies,0,abc,3,,,,,,,,\n"), 2, "'abc' is not a number"),
-        (format!("{HEADER}\nL,ies/a.ies,0,0,NaN,,,,,,,,\n"), 2, "not a finite number"),
-        (format!("{HEADER}\nL,ies/a.ies,0,0,,,,,,,,,\n"), 2, "give all three"),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,abc,3,,,,,,,,\n"),
+            2,
+            "'abc' is not a number",
+        ),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,0,NaN,,,,,,,,\n"),
+            2,
+            "not a finite number",
+        ),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,0,,,,,,,,,\n"),
+            2,
+            "give all three",
+        ),
         (format!("{HEADER}\nL,ies/a.ies,,,,,,,,,,,\n"), 2, "position"),
-        (format!("{HEADER}\nL,ies/a.ies,0,0,3,,,,,,,inf,\n"), 2, "not a finite number"),
-        (format!("{HEADER}\nL,ies/a.ies,0,0,3,,,,,,,-1,\n"), 2, "negative"),
-        (format!("{HEADER}\nL,ies/a.ies,0,0,3,0,0,0,,,,,\n"), 2, "aim"),
-        (format!("{HEADER}\nL,ies/a.ies,0,0,3,0,0,1,,,,,\n\n"), 2, "ok"),
-        (format!("{HEADER}\nL,ies/a.ies,0,0,3,1,,0,,,,,\n"), 2, "give all three"),
-        (format!("{HEADER}\nL,ies/a.ies,0,0,3,0,0,-1,0,0,2,,\n"), 2, "parallel"),
-        (format!("{HEADER}\nL,ies/a.ies,0,0,3,,,,0,0,0,,\n"), 2, "C0 direction is zero"),
-        (format!("{HEADER}\n{row}\n\n{row}\n"), 4, "already used at line 2"),
-        (format!("{HEADER}\n,ies/a.ies,0,0,3,,,,,,,,\n"), 2, "name is empty"),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,0,3,,,,,,,inf,\n"),
+            2,
+            "not a finite number",
+        ),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,0,3,,,,,,,-1,\n"),
+            2,
+            "negative",
+        ),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,0,3,0,0,0,,,,,\n"),
+            2,
+            "aim",
+        ),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,0,3,0,0,1,,,,,\n\n"),
+            2,
+            "ok",
+        ),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,0,3,1,,0,,,,,\n"),
+            2,
+            "give all three",
+        ),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,0,3,0,0,-1,0,0,2,,\n"),
+            2,
+            "parallel",
+        ),
+        (
+            format!("{HEADER}\nL,ies/a.ies,0,0,3,,,,0,0,0,,\n"),
+            2,
+            "C0 direction is zero",
+        ),
+        (
+            format!("{HEADER}\n{row}\n\n{row}\n"),
+            4,
+            "already used at line 2",
+        ),
+        (
+            format!("{HEADER}\n,ies/a.ies,0,0,3,,,,,,,,\n"),
+            2,
+            "name is empty",
+        ),
         (format!("{HEADER}\nL,,0,0,3,,,,,,,,\n"), 2, "file is empty"),
-        (format!("{HEADER}\n{row}\nM,nope.ies,0,0,3,,,,,,,,\n"), 3, "nope.ies: cannot read"),
-        (format!("{HEADER}\nM,ies/a.txt,0,0,3,,,,,,,,\n"), 2, "a.txt: not a photometric"),
-        (format!("{HEADER}\nM,bad.ies,0,0,3,,,,,,,,\n"), 2, "bad.ies:"),
-        (format!("{HEADER}\n\"L,ies/a.ies,0,0,3,,,,,,,,\n"), 2, "no closing quote"),
-        (format!("{HEADER}\n\"L\"x,ies/a.ies,0,0,3,,,,,,,,\n"), 2, "after its closing quote"),
-        (format!("{HEADER}\nL\"x,ies/a.ies,0,0,3,,,,,,,,\n"), 2, "quote inside"),
-        (format!("{HEADER}\r\n\r\n{row}\r\n\r\nL,b.ies,0,0,3,,,,,,,,\r\n"), 5, "already used at line 3"),
-        (format!("{HEADER}\r{row}\rX,ies/a.ies,0,0,3,1e400,0,0,,,,,\r"), 3, "not a finite number"),
+        (
+            format!("{HEADER}\n{row}\nM,nope.ies,0,0,3,,,,,,,,\n"),
+            3,
+            "nope.ies: cannot read",
+        ),
+        (
+            format!("{HEADER}\nM,ies/a.txt,0,0,3,,,,,,,,\n"),
+            2,
+            "a.txt: not a photometric",
+        ),
+        (
+            format!("{HEADER}\nM,bad.ies,0,0,3,,,,,,,,\n"),
+            2,
+            "bad.ies:",
+        ),
+        (
+            format!("{HEADER}\n\"L,ies/a.ies,0,0,3,,,,,,,,\n"),
+            2,
+            "no closing quote",
+        ),
+        (
+            format!("{HEADER}\n\"L\"x,ies/a.ies,0,0,3,,,,,,,,\n"),
+            2,
+            "after its closing quote",
+        ),
+        (
+            format!("{HEADER}\nL\"x,ies/a.ies,0,0,3,,,,,,,,\n"),
+            2,
+            "quote inside",
+        ),
+        (
+            format!("{HEADER}\r\n\r\n{row}\r\n\r\nL,b.ies,0,0,3,,,,,,,,\r\n"),
+            5,
+            "already used at line 3",
+        ),
+        (
+            format!("{HEADER}\r{row}\rX,ies/a.ies,0,0,3,1e400,0,0,,,,,\r"),
+            3,
+            "not a finite number",
+        ),
     ];
     let path = dir.join("s.csv");
     for (text, line, needle) in &cases {
@@ -545,7 +692,10 @@ fn hostile_schedules_are_located() {
             continue;
         }
         let err = result.expect_err(text).to_string();
-        assert!(err.starts_with(&format!("s.csv:{line}: ")), "{text:?}: {err}");
+        assert!(
+            err.starts_with(&format!("s.csv:{line}: ")),
+            "{text:?}: {err}"
+        );
         assert!(err.contains(needle), "{text:?}: {err}");
         assert!(!err.contains('\n') && !err.contains('\r'), "{err:?}");
     }
@@ -644,7 +794,10 @@ fn hostile_points_are_located() {
             continue;
         }
         let err = result.unwrap_err().to_string();
-        assert!(err.starts_with(&format!("grid.pts:{line}: ")), "{text:?}: {err}");
+        assert!(
+            err.starts_with(&format!("grid.pts:{line}: ")),
+            "{text:?}: {err}"
+        );
         assert!(err.contains(needle), "{text:?}: {err}");
         assert!(!err.contains('\n'));
     }
