@@ -33,10 +33,12 @@ use crate::photometry::PhotometryError;
 
 /// Why a lighting input could not be read or a computation could not run. Every variant
 /// displays as one line; those about a file's text name the file (by its name) and the line.
-#[derive(Debug, thiserror::Error)]
+///
+/// [`std::error::Error::source`] leads to what the line does not already say (the operating
+/// system's reason), so that a chain printed whole (`anyhow`'s `{:#}`) repeats nothing.
+#[derive(Debug)]
 pub enum LightingError {
     /// The file could not be read (the operating system's reason is the source).
-    #[error("{file}: cannot read the file")]
     Io {
         /// The file's name.
         file: String,
@@ -44,7 +46,6 @@ pub enum LightingError {
         source: std::io::Error,
     },
     /// A problem at a line of a schedule or points file.
-    #[error("{file}:{line}: {message}")]
     Invalid {
         /// The file's name.
         file: String,
@@ -54,22 +55,56 @@ pub enum LightingError {
         message: String,
     },
     /// A photometric file a schedule line names could not be read; the photometry error
-    /// names that file (and its line, for a problem in its text).
-    #[error("{file}:{line}: {source}")]
+    /// names that file (and its line, for a problem in its text). Displayed after the
+    /// schedule's place; the source is the photometry error's own (the operating system's
+    /// reason, for a file that cannot be read).
     Photometry {
         /// The schedule's name.
         file: String,
         /// The schedule line naming the photometric file.
         line: usize,
         /// The photometric file's own error.
-        source: PhotometryError,
+        error: PhotometryError,
     },
     /// A parameter is out of range.
-    #[error("{0}")]
     Parameter(String),
     /// An output could not be written.
-    #[error(transparent)]
-    Output(#[from] OutputError),
+    Output(OutputError),
+}
+
+impl std::fmt::Display for LightingError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LightingError::Io { file, .. } => write!(f, "{file}: cannot read the file"),
+            LightingError::Invalid {
+                file,
+                line,
+                message,
+            } => write!(f, "{file}:{line}: {message}"),
+            LightingError::Photometry { file, line, error } => {
+                write!(f, "{file}:{line}: {error}")
+            }
+            LightingError::Parameter(message) => f.write_str(message),
+            LightingError::Output(error) => write!(f, "{error}"),
+        }
+    }
+}
+
+impl std::error::Error for LightingError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            LightingError::Io { source, .. } => Some(source),
+            LightingError::Photometry { error, .. } => error.source(),
+            LightingError::Output(error) => error.source(),
+            LightingError::Invalid { .. } | LightingError::Parameter(_) => None,
+        }
+    }
+}
+
+impl From<OutputError> for LightingError {
+    fn from(error: OutputError) -> Self {
+        LightingError::Output(error)
+    }
 }
 
 impl LightingError {

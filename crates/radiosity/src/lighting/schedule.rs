@@ -164,11 +164,11 @@ pub fn parse_schedule(
         let photometry = match files.get(&key) {
             Some(p) => p.clone(),
             None => {
-                let p = Arc::new(photometry::read(&file).map_err(|source| {
+                let p = Arc::new(photometry::read(&file).map_err(|error| {
                     LightingError::Photometry {
                         file: name.to_string(),
                         line,
-                        source,
+                        error,
                     }
                 })?);
                 files.insert(key, p.clone());

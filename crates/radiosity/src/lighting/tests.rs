@@ -704,6 +704,19 @@ fn hostile_schedules_are_located() {
     let err = read_schedule(&path, Up::Z).unwrap_err();
     assert_eq!(err.line(), Some(2));
     assert!(err.to_string().contains("bad.ies:3:"), "{err}");
+    // A missing photometric file: the chain goes on to the operating system's reason and
+    // repeats nothing.
+    std::fs::write(&path, format!("{HEADER}\nM,nope.ies,0,0,3,,,,,,,,\n")).unwrap();
+    let err = read_schedule(&path, Up::Z).unwrap_err();
+    let mut chain = vec![err.to_string()];
+    let mut next = std::error::Error::source(&err);
+    while let Some(e) = next {
+        chain.push(e.to_string());
+        next = e.source();
+    }
+    assert_eq!(chain.len(), 2, "{chain:?}");
+    assert_eq!(chain[0], "s.csv:2: nope.ies: cannot read the file");
+    assert!(!chain[0].contains(&chain[1]), "{chain:?}");
     // A schedule that is not there names itself.
     let err = read_schedule(&dir.join("missing.csv"), Up::Z).unwrap_err();
     assert!(err.to_string().starts_with("missing.csv: "), "{err}");
