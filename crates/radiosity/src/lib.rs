@@ -44,6 +44,7 @@ pub mod geom;
 pub mod hierarchical;
 mod hint;
 pub mod io;
+pub mod lighting;
 pub mod loc;
 pub mod mesh;
 pub mod observe;
