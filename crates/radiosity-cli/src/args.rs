@@ -222,6 +222,10 @@ pub enum Command {
     /// grows). Writes CSVs, plots (SVG and PNG) and a Markdown summary.
     #[command(after_help = EXAMPLES_EXPERIMENT)]
     Experiment(ExperimentArgs),
+    /// Lighting design: illuminance in lux at calculation points from luminaires with
+    /// photometric files (IES, EULUMDAT) placed by a schedule, interreflection included.
+    #[command(after_help = EXAMPLES_LIGHTING)]
+    Lighting(LightingArgs),
     /// Radiative heat transfer between grey diffuse surfaces: temperatures, net heat flux and
     /// power per surface, from a boundary-condition table (net-radiation method).
     #[command(after_help = EXAMPLES_THERMAL)]
@@ -303,6 +307,64 @@ pub enum LinearSolverArg {
     /// Jacobi sweeps on the sparse F, to a relative residual of 1e-12, split over the ranks
     /// under mpirun; slow where most surfaces re-radiate (adiabatic).
     Jacobi,
+}
+
+const EXAMPLES_LIGHTING: &str = "Examples:
+  radiosity lighting office.obj --luminaires schedule.csv --grid desk.pts --out grid.csv
+  radiosity lighting room.glb --up y --luminaires lights.csv --grid a.pts --grid b.pts \\
+      --out grid.csv --summary summary.json";
+
+/// The scene's vertical (`lighting --up`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum UpArg {
+    /// +z is up.
+    Z,
+    /// +y is up (glTF's convention).
+    Y,
+}
+
+/// `radiosity lighting`.
+#[derive(Debug, Args)]
+pub struct LightingArgs {
+    /// The scene: an OBJ, MGF, glTF, PLY or View3D file, or a built-in name. Its emitting
+    /// surfaces' emission is luminous exitance in lm/m²; its reflectances are the materials'.
+    pub scene: String,
+    /// The luminaire schedule: a CSV with the header
+    /// `name,file,x,y,z,aim_x,aim_y,aim_z,c0_x,c0_y,c0_z,multiplier,group` (files relative to
+    /// it). Leave it out when the scene's own emitting surfaces are the light.
+    #[arg(long, value_name = "schedule.csv", help_heading = SCENE)]
+    pub luminaires: Option<PathBuf>,
+    /// Calculation points in Radiance's points format (`x y z dx dy dz` a line, the direction
+    /// the sensor's normal); give it more than once for several grids.
+    #[arg(long, value_name = "points.pts", required = true, help_heading = SCENE)]
+    pub grid: Vec<PathBuf>,
+    /// Length unit of the scene, the schedule and the points.
+    #[arg(long, value_enum, default_value = "m", help_heading = SCENE)]
+    pub unit: UnitArg,
+    /// The scene's vertical: what "down" means for a luminaire with no aim.
+    #[arg(long, value_enum, default_value = "z", help_heading = SCENE)]
+    pub up: UpArg,
+    /// Patches of the interreflection's mesh.
+    #[arg(long, value_name = "N", default_value_t = 10_000, help_heading = MESHING)]
+    pub patches: usize,
+    /// Stop the interreflection when this fraction of the first-shot flux is left unshot.
+    #[arg(long, value_name = "F", default_value_t = 1e-3, help_heading = SOLVER)]
+    pub tolerance: f64,
+    /// Gather: pairs of samples per point for the light arriving from the surfaces.
+    #[arg(long, value_name = "N", default_value_t = 256, help_heading = SOLVER)]
+    pub indirect_samples: u32,
+    /// Seed of every random stream.
+    #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]
+    pub seed: u64,
+    /// One row per point: `x,y,z,nx,ny,nz,illuminance` (lux, direct and interreflected),
+    /// then `illuminance_<group>` per light group when there is more than one.
+    #[arg(long, short, value_name = "grid.csv", help_heading = OUTPUT)]
+    pub out: PathBuf,
+    /// The summary as JSON: per grid the point count, average, minimum and maximum
+    /// illuminance and the uniformities U₀ = E_min/Ē and E_min/E_max; per luminaire its
+    /// file's lumens and the flux integrated from its distribution.
+    #[arg(long, value_name = "summary.json", help_heading = OUTPUT)]
+    pub summary: Option<PathBuf>,
 }
 
 /// `radiosity thermal`.

@@ -7,6 +7,7 @@
 pub mod alloc;
 pub mod args;
 mod experiment;
+mod lighting;
 pub mod ranks;
 mod report;
 pub mod settings;
@@ -42,6 +43,7 @@ fn run(command: Command) -> Result<()> {
         Command::SolveSystem(a) => single("solve-system").and_then(|()| solve_system(a)),
         Command::FormFactors(a) => view_factors::run(a),
         Command::Experiment(a) => single("experiment").and_then(|()| experiment::run(a)),
+        Command::Lighting(a) => single("lighting").and_then(|()| lighting::run(a)),
         Command::Thermal(a) => thermal::run(a),
     }
 }

@@ -100,6 +100,9 @@ pub enum Error {
     /// Hierarchical radiosity could not run.
     #[error(transparent)]
     Hierarchical(#[from] hierarchical::HierarchicalError),
+    /// A lighting input is malformed, or a lighting computation could not run.
+    #[error(transparent)]
+    Lighting(#[from] lighting::LightingError),
     /// A heat-transfer problem could not be solved.
     #[error(transparent)]
     Thermal(#[from] thermal::ThermalError),

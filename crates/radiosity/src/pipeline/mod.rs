@@ -9,6 +9,7 @@
 //! one memory model every pipeline checks a job against. Each takes the ranks of a distributed
 //! run where it can run over several ([`crate::comm::Ranks`]; `None` for one process).
 
+mod lighting;
 mod memory;
 mod reference;
 mod solve;
@@ -19,6 +20,7 @@ mod view_factors;
 /// The bridge from a meshed scene to its linear system (it lives with the mesh).
 pub use crate::mesh::patch_system;
 pub use crate::observe::{Event, Observer, Stage};
+pub use lighting::{lighting, luminance, LightingResult, LightingSettings, SCENE_GROUP};
 pub use memory::{available_memory, MemoryCheck, MemoryLimit, BYTES_PER_PATCH};
 pub use reference::{light_surface_means, path_surface_means, path_trace};
 pub use solve::{solve, solve_over};

@@ -544,6 +544,14 @@ impl<'a> Gather<'a> {
         }
     }
 
+    /// The irradiance at a point `x` with normal `n` that lies on no patch (a sensor in the
+    /// air, on a work plane): the emitters' by shadow rays and the solution's reflected light
+    /// gathered, as in a camera sample ([`GatherParams::direct`] and
+    /// [`GatherParams::indirect`] samples), in the scene's exitance units. One estimate.
+    pub fn irradiance_at(&self, x: Vec3, n: Vec3, rng: &mut Rng64) -> Rgb {
+        self.incoming(x, n, u32::MAX, 0, rng) * std::f64::consts::PI
+    }
+
     /// Radiance leaving point `x` on `patch` (for tests and probes): one gather estimate.
     pub fn radiance_at(&self, x: Vec3, patch: u32, rng: &mut Rng64) -> Rgb {
         let n = self.surfaces.mesh.patches[patch as usize].normal;

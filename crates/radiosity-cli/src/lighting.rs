@@ -1,0 +1,216 @@
+//! `radiosity lighting`: flags → `pipeline::lighting`, the grid CSV and the summary.
+
+use crate::args::{LightingArgs, UpArg};
+use anyhow::{bail, Context, Result};
+use radiosity::io::{write_atomic, FileFormat, OutputError};
+use radiosity::lighting::{read_points, read_schedule, Up};
+use radiosity::mesh::MeshParams;
+use radiosity::pipeline::{lighting, LightingSettings};
+use radiosity::solve::SolverParams;
+use std::io::Write as _;
+
+/// Statistics of one grid's illuminance.
+struct Stats {
+    points: usize,
+    mean: f64,
+    min: f64,
+    max: f64,
+}
+
+impl Stats {
+    fn of(e: &[f64]) -> Stats {
+        let mean = e.iter().sum::<f64>() / e.len().max(1) as f64;
+        let min = e.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Stats {
+            points: e.len(),
+            mean,
+            min,
+            max,
+        }
+    }
+
+    /// U₀ = E_min / Ē (0 where the grid is dark).
+    fn u0(&self) -> f64 {
+        if self.mean > 0.0 {
+            self.min / self.mean
+        } else {
+            0.0
+        }
+    }
+
+    /// E_min / E_max (0 where the grid is dark).
+    fn ud(&self) -> f64 {
+        if self.max > 0.0 {
+            self.min / self.max
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Run the command.
+pub fn run(a: LightingArgs) -> Result<()> {
+    if FileFormat::from_path(&a.out) != Some(FileFormat::Csv) {
+        bail!("{}: unsupported output format (use .csv)", a.out.display());
+    }
+    crate::settings::check_output(&a.out)?;
+    if let Some(p) = &a.summary {
+        if p.extension().and_then(|e| e.to_str()) != Some("json") {
+            bail!("{}: unsupported output format (use .json)", p.display());
+        }
+        if p == &a.out {
+            bail!("--summary {}: the same file as --out", p.display());
+        }
+        crate::settings::check_output(p)?;
+    }
+    for g in &a.grid {
+        if g == &a.out || a.summary.as_ref() == Some(g) {
+            bail!("--grid {}: an output would overwrite it", g.display());
+        }
+    }
+    let up = match a.up {
+        UpArg::Z => Up::Z,
+        UpArg::Y => Up::Y,
+    };
+    let luminaires = match &a.luminaires {
+        Some(p) => read_schedule(p, up)?,
+        None => Vec::new(),
+    };
+    let mut warned = std::collections::HashSet::new();
+    for l in &luminaires {
+        if warned.insert(std::sync::Arc::as_ptr(&l.photometry)) {
+            for w in &l.photometry.warnings {
+                eprintln!("radiosity: warning: {}: {w}", l.photometry.source);
+            }
+        }
+    }
+    let mut points = Vec::new();
+    let mut grids = Vec::new();
+    for g in &a.grid {
+        let p = read_points(g)?;
+        if p.is_empty() {
+            bail!("{}: no calculation points", g.display());
+        }
+        grids.push((
+            g.display().to_string(),
+            points.len()..points.len() + p.len(),
+        ));
+        points.extend(p);
+    }
+    let scene = crate::load_scene(&a.scene, false)?;
+    let mut settings = LightingSettings {
+        mesh: MeshParams::Patches(a.patches),
+        params: SolverParams {
+            tolerance: a.tolerance,
+            seed: a.seed,
+            ..LightingSettings::default().params
+        },
+        unit_metres: a.unit.metres(),
+        ..LightingSettings::default()
+    };
+    settings.form_factors.seed = a.seed;
+    settings.gather.indirect = a.indirect_samples;
+    let progress = crate::report::Progress::new(a.tolerance.max(1e-12));
+    let t = std::time::Instant::now();
+    let result = lighting(&scene, &luminaires, &points, &settings, &progress);
+    progress.finish();
+    let r = result?;
+    let seconds = t.elapsed().as_secs_f64();
+
+    // grid.csv: the fixed columns, then a column a group when there are several.
+    let several = r.groups.len() > 1;
+    write_atomic::<OutputError>(&a.out, |out| {
+        write!(out, "x,y,z,nx,ny,nz,illuminance")?;
+        if several {
+            for g in &r.groups {
+                write!(out, ",illuminance_{g}")?;
+            }
+        }
+        writeln!(out)?;
+        let ng = r.groups.len();
+        for (i, p) in points.iter().enumerate() {
+            let [x, y, z] = p.position;
+            let [nx, ny, nz] = p.normal;
+            write!(out, "{x},{y},{z},{nx},{ny},{nz},{}", r.total[i])?;
+            if several {
+                for e in &r.by_group[i * ng..(i + 1) * ng] {
+                    write!(out, ",{e}")?;
+                }
+            }
+            writeln!(out)?;
+        }
+        Ok(())
+    })
+    .context("writing the grid")?;
+
+    // The summary.
+    println!(
+        "scene       {} ({} polygons, {} patches)",
+        scene.name,
+        scene.polygons.len(),
+        r.patches
+    );
+    println!(
+        "light       {} luminaires in {} group{}: {}",
+        luminaires.len(),
+        r.groups.len(),
+        if r.groups.len() == 1 { "" } else { "s" },
+        r.groups.join(", ")
+    );
+    let mut grid_json = Vec::new();
+    for (name, range) in &grids {
+        let s = Stats::of(&r.total[range.clone()]);
+        println!(
+            "grid        {name}: {} points, average {:.1} lx, min {:.1} lx, max {:.1} lx, U0 {:.3}, min/max {:.3}",
+            s.points,
+            s.mean,
+            s.min,
+            s.max,
+            s.u0(),
+            s.ud()
+        );
+        grid_json.push(serde_json::json!({
+            "file": name,
+            "points": s.points,
+            "average": s.mean,
+            "min": s.min,
+            "max": s.max,
+            "u0": s.u0(),
+            "min_over_max": s.ud(),
+        }));
+    }
+    let luminaire_json: Vec<serde_json::Value> = luminaires
+        .iter()
+        .map(|l| {
+            serde_json::json!({
+                "name": l.name,
+                "file": l.photometry.source,
+                "group": l.group,
+                "lumens": l.photometry.rated_flux,
+                "flux": l.photometry.flux() * l.multiplier,
+                "multiplier": l.multiplier,
+            })
+        })
+        .collect();
+    println!("time        {seconds:.3} s");
+    if let Some((cpu, _)) = crate::report::resources() {
+        println!("cpu         {cpu:.2} s (user and system, all threads)");
+    }
+    println!("wrote       {} ({} points)", a.out.display(), points.len());
+    if let Some(p) = &a.summary {
+        let v = serde_json::json!({
+            "scene": scene.name,
+            "patches": r.patches,
+            "groups": r.groups,
+            "group_flux": r.flux,
+            "grids": grid_json,
+            "luminaires": luminaire_json,
+            "seconds": seconds,
+        });
+        write_atomic::<OutputError>(p, |out| writeln!(out, "{v:#}"))
+            .context("writing the summary")?;
+        println!("wrote       {}", p.display());
+    }
+    Ok(())
+}
