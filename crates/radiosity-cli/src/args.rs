@@ -336,8 +336,16 @@ pub struct LightingArgs {
     pub luminaires: Option<PathBuf>,
     /// Calculation points in Radiance's points format (`x y z dx dy dz` a line, the direction
     /// the sensor's normal); give it more than once for several grids.
-    #[arg(long, value_name = "points.pts", required = true, help_heading = SCENE)]
+    #[arg(long, value_name = "points.pts", required_unless_present = "workplane", help_heading = SCENE)]
     pub grid: Vec<PathBuf>,
+    /// A work-plane grid over the surfaces of MATERIAL (a floor), HEIGHT metres above them
+    /// (default 0.8), facing up, spaced as EN 12464-1 asks: p = 0.2 × 5^log₁₀(d) (d the longer
+    /// side of the area, p ≤ 10 m), a 0.5 m border band left out.
+    #[arg(long, value_name = "MATERIAL[:HEIGHT]", help_heading = SCENE)]
+    pub workplane: Option<String>,
+    /// Write the work-plane grid in Radiance's points format (for `rtrace -I`).
+    #[arg(long, value_name = "points.pts", requires = "workplane", help_heading = OUTPUT)]
+    pub grid_out: Option<PathBuf>,
     /// Length unit of the scene, the schedule and the points.
     #[arg(long, value_enum, default_value = "m", help_heading = SCENE)]
     pub unit: UnitArg,

@@ -3,7 +3,7 @@
 use crate::args::{LightingArgs, UpArg};
 use anyhow::{bail, Context, Result};
 use radiosity::io::{write_atomic, FileFormat, OutputError};
-use radiosity::lighting::{read_points, read_schedule, Up};
+use radiosity::lighting::{read_points, read_schedule, workplane, write_points, Up};
 use radiosity::mesh::MeshParams;
 use radiosity::pipeline::{lighting, LightingSettings};
 use radiosity::solve::SolverParams;
@@ -55,6 +55,15 @@ pub fn run(a: LightingArgs) -> Result<()> {
         bail!("{}: unsupported output format (use .csv)", a.out.display());
     }
     crate::settings::check_output(&a.out)?;
+    if let Some(p) = &a.grid_out {
+        if p == &a.out || a.grid.contains(p) || a.summary.as_ref() == Some(p) {
+            bail!(
+                "--grid-out {}: the same file as another input or output",
+                p.display()
+            );
+        }
+        crate::settings::check_output(p)?;
+    }
     if let Some(p) = &a.summary {
         if p.extension().and_then(|e| e.to_str()) != Some("json") {
             bail!("{}: unsupported output format (use .json)", p.display());
@@ -99,6 +108,25 @@ pub fn run(a: LightingArgs) -> Result<()> {
         points.extend(p);
     }
     let scene = crate::load_scene(&a.scene, false)?;
+    if let Some(spec) = &a.workplane {
+        let (material, height) = match spec.rsplit_once(':') {
+            Some((m, h)) => match h.parse::<f64>() {
+                Ok(h) if h.is_finite() => (m, h),
+                _ => bail!("--workplane {spec}: the height after ':' must be a number of metres"),
+            },
+            None => (spec.as_str(), 0.8),
+        };
+        let grid = workplane(&scene, material, height, a.unit.metres(), up)?;
+        if let Some(p) = &a.grid_out {
+            write_points(p, &grid)?;
+            println!("wrote       {} ({} points)", p.display(), grid.len());
+        }
+        grids.push((
+            format!("workplane {material}"),
+            points.len()..points.len() + grid.len(),
+        ));
+        points.extend(grid);
+    }
     let mut settings = LightingSettings {
         mesh: MeshParams::Patches(a.patches),
         params: SolverParams {

@@ -181,3 +181,89 @@ fn lighting_refuses_bad_input() {
         fails(&args, &dir, &needles, &keep);
     }
 }
+
+/// `--workplane floor`: the EN 12464-1 grid over the floor, 0.8 m up (8 × 5 points over a
+/// 6 × 4 m floor), written with `--grid-out` and read back as the same grid by `--grid`.
+#[test]
+fn lighting_lays_a_workplane_grid() {
+    let dir = scratch("lighting-workplane");
+    room(&dir, 0.5);
+    write(
+        &dir,
+        "room.obj",
+        &ROOM.replace(
+            "usemtl black\nf 1 2 3 4\n",
+            "usemtl floor\nf 1 2 3 4\nusemtl black\n",
+        ),
+    );
+    write(
+        &dir,
+        "room.mtl",
+        "newmtl black\nKd 0.5 0.5 0.5\nnewmtl floor\nKd 0.2 0.2 0.2\n",
+    );
+    let text = run_ok(
+        &[
+            "lighting",
+            "room.obj",
+            "--luminaires",
+            "schedule.csv",
+            "--workplane",
+            "floor",
+            "--grid-out",
+            "wp.pts",
+            "--out",
+            "a.csv",
+            "--patches",
+            "400",
+        ],
+        &dir,
+    );
+    assert!(text.contains("workplane floor: 40 points"), "{text}");
+    let pts = read(&dir, "wp.pts");
+    assert_eq!(pts.lines().count(), 40);
+    assert!(
+        pts.lines()
+            .all(|l| l.split_whitespace().nth(2) == Some("0.8")),
+        "{pts}"
+    );
+    run_ok(
+        &[
+            "lighting",
+            "room.obj",
+            "--luminaires",
+            "schedule.csv",
+            "--grid",
+            "wp.pts",
+            "--out",
+            "b.csv",
+            "--patches",
+            "400",
+        ],
+        &dir,
+    );
+    assert_eq!(read(&dir, "a.csv"), read(&dir, "b.csv"));
+    fails(
+        &[
+            "lighting",
+            "room.obj",
+            "--luminaires",
+            "schedule.csv",
+            "--workplane",
+            "carpet",
+            "--out",
+            "c.csv",
+        ],
+        &dir,
+        &["'carpet'", "floor"],
+        &[
+            "room.obj",
+            "room.mtl",
+            "ies",
+            "schedule.csv",
+            "desk.pts",
+            "wp.pts",
+            "a.csv",
+            "b.csv",
+        ],
+    );
+}

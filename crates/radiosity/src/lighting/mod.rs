@@ -8,6 +8,7 @@
 //!   `rtrace -I` reads them).
 //! - [`luminaire`]: a placed luminaire, its local C-γ frame in world coordinates and the
 //!   intensity it sends in a world direction.
+//! - [`workplane`]: a calculation grid over a material's surfaces, spaced as EN 12464-1 asks.
 //! - [`direct`]: the exact direct illuminance at points from point luminaires, by the
 //!   inverse-square cosine law E = I(ω) cos θ / d², with one shadow ray each.
 //!
@@ -22,11 +23,13 @@ pub mod points;
 pub mod schedule;
 #[cfg(test)]
 mod tests;
+pub mod workplane;
 
 pub use direct::{direct_illuminance, DirectResult};
 pub use luminaire::{FrameError, Luminaire};
 pub use points::{read_points, write_points, SensorPoint};
 pub use schedule::{read_schedule, Up, DEFAULT_GROUP, SCHEDULE_HEADER};
+pub use workplane::workplane;
 
 use crate::io::OutputError;
 use crate::photometry::PhotometryError;
