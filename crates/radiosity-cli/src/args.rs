@@ -368,6 +368,11 @@ pub struct LightingArgs {
     /// then `illuminance_<group>` per light group when there is more than one.
     #[arg(long, short, value_name = "grid.csv", help_heading = OUTPUT)]
     pub out: PathBuf,
+    /// One row per material name: `name,area,reflectance,illuminance,exitance,luminance`
+    /// (m², the luminance-weighted reflectance, mean illuminance in lux, mean luminous exitance
+    /// in lm/m², mean luminance in cd/m²).
+    #[arg(long, value_name = "surfaces.csv", help_heading = OUTPUT)]
+    pub surfaces_out: Option<PathBuf>,
     /// The summary as JSON: per grid the point count, average, minimum and maximum
     /// illuminance and the uniformities U₀ = E_min/Ē and E_min/E_max; per luminaire its
     /// file's lumens and the flux integrated from its distribution.

@@ -55,8 +55,24 @@ pub fn run(a: LightingArgs) -> Result<()> {
         bail!("{}: unsupported output format (use .csv)", a.out.display());
     }
     crate::settings::check_output(&a.out)?;
-    if let Some(p) = &a.grid_out {
+    if let Some(p) = &a.surfaces_out {
+        if FileFormat::from_path(p) != Some(FileFormat::Csv) {
+            bail!("{}: unsupported output format (use .csv)", p.display());
+        }
         if p == &a.out || a.grid.contains(p) || a.summary.as_ref() == Some(p) {
+            bail!(
+                "--surfaces-out {}: the same file as another input or output",
+                p.display()
+            );
+        }
+        crate::settings::check_output(p)?;
+    }
+    if let Some(p) = &a.grid_out {
+        if p == &a.out
+            || a.surfaces_out.as_ref() == Some(p)
+            || a.grid.contains(p)
+            || a.summary.as_ref() == Some(p)
+        {
             bail!(
                 "--grid-out {}: the same file as another input or output",
                 p.display()
@@ -172,6 +188,26 @@ pub fn run(a: LightingArgs) -> Result<()> {
     })
     .context("writing the grid")?;
 
+    if let Some(p) = &a.surfaces_out {
+        write_atomic::<OutputError>(p, |out| {
+            writeln!(out, "name,area,reflectance,illuminance,exitance,luminance")?;
+            for s in &r.surfaces {
+                let name = if s.name.contains([',', '"', '\n']) {
+                    format!("\"{}\"", s.name.replace('"', "\"\""))
+                } else {
+                    s.name.clone()
+                };
+                writeln!(
+                    out,
+                    "{name},{},{},{},{},{}",
+                    s.area, s.reflectance, s.illuminance, s.exitance, s.luminance
+                )?;
+            }
+            Ok(())
+        })
+        .context("writing the surfaces")?;
+    }
+
     // The summary.
     println!(
         "scene       {} ({} polygons, {} patches)",
@@ -226,6 +262,13 @@ pub fn run(a: LightingArgs) -> Result<()> {
         println!("cpu         {cpu:.2} s (user and system, all threads)");
     }
     println!("wrote       {} ({} points)", a.out.display(), points.len());
+    if let Some(p) = &a.surfaces_out {
+        println!(
+            "wrote       {} ({} surfaces)",
+            p.display(),
+            r.surfaces.len()
+        );
+    }
     if let Some(p) = &a.summary {
         let v = serde_json::json!({
             "scene": scene.name,

@@ -96,6 +96,25 @@ pub struct LightingResult {
     /// Each group's luminaires' flux, lumens (integrated from their distributions, after
     /// multipliers), in `groups` order (0 for [`SCENE_GROUP`]).
     pub flux: Vec<f64>,
+    /// One row per material name, in the scene's material order, every group together.
+    pub surfaces: Vec<SurfaceLight>,
+}
+
+/// The light on the surfaces of one material name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceLight {
+    /// The material's name.
+    pub name: String,
+    /// Area, m².
+    pub area: f64,
+    /// Photometric (luminance-weighted) reflectance.
+    pub reflectance: f64,
+    /// Area-weighted mean illuminance arriving, lux (direct and interreflected).
+    pub illuminance: f64,
+    /// Area-weighted mean luminous exitance leaving, lm/m² (emission included).
+    pub exitance: f64,
+    /// Area-weighted mean luminance, cd/m² (exitance / π: the surfaces are diffuse).
+    pub luminance: f64,
 }
 
 /// Illuminance at `points` in `scene` from `luminaires` (and the scene's own emitting
@@ -177,6 +196,15 @@ pub fn lighting(
             *d += e;
         }
     }
+    // Per patch, every group together: the illuminance arriving (lux) and the exitance
+    // leaving (RGB, lm/m²).
+    let mut patch_e = vec![0.0f64; mesh.len()];
+    let mut patch_b = vec![Rgb::BLACK; mesh.len()];
+    for (p, e) in patch_e.iter_mut().enumerate() {
+        *e = at_patches.by_group[p * lum_groups..(p + 1) * lum_groups]
+            .iter()
+            .sum();
+    }
     for g in 0..ng {
         // The group's initial exitance: the first reflection of its luminaires' light, or the
         // scene's own emission.
@@ -207,6 +235,21 @@ pub fn lighting(
         let mut b = Vec::new();
         solver.radiosity(&mut b);
         drop(solver);
+        // What arrived after the first shot: (B − initial exitance) / ρ, by channel. A black
+        // channel reflects nothing, so what arrived there cannot be read back from B: it
+        // counts 0 (a black surface's interreflected illuminance is left out of the surface
+        // table; its direct illuminance is exact).
+        for p in 0..mesh.len() {
+            patch_b[p] += b[p];
+            let (rho, m) = (system.reflectance[p], system.emission[p]);
+            let arrived = |b: f64, m: f64, r: f64| if r > 1e-9 { (b - m) / r } else { 0.0 };
+            let inc = Rgb::new(
+                arrived(b[p].r, m.r, rho.r),
+                arrived(b[p].g, m.g, rho.g),
+                arrived(b[p].b, m.b, rho.b),
+            );
+            patch_e[p] += luminance(inc).max(0.0);
+        }
         // The light arriving at each point from the surfaces, gathered.
         observer.event(Event::Stage(Stage::Render));
         let vertex = crate::render::vertex_radiosity(&mesh, &b);
@@ -241,6 +284,43 @@ pub fn lighting(
     let total = (0..n)
         .map(|i| by_group[i * ng..(i + 1) * ng].iter().sum())
         .collect();
+    // One row per material name: area-weighted means over its patches.
+    let unit2 = settings.unit_metres * settings.unit_metres;
+    let mut names: Vec<&str> = Vec::new();
+    let mut rows: Vec<SurfaceLight> = Vec::new();
+    for m in &scene.materials {
+        if !names.contains(&m.name.as_str()) {
+            names.push(&m.name);
+            rows.push(SurfaceLight {
+                name: m.name.clone(),
+                area: 0.0,
+                reflectance: luminance(m.reflectance),
+                illuminance: 0.0,
+                exitance: 0.0,
+                luminance: 0.0,
+            });
+        }
+    }
+    for (p, patch) in mesh.patches.iter().enumerate() {
+        let name = &scene.materials[patch.material as usize].name;
+        let k = names
+            .iter()
+            .position(|n| n == name)
+            .expect("every material named");
+        let a = patch.area as f64 * unit2;
+        let row = &mut rows[k];
+        row.area += a;
+        row.illuminance += a * patch_e[p];
+        row.exitance += a * luminance(patch_b[p]);
+    }
+    for row in &mut rows {
+        if row.area > 0.0 {
+            row.illuminance /= row.area;
+            row.exitance /= row.area;
+        }
+        row.luminance = row.exitance / std::f64::consts::PI;
+    }
+    rows.retain(|r| r.area > 0.0);
     Ok(LightingResult {
         groups,
         total,
@@ -248,6 +328,7 @@ pub fn lighting(
         direct,
         patches: mesh.len(),
         flux,
+        surfaces: rows,
     })
 }
 
@@ -362,6 +443,22 @@ mod tests {
             (mean - want).abs() < 0.02 * want,
             "mean indirect {mean} lux, integrating sphere {want} lux"
         );
+        // The surfaces' table: one material, all 96 m²; its exitance is ρ times what arrives
+        // (no emission), and the mean illuminance is the mean direct (Φ / A) plus the
+        // integrating sphere's reflected part.
+        assert_eq!(r.surfaces.len(), 1);
+        let w = &r.surfaces[0];
+        assert!((w.area - area).abs() < 1e-3 * area, "{w:?}");
+        assert!(
+            (w.exitance - rho * w.illuminance).abs() < 1e-9 * w.exitance,
+            "{w:?}"
+        );
+        let e_mean = phi / area + want;
+        assert!(
+            (w.illuminance - e_mean).abs() < 0.02 * e_mean,
+            "{w:?}: {e_mean}"
+        );
+        assert!((w.luminance - w.exitance / std::f64::consts::PI).abs() < 1e-12);
         // The direct part is the inverse-square cosine law, exactly.
         let p = &points[0];
         let d: Vec<f64> = (0..3).map(|k| s / 2.0 - p.position[k]).collect();

@@ -20,7 +20,9 @@ mod view_factors;
 /// The bridge from a meshed scene to its linear system (it lives with the mesh).
 pub use crate::mesh::patch_system;
 pub use crate::observe::{Event, Observer, Stage};
-pub use lighting::{lighting, luminance, LightingResult, LightingSettings, SCENE_GROUP};
+pub use lighting::{
+    lighting, luminance, LightingResult, LightingSettings, SurfaceLight, SCENE_GROUP,
+};
 pub use memory::{available_memory, MemoryCheck, MemoryLimit, BYTES_PER_PATCH};
 pub use reference::{light_surface_means, path_surface_means, path_trace};
 pub use solve::{solve, solve_over};
