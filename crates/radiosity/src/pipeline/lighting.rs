@@ -9,7 +9,8 @@
 //!    each patch's initial exitance (B = ρ E_direct + E_scene + ρ F B, in lm/m²);
 //! 3. at each sensor point adds, to its exact direct illuminance, the light arriving from the
 //!    surfaces, gathered from the solution ([`crate::render::gather::Gather::irradiance_at`]:
-//!    the lit patches by shadow rays, the rest by multiple importance sampling).
+//!    cosine rays and points on the reflecting patches, by multiple importance sampling; the
+//!    scene's own emitting surfaces by shadow rays).
 //!
 //! Radiosity is linear in its sources, so the group columns add up to the total and a light
 //! scene can be re-dimmed by a weighted sum of columns without solving again. The scene's own
@@ -253,12 +254,21 @@ pub fn lighting(
         // The light arriving at each point from the surfaces, gathered.
         observer.event(Event::Stage(Stage::Render));
         let vertex = crate::render::vertex_radiosity(&mesh, &b);
+        // The first reflection of a luminaire's light is the solution's, not an emitter's:
+        // gathered by multiple importance sampling, whose estimate stays bounded for a sensor
+        // close to a lit wall (emitter sampling alone would weigh a point on it by 1/d²).
+        // The scene's own emitting surfaces stay emitters, sampled by shadow rays.
+        let emitters = if g < lum_groups {
+            vec![Rgb::BLACK; mesh.len()]
+        } else {
+            system.emission.clone()
+        };
         let gather = Gather::new(
             Surfaces {
                 mesh: &mesh,
                 bvh: &bvh,
                 reflectance: &system.reflectance,
-                emission: &system.emission,
+                emission: &emitters,
             },
             &vertex,
             settings.gather,
@@ -504,6 +514,49 @@ mod tests {
             let sum: f64 = r.by_group[2 * i..2 * i + 2].iter().sum();
             assert_eq!(sum, r.total[i]);
         }
+    }
+
+    /// A sensor 10 cm from a wall that a luminaire 30 cm away lights brightly: the light
+    /// arriving from the surfaces, estimated 500 times (500 points at the same place, each its
+    /// own stream), stays within 50 % of its mean every time. The bright spot is gathered by
+    /// multiple importance sampling, whose estimate is bounded; sampled as an emitter, a point
+    /// of it close to the sensor would weigh 1/d² and spike.
+    #[test]
+    fn sensors_near_a_bright_wall_do_not_spike() {
+        let (s, rho) = (4.0, 0.5);
+        let scene = cube(s as f32, rho);
+        let lum = Luminaire::new(
+            "lamp",
+            isotropic(1000.0),
+            [0.3, 2.0, 2.0],
+            [0.0, 0.0, -1.0],
+            None,
+            1.0,
+            "default",
+        )
+        .unwrap();
+        let points = vec![SensorPoint::new([0.1, 2.0, 1.5], [0.0, 0.0, 1.0]).unwrap(); 500];
+        let settings = LightingSettings {
+            mesh: MeshParams::Patches(1500),
+            ..Default::default()
+        };
+        let r = lighting(
+            &scene,
+            std::slice::from_ref(&lum),
+            &points,
+            &settings,
+            &crate::observe::Silent,
+        )
+        .unwrap();
+        let ind: Vec<f64> = r.total.iter().zip(&r.direct).map(|(t, d)| t - d).collect();
+        let mean = ind.iter().sum::<f64>() / ind.len() as f64;
+        let (lo, hi) = ind
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+        assert!(
+            lo > 0.5 * mean && hi < 1.5 * mean,
+            "from the surfaces: mean {mean} lx, {lo} … {hi}"
+        );
     }
 
     /// No luminaires and no emitting surface: refused on one line.
