@@ -18,6 +18,7 @@
 //! them as the module `_native`, with `methods`.
 
 mod convert;
+mod lighting;
 mod observer;
 mod scene;
 mod solve;
@@ -68,5 +69,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(system::solve_system_csr, m)?)?;
     m.add_function(wrap_pyfunction!(methods, m)?)?;
     m.add_function(wrap_pyfunction!(thermal::thermal, m)?)?;
+    m.add_function(wrap_pyfunction!(lighting::lighting, m)?)?;
+    m.add_function(wrap_pyfunction!(lighting::read_photometry, m)?)?;
     Ok(())
 }

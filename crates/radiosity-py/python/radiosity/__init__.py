@@ -10,7 +10,7 @@ Meshing, form factors, solves and rendering run with the GIL released.
 """
 
 from . import _native
-from ._native import Scene, Solution, builtin, load, methods
+from ._native import Scene, Solution, builtin, lighting, load, methods, read_photometry
 from ._progress import Progress  # the progress callback's type (in __init__.pyi too)
 from ._solve import solve
 from ._system import solve_system
@@ -27,6 +27,8 @@ __all__ = [
     "solve_system",
     "methods",
     "thermal",
+    "lighting",
+    "read_photometry",
 ]
 
 # Documented (help(), pydoc) as the package's own, where they were defined before the split.

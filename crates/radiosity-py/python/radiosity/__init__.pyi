@@ -113,3 +113,25 @@ def thermal(
     linear_solver: str = "auto",
     progress: Progress = None,
 ) -> dict[str, Any]: ...
+
+def read_photometry(path: Any) -> dict:
+    """An IES or EULUMDAT file: c_angles, gamma_angles, candela (C × γ), lumens, rated_flux,
+    flux, source, warnings."""
+    ...
+
+def lighting(
+    scene: Scene,
+    luminaires: Any = None,
+    points: Optional[np.ndarray] = None,
+    grids: Any = (),
+    unit: float = 1.0,
+    up: str = "z",
+    patches: int = 10000,
+    tolerance: float = 1e-3,
+    indirect_samples: int = 256,
+    seed: int = 1,
+    progress: Progress = None,
+) -> dict:
+    """Illuminance (lux) at points from a luminaire schedule, interreflection included:
+    groups, illuminance (N,), by_group (N, G), direct (N,), patches, flux (G,)."""
+    ...
