@@ -31,13 +31,15 @@
 //! Intensities are candela; positions are scene units, turned into metres by `unit_metres`
 //! (1 for metres, 0.001 for millimetres), so E is lux (lm/m²).
 //!
-//! # Not here
+//! # The near field
 //!
-//! TODO(lighting command): the near field. The point-source law is the far-field limit:
-//! it holds to about 1 % (for a uniform diffuse disc) where d is at least five times the
-//! luminous opening's largest dimension ([`crate::photometry::Opening`]), the "five-times
-//! rule". Closer, the command should warn, or split the opening into sub-sources; nothing is
-//! done about it here.
+//! The point-source law is the far-field limit: it holds to about 1 % (for a uniform diffuse
+//! disc) where d is at least five times the luminous opening's largest dimension
+//! ([`crate::photometry::Opening`]), the "five-times rule". Closer, the opening (a rectangle
+//! of its length along C0 and width along C90, or a disc) is split into n × n cells, n =
+//! ⌈10 s / d⌉ for its largest side s (at most 32), each a point source of the same
+//! distribution carrying its share of the intensity, each with its own shadow ray: the
+//! illuminance of the opening integrated by the midpoint rule.
 
 use super::luminaire::Luminaire;
 use super::points::SensorPoint;
@@ -117,9 +119,55 @@ pub fn direct_illuminance(
     })
 }
 
-/// E at `p` from `l`, lux.
+/// Most cells along a side of a luminous opening in the near field.
+const MAX_CELLS: usize = 32;
+
+/// E at `p` from `l`, lux: the point-source law, or the opening integrated cell by cell in the
+/// near field.
 fn illuminance(p: &SensorPoint, l: &Luminaire, bvh: Option<&Bvh>, offset: f32, unit: f64) -> f64 {
-    let to_light = sub(l.position, p.position);
+    let o = &l.photometry.opening;
+    let size = o.width_m.max(o.length_m);
+    let d_m = norm(sub(l.position, p.position)) * unit;
+    if !(size > 0.0 && d_m.is_finite() && d_m < 5.0 * size) {
+        return from_point(p, l, l.position, 1.0, bvh, offset, unit);
+    }
+    let n = ((10.0 * size / d_m.max(1e-9)).ceil() as usize).clamp(1, MAX_CELLS);
+    let (len, wid) = (o.length_m / unit, o.width_m / unit);
+    let mut cells = Vec::with_capacity(n * n);
+    for i in 0..n {
+        for j in 0..n {
+            let (u, v) = (
+                (i as f64 + 0.5) / n as f64 - 0.5,
+                (j as f64 + 0.5) / n as f64 - 0.5,
+            );
+            if o.round && u * u + v * v > 0.25 {
+                continue;
+            }
+            cells.push([
+                l.position[0] + u * len * l.c0[0] + v * wid * l.c90[0],
+                l.position[1] + u * len * l.c0[1] + v * wid * l.c90[1],
+                l.position[2] + u * len * l.c0[2] + v * wid * l.c90[2],
+            ]);
+        }
+    }
+    let share = 1.0 / cells.len().max(1) as f64;
+    cells
+        .iter()
+        .map(|&c| from_point(p, l, c, share, bvh, offset, unit))
+        .sum()
+}
+
+/// E at `p` from a point source of `l`'s distribution at `at`, scaled by `share`, lux.
+fn from_point(
+    p: &SensorPoint,
+    l: &Luminaire,
+    at: [f64; 3],
+    share: f64,
+    bvh: Option<&Bvh>,
+    offset: f32,
+    unit: f64,
+) -> f64 {
+    let to_light = sub(at, p.position);
     let d = norm(to_light);
     if d == 0.0 || !d.is_finite() {
         return 0.0;
@@ -128,14 +176,14 @@ fn illuminance(p: &SensorPoint, l: &Luminaire, bvh: Option<&Bvh>, offset: f32, u
     if cos_theta <= 0.0 {
         return 0.0;
     }
-    let intensity = l.intensity_towards(to_light.map(|v| -v));
+    let intensity = share * l.intensity_towards(to_light.map(|v| -v));
     if intensity <= 0.0 {
         return 0.0;
     }
     if let Some(bvh) = bvh {
         let f = |a: [f64; 3]| Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32);
         let origin = f(p.position) + f(p.normal) * offset;
-        let target = f(l.position);
+        let target = f(at);
         let segment = target - origin;
         let length = segment.length();
         let t_max = length - 2.0 * offset;
