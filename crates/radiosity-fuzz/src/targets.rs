@@ -48,11 +48,15 @@ pub enum Target {
     Ies,
     /// EULUMDAT photometry.
     Ldt,
+    /// A luminaire schedule (with its photometric file beside it, unmutated).
+    Schedule,
+    /// Calculation points in Radiance's points format.
+    Points,
 }
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 15] = [
+    pub const ALL: [Target; 17] = [
         Target::Obj,
         Target::Mtl,
         Target::Mgf,
@@ -68,6 +72,8 @@ impl Target {
         Target::Pfm,
         Target::Ies,
         Target::Ldt,
+        Target::Schedule,
+        Target::Points,
     ];
 
     /// Its name.
@@ -88,6 +94,8 @@ impl Target {
             Target::Pfm => "pfm",
             Target::Ies => "ies",
             Target::Ldt => "ldt",
+            Target::Schedule => "schedule",
+            Target::Points => "points",
         }
     }
 }
@@ -101,6 +109,9 @@ const VS3: &str = "T two forms\nC encl=1 list=2 eps=1.e-4 maxu=8\nF 3\n! a box\n
 const VS3A: &str = "T L room\nC encl=1\nF 3a\nS 1 R 0 0 0.90 s1\n  3. 0. 0. 0 90 3. 3.\nS 2 Q 0 0 0.90 s2\n  3. 0. 3. 0 180\n  2. 0. 3. 0. 3. 1. 2. 1.\nS 3 T 0 1 0.90 s3\n 0. 0. 0. 180 0 0. 0. 1. 0. 1. 1.\nO 4 R 1. 1. 1. 45 30 1. 1.\nE\n";
 const IES: &str = "IESNA:LM-63-2002\r\n[TEST] fuzz seed\r\n[MANUFAC] radiosity\r\nTILT=INCLUDE\r\n1\r\n3\r\n0 45 90\r\n1 0.9 0.8\r\n1 1000 1 5 3 1 2 0.6 -0.3 0.1\r\n1 0 0\r\n0 22.5 45 67.5 90\r\n0 90 180\r\n300 280 220 120 10\r\n310 290 230 130 12\r\n320 300 240 140 14\r\n";
 const LDT: &str = "radiosity\n1\n2\n4\n90\n5\n22.5\nreport\nfuzz seed\n1\nseed.ldt\n2026-11-28\n600\n300\n80\n580\n280\n0\n0\n0\n0\n95\n80\n1\n0\n1\n2\nLED\n4000\n3000\n80\n40\n0.5\n0.6\n0.7\n0.75\n0.8\n0.85\n0.9\n0.92\n0.95\n0.97\n0\n90\n180\n270\n0\n22.5\n45\n67.5\n90\n300\n280\n220\n120\n10\n310\n290\n230\n130\n12\n320\n300\n240\n140\n14\n";
+const SCHEDULE: &str = "name,file,x,y,z,aim_x,aim_y,aim_z,c0_x,c0_y,c0_z,multiplier,group\nA,lamp.ies,1,2,2.9,,,,,,,0.8,north\n\"B, quoted\",lamp.ies,3,2,2.9,0.1,0,-1,1,0,0,,\n";
+const POINTS: &str =
+    "# a desk\n0.5 0.5 0.8 0 0 1\n1.5\t0.5 0.8 0 0 2\n\n2.5 0.5 0.8 0.1 0 1 # tilted\n";
 const BC: &str = "name,emissivity,temperature,flux\nfloor,0.9,300,\ntop,,,-20.5\n\"xeq0\",1,,\n# comment\nyeq0,0.5,0,\n";
 
 /// The outcome of a run.
@@ -147,6 +158,9 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
         Target::BoundaryCsv => vec![s("bc.csv", BC)],
         Target::Ies => vec![s("lamp.ies", IES)],
         Target::Ldt => vec![s("lamp.ldt", LDT)],
+        // The schedule first: the mutations fall on the first file.
+        Target::Schedule => vec![s("lights.csv", SCHEDULE), s("lamp.ies", IES)],
+        Target::Points => vec![s("desk.pts", POINTS)],
         Target::Pfm => vec![("ref.pfm".into(), {
             let mut b = b"PF\n2 2\n-1.0\n".to_vec();
             for k in 0..12u32 {
@@ -268,6 +282,11 @@ fn parse(target: Target, dir: &Path) -> bool {
         Target::Pfm => radiosity::render::compare::read_pfm(&dir.join("ref.pfm")).is_ok(),
         Target::Ies => radiosity::photometry::read(&dir.join("lamp.ies")).is_ok(),
         Target::Ldt => radiosity::photometry::read(&dir.join("lamp.ldt")).is_ok(),
+        Target::Schedule => {
+            radiosity::lighting::read_schedule(&dir.join("lights.csv"), radiosity::lighting::Up::Z)
+                .is_ok()
+        }
+        Target::Points => radiosity::lighting::read_points(&dir.join("desk.pts")).is_ok(),
         Target::MatrixMarket | Target::PatchesCsv => {
             let m = matrix_market::read(&dir.join("f.mtx"));
             let p = patches_csv::read(&dir.join("p.csv"));
