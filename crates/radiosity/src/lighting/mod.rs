@@ -8,7 +8,7 @@
 //!   `rtrace -I` reads them).
 //! - [`luminaire`]: a placed luminaire, its local C-γ frame in world coordinates and the
 //!   intensity it sends in a world direction.
-//! - [`workplane`]: a calculation grid over a material's surfaces, spaced as EN 12464-1 asks.
+//! - [`workplane`](mod@workplane): a calculation grid over a material's surfaces, spaced as EN 12464-1 asks.
 //! - [`direct`]: the exact direct illuminance at points from point luminaires, by the
 //!   inverse-square cosine law E = I(ω) cos θ / d², with one shadow ray each.
 //!
