@@ -18,7 +18,7 @@
 //! separated by blanks, commas or line ends, wrapped anywhere.
 
 use super::{
-    check_angles, count, invalid, last_line, number, prepare, shown, Lines, Opening,
+    check_angles, invalid, last_line, number, prepare, shown, Lines, NumberReader, Opening,
     PhotometricType, Photometry, PhotometryError, Symmetry, Table, Words, MAX_TABLE_VALUES,
 };
 
@@ -63,55 +63,7 @@ impl Revision {
 }
 
 /// The numbers after the `TILT=` line, read in order, with errors at their lines.
-struct Reader<'a> {
-    words: Words<'a>,
-    file: &'a str,
-    end_line: usize,
-}
-
-impl<'a> Reader<'a> {
-    /// The next word, or an error naming `what` was expected.
-    fn word(&mut self, what: &str) -> Result<(usize, &'a str), PhotometryError> {
-        self.words.next().ok_or_else(|| {
-            invalid(
-                self.file,
-                self.end_line,
-                format!("expected {what}, found the end of the file"),
-            )
-        })
-    }
-
-    /// The next number and its line.
-    fn number(&mut self, what: &str) -> Result<(f64, usize), PhotometryError> {
-        let (line, word) = self.word(what)?;
-        number(word, what)
-            .map(|v| (v, line))
-            .map_err(|m| invalid(self.file, line, m))
-    }
-
-    /// The next number, a count of at least `min`.
-    fn count(&mut self, what: &str, min: usize) -> Result<(usize, usize), PhotometryError> {
-        let (line, word) = self.word(what)?;
-        let value = number(word, what).map_err(|m| invalid(self.file, line, m))?;
-        count(value, word, what, min)
-            .map(|n| (n, line))
-            .map_err(|m| invalid(self.file, line, m))
-    }
-
-    /// `n` numbers (the caller has checked that `n` words are left), with their lines.
-    fn numbers(&mut self, n: usize, what: &str) -> Result<(Vec<f64>, Vec<usize>), PhotometryError> {
-        // No more room than the words left can fill, whatever the count says.
-        let room = n.min(self.words.remaining());
-        let mut values = Vec::with_capacity(room);
-        let mut lines = Vec::with_capacity(room);
-        for _ in 0..n {
-            let (v, line) = self.number(what)?;
-            values.push(v);
-            lines.push(line);
-        }
-        Ok((values, lines))
-    }
-}
+type Reader<'a> = NumberReader<'a>;
 
 /// Parse the text of an IES LM-63 file; `name` is the file's name, for messages and
 /// [`Photometry::source`].
@@ -159,6 +111,7 @@ pub fn parse_ies(text: &str, name: &str) -> Result<Photometry, PhotometryError> 
         words: Words::new(lines, true),
         file: name,
         end_line,
+        parse: number,
     };
     if tilt.eq_ignore_ascii_case("INCLUDE") {
         skip_tilt_table(&mut r)?;

@@ -41,8 +41,8 @@
 //! Numbers may use a decimal comma (`99,8`), as some European writers do.
 
 use super::{
-    check_angles, count, invalid, last_line, number, prepare, shown, Lines, Opening, Photometry,
-    PhotometryError, Symmetry, Table, Words, MAX_TABLE_VALUES,
+    check_angles, count, invalid, last_line, number, prepare, shown, Lines, NumberReader, Opening,
+    Photometry, PhotometryError, Symmetry, Table, Words, MAX_TABLE_VALUES,
 };
 
 /// A number as EULUMDAT writes it: a decimal point or a single decimal comma.
@@ -98,39 +98,7 @@ impl<'a> Cursor<'a> {
 /// The numeric tail (direct ratios, angles, intensities): one value a line as the format
 /// writes it, but read as blank-separated words so that a writer putting several on a line
 /// is read too.
-struct Tail<'a> {
-    words: Words<'a>,
-    file: &'a str,
-    end_line: usize,
-}
-
-impl<'a> Tail<'a> {
-    fn number(&mut self, what: &str) -> Result<(f64, usize), PhotometryError> {
-        let (line, word) = self.words.next().ok_or_else(|| {
-            invalid(
-                self.file,
-                self.end_line,
-                format!("expected {what}, found the end of the file"),
-            )
-        })?;
-        ldt_number(word, what)
-            .map(|v| (v, line))
-            .map_err(|m| invalid(self.file, line, m))
-    }
-
-    fn numbers(&mut self, n: usize, what: &str) -> Result<(Vec<f64>, Vec<usize>), PhotometryError> {
-        // No more room than the words left can fill, whatever the count says.
-        let room = n.min(self.words.remaining());
-        let mut values = Vec::with_capacity(room);
-        let mut lines = Vec::with_capacity(room);
-        for _ in 0..n {
-            let (v, line) = self.number(what)?;
-            values.push(v);
-            lines.push(line);
-        }
-        Ok((values, lines))
-    }
-}
+type Tail<'a> = NumberReader<'a>;
 
 /// Parse the text of an EULUMDAT file; `name` is the file's name, for messages and
 /// [`Photometry::source`]. Intensities (cd/klm) are scaled to candela by the first lamp set's
@@ -287,6 +255,7 @@ pub fn parse_ldt(text: &str, name: &str) -> Result<Photometry, PhotometryError> 
         words: Words::new(c.lines, false),
         file: name,
         end_line,
+        parse: ldt_number,
     };
     let left = t.words.remaining();
     let needed = [

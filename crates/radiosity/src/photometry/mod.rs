@@ -607,6 +607,69 @@ pub(crate) fn last_line(text: &str) -> usize {
     Lines::new(text).count().max(1)
 }
 
+/// Numbers read in order from [`Words`], each error at its line: the tables of both formats,
+/// which differ only in how a word is read as a number (EULUMDAT allows a decimal comma).
+pub(crate) struct NumberReader<'a> {
+    pub(crate) words: Words<'a>,
+    pub(crate) file: &'a str,
+    /// The file's last line, where "found the end of the file" is reported.
+    pub(crate) end_line: usize,
+    /// A word as a number, or the message (`what` names the value).
+    pub(crate) parse: fn(&str, &str) -> Result<f64, String>,
+}
+
+impl<'a> NumberReader<'a> {
+    /// The next word, or an error naming `what` was expected.
+    pub(crate) fn word(&mut self, what: &str) -> Result<(usize, &'a str), PhotometryError> {
+        self.words.next().ok_or_else(|| {
+            invalid(
+                self.file,
+                self.end_line,
+                format!("expected {what}, found the end of the file"),
+            )
+        })
+    }
+
+    /// The next number and its line.
+    pub(crate) fn number(&mut self, what: &str) -> Result<(f64, usize), PhotometryError> {
+        let (line, word) = self.word(what)?;
+        (self.parse)(word, what)
+            .map(|v| (v, line))
+            .map_err(|m| invalid(self.file, line, m))
+    }
+
+    /// The next number, a count of at least `min`.
+    pub(crate) fn count(
+        &mut self,
+        what: &str,
+        min: usize,
+    ) -> Result<(usize, usize), PhotometryError> {
+        let (line, word) = self.word(what)?;
+        let value = (self.parse)(word, what).map_err(|m| invalid(self.file, line, m))?;
+        count(value, word, what, min)
+            .map(|n| (n, line))
+            .map_err(|m| invalid(self.file, line, m))
+    }
+
+    /// `n` numbers (the caller has checked that `n` words are left), with their lines.
+    pub(crate) fn numbers(
+        &mut self,
+        n: usize,
+        what: &str,
+    ) -> Result<(Vec<f64>, Vec<usize>), PhotometryError> {
+        // No more room than the words left can fill, whatever the count says.
+        let room = n.min(self.words.remaining());
+        let mut values = Vec::with_capacity(room);
+        let mut lines = Vec::with_capacity(room);
+        for _ in 0..n {
+            let (v, line) = self.number(what)?;
+            values.push(v);
+            lines.push(line);
+        }
+        Ok((values, lines))
+    }
+}
+
 /// Blank- (and, for IES, comma-) separated words of the lines that follow, with their line
 /// numbers. Allocates nothing.
 #[derive(Clone)]
