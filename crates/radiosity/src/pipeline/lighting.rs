@@ -366,6 +366,20 @@ mod tests {
         Arc::new(parse_ies(&text, "iso.ies").unwrap())
     }
 
+    /// An isotropic luminaire of `i0` candela at `at`, aimed down, in `group`.
+    fn lamp(name: &str, i0: f64, at: [f64; 3], multiplier: f64, group: &str) -> Luminaire {
+        Luminaire::new(
+            name,
+            isotropic(i0),
+            at,
+            [0.0, 0.0, -1.0],
+            None,
+            multiplier,
+            group,
+        )
+        .unwrap()
+    }
+
     /// A closed cube of side `s` metres, inward faces, one grey reflectance.
     fn cube(s: f32, rho: f64) -> Scene {
         let v = |x: f32, y: f32, z: f32| Vec3::new(x * s, y * s, z * s);
@@ -414,17 +428,7 @@ mod tests {
     fn a_cube_interreflects_as_an_integrating_sphere() {
         let (s, rho, i0) = (4.0, 0.5, 1000.0);
         let scene = cube(s as f32, rho);
-        let photometry = isotropic(i0);
-        let lum = Luminaire::new(
-            "lamp",
-            photometry.clone(),
-            [s / 2.0; 3],
-            [0.0, 0.0, -1.0],
-            None,
-            1.0,
-            "default",
-        )
-        .unwrap();
+        let lum = lamp("lamp", i0, [s / 2.0; 3], 1.0, "default");
         let points = wall_points(s, 7);
         let settings = LightingSettings {
             mesh: MeshParams::Patches(2400),
@@ -482,26 +486,8 @@ mod tests {
     fn black_walls_leave_the_direct_light_and_groups_add_up() {
         let s = 3.0;
         let scene = cube(s as f32, 0.0);
-        let a = Luminaire::new(
-            "a",
-            isotropic(500.0),
-            [1.0, 1.5, 2.5],
-            [0.0, 0.0, -1.0],
-            None,
-            1.0,
-            "one",
-        )
-        .unwrap();
-        let b = Luminaire::new(
-            "b",
-            isotropic(300.0),
-            [2.0, 1.5, 2.5],
-            [0.0, 0.0, -1.0],
-            None,
-            2.0,
-            "two",
-        )
-        .unwrap();
+        let a = lamp("a", 500.0, [1.0, 1.5, 2.5], 1.0, "one");
+        let b = lamp("b", 300.0, [2.0, 1.5, 2.5], 2.0, "two");
         let points = wall_points(s, 3);
         let settings = LightingSettings {
             mesh: MeshParams::Patches(300),
@@ -525,16 +511,7 @@ mod tests {
     fn sensors_near_a_bright_wall_do_not_spike() {
         let (s, rho) = (4.0, 0.5);
         let scene = cube(s as f32, rho);
-        let lum = Luminaire::new(
-            "lamp",
-            isotropic(1000.0),
-            [0.3, 2.0, 2.0],
-            [0.0, 0.0, -1.0],
-            None,
-            1.0,
-            "default",
-        )
-        .unwrap();
+        let lum = lamp("lamp", 1000.0, [0.3, 2.0, 2.0], 1.0, "default");
         let points = vec![SensorPoint::new([0.1, 2.0, 1.5], [0.0, 0.0, 1.0]).unwrap(); 500];
         let settings = LightingSettings {
             mesh: MeshParams::Patches(1500),
