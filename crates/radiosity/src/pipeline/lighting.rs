@@ -296,11 +296,12 @@ pub fn lighting(
         .collect();
     // One row per material name: area-weighted means over its patches.
     let unit2 = settings.unit_metres * settings.unit_metres;
-    let mut names: Vec<&str> = Vec::new();
+    // The row of each material: materials that share a name share a row.
     let mut rows: Vec<SurfaceLight> = Vec::new();
+    let mut row_of = Vec::with_capacity(scene.materials.len());
+    let mut by_name: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
     for m in &scene.materials {
-        if !names.contains(&m.name.as_str()) {
-            names.push(&m.name);
+        let k = *by_name.entry(m.name.as_str()).or_insert_with(|| {
             rows.push(SurfaceLight {
                 name: m.name.clone(),
                 area: 0.0,
@@ -309,16 +310,13 @@ pub fn lighting(
                 exitance: 0.0,
                 luminance: 0.0,
             });
-        }
+            rows.len() - 1
+        });
+        row_of.push(k);
     }
     for (p, patch) in mesh.patches.iter().enumerate() {
-        let name = &scene.materials[patch.material as usize].name;
-        let k = names
-            .iter()
-            .position(|n| n == name)
-            .expect("every material named");
         let a = patch.area as f64 * unit2;
-        let row = &mut rows[k];
+        let row = &mut rows[row_of[patch.material as usize]];
         row.area += a;
         row.illuminance += a * patch_e[p];
         row.exitance += a * luminance(patch_b[p]);
