@@ -311,8 +311,9 @@ pub enum LinearSolverArg {
 
 const EXAMPLES_LIGHTING: &str = "Examples:
   radiosity lighting office.obj --luminaires schedule.csv --grid desk.pts --out grid.csv
-  radiosity lighting room.glb --up y --luminaires lights.csv --grid a.pts --grid b.pts \\
-      --out grid.csv --summary summary.json";
+  radiosity lighting room.glb --luminaires lights.csv --grid a.pts --grid b.pts \\
+      --out grid.csv --summary summary.json
+  radiosity lighting blender-export.glb --workplane Floor --out grid.csv    (the file's own lights)";
 
 /// The scene's vertical (`lighting --up`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -331,7 +332,8 @@ pub struct LightingArgs {
     pub scene: String,
     /// The luminaire schedule: a CSV with the header
     /// `name,file,x,y,z,aim_x,aim_y,aim_z,c0_x,c0_y,c0_z,multiplier,group` (files relative to
-    /// it). Leave it out when the scene's own emitting surfaces are the light.
+    /// it). Leave it out when the scene's own emitting surfaces (or a glTF scene's
+    /// `KHR_lights_punctual` / `EXT_lights_ies` lights, which are always used) are the light.
     #[arg(long, value_name = "schedule.csv", help_heading = SCENE)]
     pub luminaires: Option<PathBuf>,
     /// Calculation points in Radiance's points format (`x y z dx dy dz` a line, the direction
@@ -349,9 +351,10 @@ pub struct LightingArgs {
     /// Length unit of the scene, the schedule and the points.
     #[arg(long, value_enum, default_value = "m", help_heading = SCENE)]
     pub unit: UnitArg,
-    /// The scene's vertical: what "down" means for a luminaire with no aim.
-    #[arg(long, value_enum, default_value = "z", help_heading = SCENE)]
-    pub up: UpArg,
+    /// The scene's vertical: what "down" means for a luminaire with no aim [default: z; y
+    /// for glTF scenes, which are always y-up].
+    #[arg(long, value_enum, help_heading = SCENE)]
+    pub up: Option<UpArg>,
     /// Patches of the interreflection's mesh.
     #[arg(long, value_name = "N", default_value_t = 10_000, help_heading = MESHING)]
     pub patches: usize,

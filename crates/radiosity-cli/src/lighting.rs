@@ -3,7 +3,9 @@
 use crate::args::{LightingArgs, UpArg};
 use anyhow::{bail, Context, Result};
 use radiosity::io::{write_atomic, FileFormat, OutputError};
-use radiosity::lighting::{read_points, read_schedule, workplane, write_points, Up};
+use radiosity::lighting::{
+    gltf_luminaires, read_points, read_schedule, workplane, write_points, Up,
+};
 use radiosity::mesh::MeshParams;
 use radiosity::pipeline::{lighting, LightingSettings};
 use radiosity::solve::SolverParams;
@@ -94,14 +96,31 @@ pub fn run(a: LightingArgs) -> Result<()> {
             bail!("--grid {}: an output would overwrite it", g.display());
         }
     }
-    let up = match a.up {
-        UpArg::Z => Up::Z,
-        UpArg::Y => Up::Y,
+    let is_gltf = matches!(
+        FileFormat::from_path(std::path::Path::new(&a.scene)),
+        Some(FileFormat::Gltf | FileFormat::Glb)
+    );
+    let up = match (a.up, is_gltf) {
+        (Some(UpArg::Z), true) => {
+            bail!("--up z: {} is glTF, whose scenes are always y-up", a.scene)
+        }
+        (Some(UpArg::Y), _) | (None, true) => Up::Y,
+        (Some(UpArg::Z), false) | (None, false) => Up::Z,
     };
-    let luminaires = match &a.luminaires {
+    let mut luminaires = match &a.luminaires {
         Some(p) => read_schedule(p, up)?,
         None => Vec::new(),
     };
+    if is_gltf {
+        let (own, warnings) = gltf_luminaires(std::path::Path::new(&a.scene))?;
+        for w in warnings {
+            eprintln!("radiosity: warning: {w}");
+        }
+        if !own.is_empty() {
+            println!("lights      {} from the glTF file", own.len());
+        }
+        luminaires.extend(own);
+    }
     let mut warned = std::collections::HashSet::new();
     for l in &luminaires {
         if warned.insert(std::sync::Arc::as_ptr(&l.photometry)) {

@@ -16,6 +16,7 @@ mod validator;
 mod errors;
 mod experiment;
 mod form_factors;
+mod gltf_lights;
 mod lighting;
 mod mpi;
 mod render;

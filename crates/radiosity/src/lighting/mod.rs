@@ -12,12 +12,15 @@
 //! - [`direct`]: the exact direct illuminance at points from point luminaires, by the
 //!   inverse-square cosine law E = I(ω) cos θ / d², with one shadow ray each.
 //!
-//! What is not here yet, for the command: the first shot of the luminaires into the scene's
-//! patches (the same law, E at patch centres or integrated over patches), the diffuse
-//! interreflection solved from there and gathered at the points, the near-field treatment of
-//! large luminous openings (see [`direct`]), and the grid output.
+//! - [`gltf`](mod@gltf): luminaires from a glTF scene's own `KHR_lights_punctual` and
+//!   `EXT_lights_ies` lights.
+//!
+//! The calculation over a whole scene (the luminaires' first shot into the patches, the
+//! interreflection, the gather at the points, the surfaces table) is
+//! [`crate::pipeline::lighting`].
 
 pub mod direct;
+pub mod gltf;
 pub mod luminaire;
 pub mod points;
 pub mod schedule;
@@ -26,6 +29,7 @@ mod tests;
 pub mod workplane;
 
 pub use direct::{direct_illuminance, DirectResult};
+pub use gltf::gltf_luminaires;
 pub use luminaire::{FrameError, Luminaire};
 pub use points::{read_points, write_points, SensorPoint};
 pub use schedule::{read_schedule, Up, DEFAULT_GROUP, SCHEDULE_HEADER};

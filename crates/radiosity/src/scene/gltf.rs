@@ -46,8 +46,8 @@ use glam::{DMat4, DVec3};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
-/// Extensions whose presence in `extensionsRequired` we can honour: the two we read, and those
-/// that only change what we ignore anyway.
+/// Extensions whose presence in `extensionsRequired` we can honour: those we read (the lights
+/// by [`super::gltf_lights`], for `lighting`), and those that only change what we ignore anyway.
 const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_materials_unlit",
@@ -55,9 +55,11 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_specular",
     "KHR_mesh_quantization",
+    "KHR_lights_punctual",
+    "EXT_lights_ies",
 ];
 
-fn invalid(path: &Path, message: impl Into<String>) -> SceneError {
+pub(super) fn invalid(path: &Path, message: impl Into<String>) -> SceneError {
     SceneError::Invalid {
         at: crate::loc::FileLoc::file(path),
         message: crate::loc::shorten(message.into()),
@@ -150,17 +152,17 @@ fn percent_decode(uri: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-struct Reader<'a> {
-    path: &'a Path,
-    doc: &'a ::gltf::Document,
-    buffers: Vec<Vec<u8>>,
+pub(super) struct Reader<'a> {
+    pub(super) path: &'a Path,
+    pub(super) doc: &'a ::gltf::Document,
+    pub(super) buffers: Vec<Vec<u8>>,
     /// Mean linear colour of each image already decoded.
-    image_means: HashMap<usize, Rgb>,
+    pub(super) image_means: HashMap<usize, Rgb>,
 }
 
 impl<'a> Reader<'a> {
     /// The bytes a URI names: a `data:` URI, or a file relative to the glTF file.
-    fn resolve(&self, uri: &str, what: &str) -> Result<(Vec<u8>, String), SceneError> {
+    pub(super) fn resolve(&self, uri: &str, what: &str) -> Result<(Vec<u8>, String), SceneError> {
         if let Some(rest) = uri.strip_prefix("data:") {
             let (_, payload) = rest.split_once(";base64,").ok_or_else(|| {
                 invalid(
@@ -193,7 +195,7 @@ impl<'a> Reader<'a> {
         Ok((bytes, file.display().to_string()))
     }
 
-    fn load_buffers(&mut self, bin: Option<&[u8]>) -> Result<(), SceneError> {
+    pub(super) fn load_buffers(&mut self, bin: Option<&[u8]>) -> Result<(), SceneError> {
         for b in self.doc.buffers() {
             let what = format!("buffers[{}]", b.index());
             let (data, from) = match b.source() {
@@ -548,23 +550,14 @@ fn check_references(path: &Path, json: &[u8]) -> Result<(), SceneError> {
     Ok(())
 }
 
-fn read_scene(
-    path: &Path,
-    one_sided: bool,
-    colours: Option<(&mut Vec<[Rgb; 3]>, VertexValues)>,
-) -> Result<Scene, SceneError> {
-    let (mut colours, which) = match colours {
-        Some((c, w)) => (Some(c), w),
-        None => (None, VertexValues::Colour),
-    };
-    let bytes = crate::io::read_input(path).map_err(|source| SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+/// A glTF file's bytes parsed: the document, its JSON text and (GLB) its binary chunk; the
+/// references the `gltf` crate would unwrap are checked first, and a required extension the
+/// engine does not implement is refused.
+pub(super) fn open<'b>(path: &Path, bytes: &'b [u8]) -> Result<Opened<'b>, SceneError> {
     let (json, bin) = if bytes.starts_with(b"glTF") {
-        split_glb(path, &bytes)?
+        split_glb(path, bytes)?
     } else {
-        (&bytes[..], None)
+        (bytes, None)
     };
     check_references(path, json)?;
     let gltf = ::gltf::Gltf::from_slice(json).map_err(|e| match e {
@@ -578,8 +571,7 @@ fn read_scene(
         }
         e => invalid(path, format!("invalid glTF: {e}")),
     })?;
-    let doc = &gltf.document;
-    for ext in doc.extensions_required() {
+    for ext in gltf.document.extensions_required() {
         if !SUPPORTED_REQUIRED.contains(&ext) {
             return Err(invalid(
                 path,
@@ -587,6 +579,33 @@ fn read_scene(
             ));
         }
     }
+    Ok(Opened { gltf, json, bin })
+}
+
+/// A glTF file parsed by [`open`].
+pub(super) struct Opened<'b> {
+    pub(super) gltf: ::gltf::Gltf,
+    /// The JSON text.
+    pub(super) json: &'b [u8],
+    /// The GLB binary chunk, if any.
+    pub(super) bin: Option<&'b [u8]>,
+}
+
+fn read_scene(
+    path: &Path,
+    one_sided: bool,
+    colours: Option<(&mut Vec<[Rgb; 3]>, VertexValues)>,
+) -> Result<Scene, SceneError> {
+    let (mut colours, which) = match colours {
+        Some((c, w)) => (Some(c), w),
+        None => (None, VertexValues::Colour),
+    };
+    let bytes = crate::io::read_input(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let Opened { gltf, bin, .. } = open(path, &bytes)?;
+    let doc = &gltf.document;
     let mut r = Reader {
         path,
         doc,
@@ -651,7 +670,7 @@ fn read_scene(
         }
         if node.light().is_some() {
             *ignored
-                .entry("punctual lights (only emissive surfaces emit)")
+                .entry("punctual lights (only `lighting` reads them; here only emissive surfaces emit)")
                 .or_default() += 1;
         }
         let Some(mesh) = node.mesh() else { continue };

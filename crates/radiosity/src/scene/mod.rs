@@ -10,6 +10,7 @@
 
 pub mod builtin;
 pub mod gltf;
+pub mod gltf_lights;
 pub mod mgf;
 pub mod obj;
 pub mod ply;
