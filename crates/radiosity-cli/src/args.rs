@@ -441,6 +441,19 @@ pub struct ThermalArgs {
     /// `patch,name,x,y,z,area,emissivity,temperature,flux,power`.
     #[arg(long, value_name = "patches.csv", help_heading = OUTPUT)]
     pub patches_out: Option<PathBuf>,
+    /// Points for radiant temperatures, in Radiance's points format (`x y z dx dy dz` a line,
+    /// scene units; the direction is the side the plane radiant temperature faces); give it
+    /// more than once for several files. Needs `--mrt-out`.
+    #[arg(long, value_name = "points.pts", requires = "mrt_out", help_heading = OUTPUT)]
+    pub grid: Vec<PathBuf>,
+    /// One row per point of the grids: `x,y,z,mean_radiant_temperature,
+    /// plane_radiant_temperature,sky_view` (K, K, the share of the sphere that sees no
+    /// surface), from the solved radiosities with exact visibility.
+    #[arg(long, value_name = "mrt.csv", requires = "grid", help_heading = OUTPUT)]
+    pub mrt_out: Option<PathBuf>,
+    /// Rays per point over the sphere (and as many over the hemisphere), stratified.
+    #[arg(long, value_name = "N", default_value_t = 4096, help_heading = OUTPUT)]
+    pub mrt_rays: u32,
 }
 
 /// Which experiment.

@@ -34,6 +34,28 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         }
         crate::settings::check_output(p)?;
     }
+    if let Some(p) = &a.mrt_out {
+        if FileFormat::from_path(p) != Some(FileFormat::Csv) {
+            bail!("--mrt-out {}: must be a .csv file", p.display());
+        }
+        crate::settings::check_output(p)?;
+        if a.mrt_rays == 0 || a.mrt_rays > radiosity::pipeline::MAX_RADIANT_RAYS {
+            bail!(
+                "--mrt-rays {}: give 1 to {}",
+                a.mrt_rays,
+                radiosity::pipeline::MAX_RADIANT_RAYS
+            );
+        }
+    }
+    // The points, read before any work.
+    let mut points = Vec::new();
+    for g in &a.grid {
+        let p = radiosity::lighting::read_points(g)?;
+        if p.is_empty() {
+            bail!("{}: no points", g.display());
+        }
+        points.extend(p);
+    }
     if !(a.environment.is_finite() && a.environment >= 0.0) {
         bail!(
             "--environment {}: a temperature in kelvin, at least 0",
@@ -227,6 +249,42 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         radiosity::export::write_text(p, &s)?;
     }
 
+    let radiant = if let Some(p) = &a.mrt_out {
+        let bvh = radiosity::accel::Bvh::build(mesh);
+        let params = radiosity::pipeline::RadiantParams {
+            rays: a.mrt_rays,
+            seed: a.seed,
+        };
+        let t = std::time::Instant::now();
+        let r = radiosity::pipeline::radiant_temperatures(
+            mesh,
+            &bvh,
+            &solution.radiosity,
+            a.environment,
+            &points,
+            params,
+        )
+        .map_err(|m| anyhow::anyhow!("radiant temperatures: {m}"))?;
+        let mut s =
+            String::from("x,y,z,mean_radiant_temperature,plane_radiant_temperature,sky_view\n");
+        for (q, v) in points.iter().zip(&r.points) {
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{},{}",
+                q.position[0],
+                q.position[1],
+                q.position[2],
+                v.mean_radiant_temperature,
+                v.plane_radiant_temperature,
+                v.sky_view
+            );
+        }
+        radiosity::export::write_text(p, &s)?;
+        Some((p, r, t.elapsed().as_secs_f64()))
+    } else {
+        None
+    };
+
     // Summary.
     let info = &solution.info;
     println!(
@@ -312,6 +370,29 @@ pub fn run(a: ThermalArgs) -> Result<()> {
     }
     println!("wrote       {}", a.out.display());
     if let Some(p) = &a.patches_out {
+        println!("wrote       {}", p.display());
+    }
+    if let Some((p, r, seconds)) = &radiant {
+        let (lo, hi) = r
+            .points
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (
+                    lo.min(v.mean_radiant_temperature),
+                    hi.max(v.mean_radiant_temperature),
+                )
+            });
+        println!(
+            "radiant     {} points, mean radiant temperature {lo:.2}..{hi:.2} K, {} rays in {seconds:.2} s",
+            r.points.len(),
+            r.rays
+        );
+        if r.back_hits > 0 {
+            eprintln!(
+                "radiosity: warning: {} of {} rays met the back of a surface (points inside a solid?); they count as the surroundings",
+                r.back_hits, r.rays
+            );
+        }
         println!("wrote       {}", p.display());
     }
     Ok(())

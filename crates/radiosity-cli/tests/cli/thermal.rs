@@ -481,3 +481,98 @@ fn thermal_concentric_spheres() {
         s["inner"][3]
     );
 }
+
+/// Radiant temperatures at points (`--grid`, `--mrt-out`): a closed black 2 m cube, floor at
+/// 350 K, the rest at 300 K. At the centre each face subtends 4π/6, so T_mr⁴ = (350⁴ +
+/// 5·300⁴)/6; a sensor there facing the floor sees it with the parallel-square factor
+/// 4 · (1/2π)·2·(1/√2)·atan(1/√2) = 0.554…, so T_pr⁴ = F·350⁴ + (1 − F)·300⁴. The stratified
+/// estimate errs by under 4·√(3√n)/n of the spread of T⁴ (see `pipeline::radiant`).
+#[test]
+fn thermal_radiant_temperatures_at_points() {
+    let dir = scratch("thermal-mrt");
+    write(&dir, "cube.mtl", "newmtl floor\nKd 0 0 0\nnewmtl walls\nKd 0 0 0\n");
+    let mut obj = String::from("mtllib cube.mtl\n");
+    for k in 0..8 {
+        let c = |bit: usize| if k & bit != 0 { 2.0 } else { 0.0 };
+        obj += &format!("v {} {} {}\n", c(1), c(2), c(4));
+    }
+    // Inward faces: the outward corner orders reversed; z− (the floor) first.
+    let faces = [
+        [0, 2, 3, 1],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [4, 5, 7, 6],
+    ];
+    for (i, f) in faces.iter().enumerate() {
+        if i < 2 {
+            obj += if i == 0 {
+                "usemtl floor\n"
+            } else {
+                "usemtl walls\n"
+            };
+        }
+        let f = f.map(|v| v + 1);
+        obj += &format!("f {} {} {} {}\n", f[3], f[2], f[1], f[0]);
+    }
+    write(&dir, "cube.obj", &obj);
+    write(
+        &dir,
+        "bc.csv",
+        "name,emissivity,temperature,flux\nfloor,1,350,\nwalls,1,300,\n",
+    );
+    write(&dir, "p.pts", "1 1 1 0 0 -1\n1 1 1 0 0 1\n");
+    let out = thermal(
+        &dir,
+        &[
+            "cube.obj",
+            "--boundary",
+            "bc.csv",
+            "--out",
+            "s.csv",
+            "--grid",
+            "p.pts",
+            "--mrt-out",
+            "mrt.csv",
+        ],
+    );
+    assert!(out.contains("radiant     2 points"), "{out}");
+    let (header, rows) = read_csv(&dir.join("mrt.csv"));
+    assert_eq!(
+        header.join(","),
+        "x,y,z,mean_radiant_temperature,plane_radiant_temperature,sky_view"
+    );
+    let (hot, cold) = (350f64.powi(4), 300f64.powi(4));
+    let f = 4.0 / (2.0 * std::f64::consts::PI) * 2.0 / 2f64.sqrt() * (1.0 / 2f64.sqrt()).atan();
+    let n = 4232.0; // 2k², k = 46, for the default 4,096 rays
+    let bound = 4.0 * (3.0 * f64::sqrt(n)).sqrt() / n * (hot - cold);
+    let v = |r: &Vec<String>, c: usize| r[c].parse::<f64>().unwrap();
+    let mean = (hot + 5.0 * cold) / 6.0;
+    for (r, facing_floor) in rows.iter().zip([true, false]) {
+        assert!((v(r, 3).powi(4) - mean).abs() < bound, "T_mr {}", v(r, 3));
+        let share = if facing_floor { f } else { 0.0 };
+        let plane = share * hot + (1.0 - share) * cold;
+        assert!((v(r, 4).powi(4) - plane).abs() < bound, "T_pr {}", v(r, 4));
+        assert_eq!(v(r, 5), 0.0, "a closed box has no sky");
+    }
+    // A bad grid: named with its line, before any work; no output left.
+    write(&dir, "bad.pts", "1 1 1 0 0 1\n1 1 nan 0 0 1\n");
+    fails(
+        &[
+            "thermal",
+            "cube.obj",
+            "--boundary",
+            "bc.csv",
+            "--out",
+            "t.csv",
+            "--grid",
+            "bad.pts",
+            "--mrt-out",
+            "m.csv",
+        ],
+        &dir,
+        &["bad.pts:2"],
+        &["cube.obj", "cube.mtl", "bc.csv", "p.pts", "s.csv", "mrt.csv", "bad.pts"],
+    );
+}

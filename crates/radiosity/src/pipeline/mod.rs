@@ -11,6 +11,7 @@
 
 mod lighting;
 mod memory;
+mod radiant;
 mod reference;
 mod solve;
 mod system;
@@ -24,6 +25,9 @@ pub use lighting::{
     lighting, luminance, LightingResult, LightingSettings, SurfaceLight, SCENE_GROUP,
 };
 pub use memory::{available_memory, MemoryCheck, MemoryLimit, BYTES_PER_PATCH};
+pub use radiant::{
+    radiant_temperatures, RadiantParams, RadiantPoint, RadiantResult, MAX_RADIANT_RAYS,
+};
 pub use reference::{light_surface_means, path_surface_means, path_trace};
 pub use solve::{solve, solve_over};
 pub use system::{solve_system, trace_reference, SystemSolution, TRACE_EXACT_MAX};
