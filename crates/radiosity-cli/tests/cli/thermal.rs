@@ -309,7 +309,7 @@ fn thermal_rejects_bad_boundaries() {
         ),
         (
             "plate,0.5,300,\n",
-            &["bc.csv", "no boundary condition for 1 surface: back"],
+            &["bc.csv", "no boundary condition for 1 surface name: 'back'"],
         ),
     ] {
         write(&dir, "bc.csv", &format!("{h}{body}"));
@@ -490,7 +490,11 @@ fn thermal_concentric_spheres() {
 #[test]
 fn thermal_radiant_temperatures_at_points() {
     let dir = scratch("thermal-mrt");
-    write(&dir, "cube.mtl", "newmtl floor\nKd 0 0 0\nnewmtl walls\nKd 0 0 0\n");
+    write(
+        &dir,
+        "cube.mtl",
+        "newmtl floor\nKd 0 0 0\nnewmtl walls\nKd 0 0 0\n",
+    );
     let mut obj = String::from("mtllib cube.mtl\n");
     for k in 0..8 {
         let c = |bit: usize| if k & bit != 0 { 2.0 } else { 0.0 };
@@ -573,6 +577,77 @@ fn thermal_radiant_temperatures_at_points() {
         ],
         &dir,
         &["bad.pts:2"],
-        &["cube.obj", "cube.mtl", "bc.csv", "p.pts", "s.csv", "mrt.csv", "bad.pts"],
+        &[
+            "cube.obj", "cube.mtl", "bc.csv", "p.pts", "s.csv", "mrt.csv", "bad.pts",
+        ],
     );
+}
+
+/// A View3D file whose surface names repeat (View3D numbers its surfaces and reads it): a unit
+/// cube whose top and bottom are both `side` (400 K) and whose four walls are all `wall`
+/// (300 K), black. Each name's boundary applies to all its surfaces, and the flux of `side` is
+/// F σ(400⁴ − 300⁴) with F = 1 − F_opposite = 1 − 0.1998248957 (Howell C-11), to the Monte
+/// Carlo error of 10⁶ rays a row (1e-3).
+#[test]
+fn thermal_reads_repeated_view3d_names() {
+    let dir = scratch("thermal-repeated-names");
+    let mut vs3 = String::from("T cube\nC encl=1\nF 3\n");
+    for (k, v) in [
+        [0, 0, 0],
+        [1, 0, 0],
+        [1, 1, 0],
+        [0, 1, 0],
+        [0, 0, 1],
+        [1, 0, 1],
+        [1, 1, 1],
+        [0, 1, 1],
+    ]
+    .iter()
+    .enumerate()
+    {
+        vs3 += &format!("V {} {} {} {}\n", k + 1, v[0], v[1], v[2]);
+    }
+    for (k, (f, name)) in [
+        ([2, 3, 4, 1], "side"),
+        ([8, 7, 6, 5], "side"),
+        ([5, 6, 2, 1], "wall"),
+        ([6, 7, 3, 2], "wall"),
+        ([7, 8, 4, 3], "wall"),
+        ([8, 5, 1, 4], "wall"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        vs3 += &format!(
+            "S {} {} {} {} {} 0 0 1 {name}\n",
+            k + 1,
+            f[0],
+            f[1],
+            f[2],
+            f[3]
+        );
+    }
+    vs3 += "End of data\n";
+    write(&dir, "c.vs3", &vs3);
+    write(
+        &dir,
+        "bc.csv",
+        "name,emissivity,temperature,flux\nside,1,400,\nwall,1,300,\n",
+    );
+    let out = run(
+        &["thermal", "c.vs3", "--boundary", "bc.csv", "--out", "s.csv"],
+        &dir,
+    );
+    let text = succeed(&out);
+    assert!(
+        stderr(&out).contains("4 surface name(s) repeat"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(balance_of(&text) < 1e-9);
+    let s = read_surfaces(&dir.join("s.csv"));
+    let q = (1.0 - 0.199_824_895_7) * SIGMA * (400f64.powi(4) - 300f64.powi(4));
+    let got = s["side"];
+    assert!((got[0] - 2.0).abs() < 1e-9, "both sides count: {}", got[0]);
+    assert!((got[3] - q).abs() < 1e-3 * q, "{} vs {q}", got[3]);
 }

@@ -109,16 +109,17 @@ pub fn thermal_boundaries(
     for p in &scene.polygons {
         used[p.material] = true;
     }
-    let by_name: std::collections::HashMap<&str, usize> = scene
-        .materials
-        .iter()
-        .enumerate()
-        .filter(|(m, _)| used[*m])
-        .map(|(m, mat)| (mat.name.as_str(), m))
-        .collect();
+    // A name may be shared by several materials (View3D files may repeat surface names):
+    // the row applies to all of them.
+    let mut by_name: std::collections::HashMap<&str, Vec<usize>> = std::collections::HashMap::new();
+    for (m, mat) in scene.materials.iter().enumerate() {
+        if used[m] {
+            by_name.entry(mat.name.as_str()).or_default().push(m);
+        }
+    }
     let mut boundary_of = vec![None; scene.materials.len()];
     for (k, (name, _)) in names.iter().enumerate() {
-        let Some(&m) = by_name.get(name.as_str()) else {
+        let Some(ms) = by_name.get(name.as_str()) else {
             let hint = match combined(name) {
                 Some(t) => format!("it is combined into '{t}' (cmb); name that surface"),
                 None => {
@@ -136,9 +137,14 @@ pub fn thermal_boundaries(
                     )
                 }
             };
-            return Err((Some(k), format!("unknown surface '{name}'; {hint}")));
+            return Err((
+                Some(k),
+                crate::loc::shorten(format!("unknown surface '{name}'; {hint}")),
+            ));
         };
-        boundary_of[m] = Some(k as u32);
+        for &m in ms {
+            boundary_of[m] = Some(k as u32);
+        }
     }
     let mut missing: Vec<&str> = (0..scene.materials.len())
         .filter(|&m| used[m] && boundary_of[m].is_none())
@@ -146,13 +152,24 @@ pub fn thermal_boundaries(
         .collect();
     if !missing.is_empty() {
         missing.sort_unstable();
+        missing.dedup();
+        let shown: Vec<String> = missing
+            .iter()
+            .take(10)
+            .map(|n| crate::loc::shorten(format!("'{n}'")))
+            .collect();
+        let more = if missing.len() > 10 {
+            format!(" and {} more", missing.len() - 10)
+        } else {
+            String::new()
+        };
         return Err((
             None,
             format!(
-                "no boundary condition for {} surface{}: {} (add a row for each; leave temperature and flux empty for an adiabatic surface)",
+                "no boundary condition for {} surface name{}: {}{more} (add a row for each; leave temperature and flux empty for an adiabatic surface)",
                 missing.len(),
                 if missing.len() == 1 { "" } else { "s" },
-                missing.join(", ")
+                shown.join(", ")
             ),
         ));
     }

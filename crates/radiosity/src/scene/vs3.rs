@@ -482,42 +482,55 @@ pub fn parse(path: &Path, text: &str) -> Result<Vs3, SceneError> {
     let mut materials: Vec<Material> = Vec::new();
     let mut material_of = vec![usize::MAX; surfaces.len()];
     let mut reported = Vec::new();
-    // Reported name → its line: a repeated name is found in O(1).
+    // Name → its first line: a repeated name is found in O(1). View3D identifies surfaces by
+    // number and reads files whose names repeat; so do we, with a warning: each surface keeps
+    // its own material (its own row of factors), and a boundary condition given for the name
+    // applies to every surface of that name.
     let mut named: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+    let mut repeats: Vec<(usize, usize, &str)> = Vec::new();
     for (k, s) in surfaces.iter().enumerate() {
+        let new_name = !matches!((s.kind, s.combined_into), (SurfaceKind::Radiating, Some(_)));
+        if new_name {
+            if let Some(&first) = named.get(s.name.as_str()) {
+                repeats.push((s.line, first, &s.name));
+            } else {
+                named.insert(&s.name, s.line);
+            }
+        }
         material_of[k] = match (s.kind, s.combined_into) {
             (SurfaceKind::Radiating, Some(t)) => material_of[t],
             (SurfaceKind::Radiating, None) => {
-                if let Some(other) = named.insert(&s.name, s.line) {
-                    return Err(invalid(
-                        path,
-                        s.line,
-                        format!(
-                            "surface name '{}' is also the name of the surface on line {other}; names must differ",
-                            s.name
-                        ),
-                    ));
-                }
                 reported.push(materials.len());
                 materials.push(Material::diffuse(&s.name, Rgb::splat(1.0 - s.emissivity)));
                 materials.len() - 1
             }
             (SurfaceKind::Obstruction, _) => {
-                if let Some(other) = named.insert(&s.name, s.line) {
-                    return Err(invalid(
-                        path,
-                        s.line,
-                        format!(
-                            "obstruction {} is named '{}' here, as is the surface on line {other}; rename that surface",
-                            k + 1,
-                            s.name
-                        ),
-                    ));
-                }
                 materials.push(Material::diffuse(&s.name, Rgb::BLACK));
                 materials.len() - 1
             }
         };
+    }
+    if !repeats.is_empty() {
+        let shown: Vec<String> = repeats
+            .iter()
+            .take(3)
+            .map(|(line, first, name)| {
+                format!(
+                    "'{}' on line {line} (first on line {first})",
+                    crate::loc::shorten(name.to_string())
+                )
+            })
+            .collect();
+        let more = match repeats.len() {
+            n if n > 3 => format!(" and {} more", n - 3),
+            _ => String::new(),
+        };
+        warnings.push(format!(
+            "{}: {} surface name(s) repeat: {}{more}; each surface keeps its own row, and a boundary condition for a repeated name applies to all of its surfaces",
+            path.display(),
+            repeats.len(),
+            shown.join(", ")
+        ));
     }
     let name = super::name_of(path);
     let scene = Scene {
@@ -648,6 +661,29 @@ mod tests {
             names,
             ["srf-1", "srf-2", "srf-3", "srf-4", "srf-5", "srf-6", "srf-7", "srf-8"]
         );
+    }
+
+    /// View3D reads files whose surface names repeat (it numbers surfaces); so do we, with
+    /// one warning naming the first few: each surface keeps its own material (its own row).
+    #[test]
+    fn repeated_names_are_read_with_a_warning() {
+        let mut text = String::from("F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 1 1 0\nV 4 0 1 0\n");
+        for k in 1..=6 {
+            text += &format!("S {k} 1 2 3 4 0 0 0.5 wall\n");
+        }
+        let v = parse(Path::new("x.vs3"), &text).unwrap();
+        assert_eq!(v.reported.len(), 6);
+        assert_eq!(v.scene.materials.len(), 6);
+        assert!(v.scene.materials.iter().all(|m| m.name == "wall"));
+        let w: Vec<&String> = v
+            .scene
+            .warnings
+            .iter()
+            .filter(|w| w.contains("repeat"))
+            .collect();
+        assert_eq!(w.len(), 1, "{:?}", v.scene.warnings);
+        assert!(w[0].contains("5 surface name(s) repeat"), "{}", w[0]);
+        assert!(w[0].contains("line 7 (first on line 6)") && w[0].contains("and 2 more"));
     }
 
     #[test]
