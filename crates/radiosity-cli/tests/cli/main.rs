@@ -17,6 +17,7 @@ mod errors;
 mod experiment;
 mod form_factors;
 mod lighting;
+mod lighting_pictures;
 mod mpi;
 mod render;
 mod solve;
