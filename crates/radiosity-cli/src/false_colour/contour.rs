@@ -162,7 +162,10 @@ mod tests {
             for p in &line.points {
                 let d = (p[0] - centre[0]).hypot(p[1] - centre[1]);
                 assert!((d - r).abs() < h, "level {level}: {p:?} at {d}, circle {r}");
-                assert!((d - r).abs() < h * h / (4.0 * r), "level {level}: {d} vs {r}");
+                assert!(
+                    (d - r).abs() < h * h / (4.0 * r),
+                    "level {level}: {d} vs {r}"
+                );
                 angles.push((p[1] - centre[1]).atan2(p[0] - centre[0]));
             }
             angles.sort_by(f64::total_cmp);
@@ -206,7 +209,10 @@ mod tests {
         }
         // Saddles: corners 0 and 2 above 0.5, 1 and 3 below; the centre's mean decides which
         // pair the lines cut off.
-        for (values, cut) in [([1.0, 0.0, 1.0, 0.2], [[1.0, 0.0], [0.0, 1.0]]), ([1.0, 0.0, 0.8, 0.0], [[0.0, 0.0], [1.0, 1.0]])] {
+        for (values, cut) in [
+            ([1.0, 0.0, 1.0, 0.2], [[1.0, 0.0], [0.0, 1.0]]),
+            ([1.0, 0.0, 0.8, 0.0], [[0.0, 0.0], [1.0, 1.0]]),
+        ] {
             let sq = Field {
                 origin: [0.0, 0.0],
                 step: [1.0, 1.0],
@@ -217,8 +223,15 @@ mod tests {
             let lines = isolines(&sq, 0.5);
             assert_eq!(lines.len(), 2);
             for line in &lines {
-                let m = [0.5 * (line.points[0][0] + line.points[1][0]), 0.5 * (line.points[0][1] + line.points[1][1])];
-                assert!(cut.iter().any(|c| (m[0] - c[0]).abs() < 0.5 && (m[1] - c[1]).abs() < 0.5), "{values:?}: {line:?}");
+                let m = [
+                    0.5 * (line.points[0][0] + line.points[1][0]),
+                    0.5 * (line.points[0][1] + line.points[1][1]),
+                ];
+                assert!(
+                    cut.iter()
+                        .any(|c| (m[0] - c[0]).abs() < 0.5 && (m[1] - c[1]).abs() < 0.5),
+                    "{values:?}: {line:?}"
+                );
             }
         }
     }

@@ -104,7 +104,11 @@ pub fn triangulate(pts: &[[f64; 2]]) -> Result<Triangulation, String> {
     all.push([mid[0] + far, mid[1] - far]);
     all.push([mid[0], mid[1] + far]);
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| pts[a][0].total_cmp(&pts[b][0]).then(pts[a][1].total_cmp(&pts[b][1])));
+    order.sort_by(|&a, &b| {
+        pts[a][0]
+            .total_cmp(&pts[b][0])
+            .then(pts[a][1].total_cmp(&pts[b][1]))
+    });
     let mut active = vec![triangle(&all, [n, n + 1, n + 2])];
     let mut done: Vec<Tri> = Vec::new();
     let mut edges: Vec<[usize; 2]> = Vec::new();
@@ -176,7 +180,9 @@ mod tests {
     fn scatter(n: usize, seed: u64) -> Vec<[f64; 2]> {
         let mut s = seed;
         let mut next = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         };
         (0..n).map(|_| [next(), next()]).collect()
@@ -193,7 +199,9 @@ mod tests {
                 p.reverse();
             }
             for &q in &p {
-                while hull.len() >= 2 && orient(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0 {
+                while hull.len() >= 2
+                    && orient(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+                {
                     hull.pop();
                 }
                 hull.push(q);

@@ -5,21 +5,22 @@
 //!
 //! A grid is drawn in its plane ([`GridPlane`]). Points on a regular lattice along the
 //! drawing axes (the work-plane grid) are drawn as their cells, one flat band colour a cell,
-//! and the isolines are those of the bilinear interpolant between the nodes: marching squares
-//! on the lattice subdivided to about 100 nodes a side ([`Field::refined`]). Other points are triangulated
-//! (Delaunay) and interpolated linearly within each triangle, exact for a linear field and
-//! never beyond the neighbours' values, onto a raster of 200 cells along the grid's longer
-//! side; only cells whose centre lies in the points' convex hull are drawn, and the isolines
-//! are marching squares on that raster. The isolux plot shows the grid's area in light grey,
-//! its points as dots, and each isoline in its level's colour, labelled with its level.
+//! and the isolines are those of the bilinear interpolant between the nodes: marching
+//! squares on the lattice subdivided to about 100 nodes a side ([`Field::refined`]). Other
+//! points are triangulated (Delaunay) and interpolated linearly within each triangle, exact
+//! for a linear field and never beyond the neighbours' values, onto a raster of 200 cells
+//! along the grid's longer side; only cells whose centre lies in the points' convex hull are
+//! drawn, and the isolines are marching squares on that raster. The isolux plot shows the
+//! grid's area in light grey, its points as dots (up to 20,000 of them), and each isoline in
+//! its level's colour, labelled with its level.
 
 use super::contour::{isolines, Polyline};
 use super::delaunay::triangulate;
 use super::lattice::{detect, Field};
 use super::plane::GridPlane;
 use super::{
-    draw_band_legend, draw_header, register_font, rgb, write_png, Bands, DrawResult, Scale,
-    HEADER, LEGEND_WIDTH,
+    draw_band_legend, draw_header, register_font, rgb, write_png, Bands, DrawResult, Scale, HEADER,
+    LEGEND_WIDTH,
 };
 use anyhow::{bail, Context, Result};
 use plotters::coord::types::RangedCoordf64;
@@ -32,8 +33,6 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-/// Width of the pictures, pixels.
-pub const WIDTH: u32 = 1000;
 /// The chart's margin, pixels.
 const MARGIN: u32 = 14;
 /// Height of the x axis's labels, pixels.
@@ -60,21 +59,26 @@ pub struct MapFrame {
 }
 
 impl MapFrame {
-    /// The frame for content spanning `lo..hi` along (u, v): 752 pixels wide, as tall as
-    /// the content's aspect asks within 260–760 pixels, one scale both ways, centred.
+    /// The frame for content spanning `lo..hi` along (u, v): one scale both ways, the
+    /// plotting area at most 752 × 760 pixels and at least 452 × 260 (the content centred
+    /// where its aspect leaves room), the picture as wide as the plot, its axes and legend.
     pub fn of(lo: [f64; 2], hi: [f64; 2]) -> MapFrame {
-        let pw = WIDTH - LEGEND_WIDTH - 2 * MARGIN - Y_LABELS;
+        let (most, least) = ((752.0, 760.0), (452.0, 260.0));
         let du = (hi[0] - lo[0]).max(1e-12);
         let dv = (hi[1] - lo[1]).max(1e-12);
-        let ph = ((pw as f64 * dv / du).round() as u32).clamp(260, 760);
-        let height = HEADER + 2 * MARGIN + X_LABELS + ph;
-        let s = (pw as f64 / du).min(ph as f64 / dv);
+        let s = (most.0 / du).min(most.1 / dv);
+        let pw = (s * du).round().clamp(least.0, most.0) as u32;
+        let ph = (s * dv).round().clamp(least.1, most.1) as u32;
+        let size = (
+            pw + 2 * MARGIN + Y_LABELS + LEGEND_WIDTH,
+            HEADER + 2 * MARGIN + X_LABELS + ph,
+        );
         let (cu, cv) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
         let (hu, hv) = (0.5 * pw as f64 / s, 0.5 * ph as f64 / s);
         let x0 = (MARGIN + Y_LABELS) as i32;
         let y0 = (HEADER + MARGIN) as i32;
         MapFrame {
-            size: (WIDTH, height),
+            size,
             u: cu - hu..cu + hu,
             v: cv - hv..cv + hv,
             columns: (x0, x0 + pw as i32 - 1),
@@ -86,7 +90,8 @@ impl MapFrame {
     pub fn pixel(&self, p: [f64; 2]) -> (i32, i32) {
         let tu = (p[0] - self.u.start) / (self.u.end - self.u.start);
         let tv = (p[1] - self.v.start) / (self.v.end - self.v.start);
-        let x = self.columns.0 + ((self.columns.1 - self.columns.0) as f64 * tu + 1e-3).floor() as i32;
+        let x =
+            self.columns.0 + ((self.columns.1 - self.columns.0) as f64 * tu + 1e-3).floor() as i32;
         let y = self.rows.1 + ((self.rows.0 - self.rows.1) as f64 * tv - 1e-3).ceil() as i32;
         (x, y)
     }
@@ -214,8 +219,9 @@ impl GridPictures {
             let uv: Vec<[f64; 2]> = positions.iter().map(|&p| plane.project(p)).collect();
             let (field, layout) = match detect(&uv) {
                 Some((field, node)) => (field, Layout::Lattice { node }),
-                None => scattered(&uv)
-                    .map_err(|e| anyhow::anyhow!("--pictures: grid {name}: {e}"))?,
+                None => {
+                    scattered(&uv).map_err(|e| anyhow::anyhow!("--pictures: grid {name}: {e}"))?
+                }
             };
             prepared.push(Prepared {
                 name: name.clone(),
@@ -462,20 +468,21 @@ struct Picture<'a> {
 }
 
 type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+type ChartAndLegend<'a, DB> = (Chart<'a, DB>, DrawingArea<DB, Shift>);
 
 /// The header, and the chart over the frame's ranges with its axes (no grid lines); returns
 /// the chart and the legend's column.
 fn frame_chart<'a, DB: DrawingBackend>(
     root: &'a DrawingArea<DB, Shift>,
     pic: &Picture<'_>,
-) -> std::result::Result<(Chart<'a, DB>, DrawingArea<DB, Shift>), Box<dyn std::error::Error>>
+) -> std::result::Result<ChartAndLegend<'a, DB>, Box<dyn std::error::Error>>
 where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
     let (header, body) = root.split_vertically(HEADER);
     draw_header(&header, &pic.title, &pic.caption)?;
-    let (left, legend) = body.split_horizontally(WIDTH - LEGEND_WIDTH);
+    let (left, legend) = body.split_horizontally(pic.frame.size.0 - LEGEND_WIDTH);
     let mut chart = ChartBuilder::on(&left)
         .margin(MARGIN)
         .x_label_area_size(X_LABELS)
@@ -559,7 +566,10 @@ fn along(px: &[(f64, f64)], f: f64) -> (f64, f64) {
         let d = (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1);
         if d >= left && d > 0.0 {
             let t = left / d;
-            return (w[0].0 + t * (w[1].0 - w[0].0), w[0].1 + t * (w[1].1 - w[0].1));
+            return (
+                w[0].0 + t * (w[1].0 - w[0].0),
+                w[0].1 + t * (w[1].1 - w[0].1),
+            );
         }
         left -= d;
     }
@@ -601,10 +611,18 @@ where
             }))?;
         }
     }
-    chart.draw_series(
+    // The points: smaller dots where there are many, none past 20,000 (a blur, and a large
+    // SVG).
+    let dot = if pic.points.len() > 400 { 1 } else { 2 };
+    let shown = if pic.points.len() <= 20_000 {
         pic.points
+    } else {
+        &[]
+    };
+    chart.draw_series(
+        shown
             .iter()
-            .map(|p| Circle::new((p[0], p[1]), 2, RGBColor(60, 60, 60).filled())),
+            .map(|p| Circle::new((p[0], p[1]), dot, RGBColor(60, 60, 60).filled())),
     )?;
     // Labels: one a line long enough to carry it (the longest of each level always), at
     // the first of a few places along it where it overlaps no other label.
@@ -660,10 +678,11 @@ where
             root.draw(&Text::new(
                 text.clone(),
                 (xi, yi),
-                font.color(&rgb(pic.bands.line_colour(*k))).pos(text_anchor::Pos::new(
-                    text_anchor::HPos::Center,
-                    text_anchor::VPos::Center,
-                )),
+                font.color(&rgb(pic.bands.line_colour(*k)))
+                    .pos(text_anchor::Pos::new(
+                        text_anchor::HPos::Center,
+                        text_anchor::VPos::Center,
+                    )),
             ))?;
         }
     }
@@ -716,7 +735,11 @@ enum Kind {
     Isolux,
 }
 
-fn draw<DB: DrawingBackend>(kind: Kind, root: &DrawingArea<DB, Shift>, pic: &Picture<'_>) -> DrawResult
+fn draw<DB: DrawingBackend>(
+    kind: Kind,
+    root: &DrawingArea<DB, Shift>,
+    pic: &Picture<'_>,
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -759,7 +782,12 @@ mod tests {
     #[test]
     fn the_frame_is_the_charts() {
         register_font();
-        for (lo, hi) in [([0.5, 0.5], [5.5, 3.5]), ([-3.0, 10.0], [-1.0, 40.0]), ([0.0, 0.0], [30.0, 15.0])] {
+        for (lo, hi) in [
+            ([0.5, 0.5], [5.5, 3.5]),
+            ([-3.0, 10.0], [-1.0, 40.0]),
+            ([0.0, 0.0], [30.0, 15.0]),
+            ([0.0, 0.0], [7.0, 11.0]),
+        ] {
             let frame = MapFrame::of(lo, hi);
             let mut buf = vec![0u8; frame.size.0 as usize * frame.size.1 as usize * 3];
             let root = BitMapBackend::with_buffer(&mut buf, frame.size).into_drawing_area();
@@ -793,7 +821,9 @@ mod tests {
     fn scattered_points_are_interpolated_in_their_hull() {
         let mut s = 12345u64;
         let mut next = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         };
         // A disc of radius 2 about (1, 1): its hull is inside the disc.
@@ -837,6 +867,9 @@ mod tests {
         }
         // The hull of 300 points fills most of the disc: most of its area is drawn.
         let cell = f.step[0] * f.step[1];
-        assert!(drawn as f64 * cell > 0.85 * std::f64::consts::PI * 4.0, "{drawn} cells");
+        assert!(
+            drawn as f64 * cell > 0.85 * std::f64::consts::PI * 4.0,
+            "{drawn} cells"
+        );
     }
 }

@@ -57,8 +57,14 @@ impl Field {
         );
         for j in 0..nv {
             for i in 0..nu {
-                let (i0, j0) = ((i / k).min(self.nu.saturating_sub(2)), (j / k).min(self.nv.saturating_sub(2)));
-                let (s, t) = ((i - i0 * k) as f64 / k as f64, (j - j0 * k) as f64 / k as f64);
+                let (i0, j0) = (
+                    (i / k).min(self.nu.saturating_sub(2)),
+                    (j / k).min(self.nv.saturating_sub(2)),
+                );
+                let (s, t) = (
+                    (i - i0 * k) as f64 / k as f64,
+                    (j - j0 * k) as f64 / k as f64,
+                );
                 let (i1, j1) = ((i0 + 1).min(self.nu - 1), (j0 + 1).min(self.nv - 1));
                 // Corners at weight zero do not count (a node on the lattice's edge or hole).
                 let corners = [
@@ -220,7 +226,11 @@ mod tests {
             let q = f.node(k % f.nu, k / f.nu);
             assert!((p[0] - q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9);
         }
-        let column: Vec<[f64; 2]> = l.iter().copied().filter(|p| p[0] > 1.0 && p[0] < 2.0).collect();
+        let column: Vec<[f64; 2]> = l
+            .iter()
+            .copied()
+            .filter(|p| p[0] > 1.0 && p[0] < 2.0)
+            .collect();
         assert!(detect(&column).is_none());
         let missing: Vec<[f64; 2]> = l
             .iter()

@@ -83,15 +83,17 @@ fn nice_step(span: f64, parts: f64) -> f64 {
 }
 
 impl Bands {
-    /// Bands covering `[lo, hi]` with 5 to 11 linear bands (the span over ten, rounded up to a nice step), or 1–2–5 levels per decade on a
-    /// log scale (one a decade past six decades); a single value or an empty range gets a band
-    /// around it. Non-finite bounds read as `[0, 1]`.
+    /// Bands covering `[lo, hi]`: 5 to 11 linear bands (a tenth of the span rounded up to a
+    /// nice step), or 1–2–5 levels per decade on a log scale (one a decade past six decades);
+    /// a single value gets bands around it. Non-finite bounds, or both zero, read as `[0, 1]`.
     pub fn new(lo: f64, hi: f64, scale: Scale) -> Bands {
-        let (mut lo, mut hi) = if lo.is_finite() && hi.is_finite() && lo <= hi {
-            (lo, hi)
-        } else {
-            (0.0, 1.0)
-        };
+        // Nothing to show (no range, or all zero: a dark grid): the unit range.
+        let (mut lo, mut hi) =
+            if lo.is_finite() && hi.is_finite() && lo <= hi && (lo != 0.0 || hi != 0.0) {
+                (lo, hi)
+            } else {
+                (0.0, 1.0)
+            };
         match scale {
             Scale::Linear => {
                 if hi - lo <= 1e-9 * hi.abs().max(lo.abs()) {
@@ -293,7 +295,10 @@ where
     ))?;
     for k in 0..=n {
         let y = top + (n - k) * swatch;
-        area.draw(&PathElement::new(vec![(44, y), (49, y)], BLACK.stroke_width(1)))?;
+        area.draw(&PathElement::new(
+            vec![(44, y), (49, y)],
+            BLACK.stroke_width(1),
+        ))?;
         area.draw(&Text::new(
             bands.label(k as usize),
             (53, y),
@@ -345,14 +350,18 @@ const RASTER_MAX: (f64, f64) = (860.0, 700.0);
 
 impl RasterFrame {
     /// The frame of a `width × height` raster: scaled (by nearest value) to fit 860 × 700
-    /// pixels, below the header, left of the legend.
+    /// pixels, below the header, left of the legend (the picture at least 700 pixels wide).
     pub fn of(width: usize, height: usize) -> RasterFrame {
         let scale = (RASTER_MAX.0 / width.max(1) as f64).min(RASTER_MAX.1 / height.max(1) as f64);
         let drawn = (
             ((width as f64 * scale).round() as u32).max(1),
             ((height as f64 * scale).round() as u32).max(1),
         );
-        let size = (16 + drawn.0 + 16 + LEGEND_WIDTH, HEADER + drawn.1 + 16);
+        // At least 700 pixels wide: room for the caption.
+        let size = (
+            (16 + drawn.0 + 16 + LEGEND_WIDTH).max(700),
+            HEADER + drawn.1 + 16,
+        );
         RasterFrame {
             size,
             origin: (16, HEADER),
@@ -465,7 +474,10 @@ mod tests {
     #[test]
     fn levels_are_round() {
         let b = Bands::new(0.0, 410.0, Scale::Linear);
-        assert_eq!(b.levels, (0..=9).map(|k| 50.0 * k as f64).collect::<Vec<_>>());
+        assert_eq!(
+            b.levels,
+            (0..=9).map(|k| 50.0 * k as f64).collect::<Vec<_>>()
+        );
         let b = Bands::new(87.0, 410.0, Scale::Linear);
         assert_eq!(b.levels.first(), Some(&50.0));
         assert_eq!(b.levels.last(), Some(&450.0));
@@ -477,6 +489,10 @@ mod tests {
         assert_eq!(b.crossed(87.0, 410.0).len(), 7);
         let b = Bands::new(300.0, 300.0, Scale::Linear);
         assert!(b.levels[0] <= 300.0 && *b.levels.last().unwrap() >= 300.0);
+        assert_eq!(
+            Bands::new(0.0, 0.0, Scale::Linear),
+            Bands::new(0.0, 1.0, Scale::Linear)
+        );
         let b = Bands::new(0.0, 1.1, Scale::Linear);
         assert_eq!(b.label(1), "0.2");
         let b = Bands::new(0.0, 2.1, Scale::Linear);
@@ -497,7 +513,13 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let (w, h) = (40, 30);
         let values: Vec<f64> = (0..w * h)
-            .map(|i| if i % w == 0 { f64::NAN } else { 10.0 * (i % w) as f64 + 0.1 * (i / w) as f64 })
+            .map(|i| {
+                if i % w == 0 {
+                    f64::NAN
+                } else {
+                    10.0 * (i % w) as f64 + 0.1 * (i / w) as f64
+                }
+            })
             .collect();
         let raster = Raster {
             width: w,
@@ -517,11 +539,22 @@ mod tests {
             for x in (frame.origin.0..frame.origin.0 + frame.drawn.0).step_by(5) {
                 let (c, r) = frame.value_at(x, y, w, h).unwrap();
                 let v = values[r * w + c];
-                let want = if v.is_nan() { [255; 3] } else { bands.colour(bands.band(v)) };
+                let want = if v.is_nan() {
+                    [255; 3]
+                } else {
+                    bands.colour(bands.band(v))
+                };
                 assert_eq!(img.get_pixel(x, y).0, want, "({x}, {y}) shows {v}");
             }
         }
-        assert!(write_raster_png(&path, &Raster { width: 41, ..raster }).is_err());
+        assert!(write_raster_png(
+            &path,
+            &Raster {
+                width: 41,
+                ..raster
+            }
+        )
+        .is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

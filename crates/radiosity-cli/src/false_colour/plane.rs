@@ -158,9 +158,9 @@ impl GridPlane {
             (n, u, v)
         } else {
             // Elevation, seen from the side the sensors face; the vertical up the page.
-            let facing: [f64; 3] = normals.iter().fold([0.0; 3], |s, d| {
-                [s[0] + d[0], s[1] + d[1], s[2] + d[2]]
-            });
+            let facing: [f64; 3] = normals
+                .iter()
+                .fold([0.0; 3], |s, d| [s[0] + d[0], s[1] + d[1], s[2] + d[2]]);
             let side = dot(normal, facing);
             let n = if side.abs() > 1e-9 * n {
                 scaled(normal, side.signum())
@@ -270,7 +270,7 @@ mod tests {
         let e = GridPlane::fit(&two, &vec![[0.0, 0.0, 1.0]; 40], Up::Z).unwrap_err();
         assert!(e.contains("not on one plane"), "{e}");
         let line: Vec<[f64; 3]> = (0..6).map(|k| [k as f64, 2.0, 0.8]).collect();
-        let e = GridPlane::fit(&line, &vec![[0.0, 0.0, 1.0]; 6], Up::Z).unwrap_err();
+        let e = GridPlane::fit(&line, &[[0.0, 0.0, 1.0]; 6], Up::Z).unwrap_err();
         assert!(e.contains("line"), "{e}");
         let e = GridPlane::fit(&[[1.0, 1.0, 1.0]; 3], &[[0.0, 0.0, 1.0]; 3], Up::Z).unwrap_err();
         assert!(e.contains("one spot"), "{e}");

@@ -129,12 +129,18 @@ fn lighting_draws_false_colour_and_isolux_pictures() {
         for ext in ["png", "svg"] {
             let p = pics.join(format!("{n}.{ext}"));
             assert!(p.is_file(), "{} missing", p.display());
-            assert!(text.contains(&p.strip_prefix(&dir).unwrap().display().to_string()), "{text}");
+            assert!(
+                text.contains(&p.strip_prefix(&dir).unwrap().display().to_string()),
+                "{text}"
+            );
         }
     }
     let (points, e) = grid(&dir);
     assert_eq!(points.len(), 60 + 40);
-    let ranges = [("desk.pts".to_string(), 0..60), ("workplane floor".to_string(), 60..100)];
+    let ranges = [
+        ("desk.pts".to_string(), 0..60),
+        ("workplane floor".to_string(), 60..100),
+    ];
     let layout = GridPictures::prepare(
         &pics,
         &ranges,
@@ -148,8 +154,13 @@ fn lighting_draws_false_colour_and_isolux_pictures() {
         let values = &e[range.clone()];
         let (lo, hi) = values
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
-        assert!(hi > 5.0 * lo, "{stem}: {lo}–{hi} lx is not a test of colours");
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        assert!(
+            hi > 5.0 * lo,
+            "{stem}: {lo}–{hi} lx is not a test of colours"
+        );
         let bands = Bands::new(lo, hi, Scale::Linear);
         let step = bands.levels[1] - bands.levels[0];
         let img = image::open(pics.join(format!("{stem}-illuminance.png")))
@@ -198,9 +209,15 @@ fn lighting_draws_false_colour_and_isolux_pictures() {
         assert!(iso.matches("<polyline").count() >= crossed.len(), "{stem}");
         for k in crossed {
             let label = bands.label(k);
-            assert!(iso_texts.contains(&label.as_str()), "{stem}: no line labelled {label}");
+            assert!(
+                iso_texts.contains(&label.as_str()),
+                "{stem}: no line labelled {label}"
+            );
             let row = format!("{label} lx");
-            assert!(iso_texts.contains(&row.as_str()), "{stem}: no legend row {row}");
+            assert!(
+                iso_texts.contains(&row.as_str()),
+                "{stem}: no legend row {row}"
+            );
         }
     }
 }
@@ -217,7 +234,11 @@ fn lighting_pictures_refuse_bad_input() {
         "two-planes.pts",
         "1 1 0.8 0 0 1\n2 1 0.8 0 0 1\n1 2 0.8 0 0 1\n2 2 0.8 0 0 1\n0 1 1 1 0 0\n0 2 1 1 0 0\n0 1 2 1 0 0\n",
     );
-    write(&dir, "line.pts", "1 1 0.8 0 0 1\n2 1 0.8 0 0 1\n3 1 0.8 0 0 1\n");
+    write(
+        &dir,
+        "line.pts",
+        "1 1 0.8 0 0 1\n2 1 0.8 0 0 1\n3 1 0.8 0 0 1\n",
+    );
     let keep = [
         "room.obj",
         "room.mtl",
@@ -244,9 +265,21 @@ fn lighting_pictures_refuse_bad_input() {
         .map(String::from)
     };
     for (grid, pictures, needles) in [
-        ("desk.pts", "taken", vec!["--pictures taken", "not a folder"]),
-        ("desk.pts", "taken/pics", vec!["--pictures taken/pics", "not a folder"]),
-        ("two-planes.pts", "pics", vec!["two-planes.pts", "not on one plane"]),
+        (
+            "desk.pts",
+            "taken",
+            vec!["--pictures taken", "not a folder"],
+        ),
+        (
+            "desk.pts",
+            "taken/pics",
+            vec!["--pictures taken/pics", "not a folder"],
+        ),
+        (
+            "two-planes.pts",
+            "pics",
+            vec!["two-planes.pts", "not on one plane"],
+        ),
         ("line.pts", "pics", vec!["line.pts", "line"]),
     ] {
         let a = args(grid, pictures);
