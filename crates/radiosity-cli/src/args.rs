@@ -381,6 +381,12 @@ pub struct LightingArgs {
     /// file's lumens and the flux integrated from its distribution.
     #[arg(long, value_name = "summary.json", help_heading = OUTPUT)]
     pub summary: Option<PathBuf>,
+    /// Pictures of each grid in DIR (created if missing): `<stem>-illuminance.png`/`.svg`, a
+    /// false-colour map (viridis bands, legend in lux, Ē, E_min, E_max and U₀ in the
+    /// caption), and `<stem>-isolux.png`/`.svg`, labelled isolux lines over the grid's points;
+    /// the stem is the --grid file's, or `workplane-MATERIAL`. Each grid must lie in one plane.
+    #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
+    pub pictures: Option<PathBuf>,
 }
 
 /// `radiosity thermal`.

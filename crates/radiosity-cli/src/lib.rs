@@ -7,6 +7,7 @@
 pub mod alloc;
 pub mod args;
 mod experiment;
+pub mod false_colour;
 mod lighting;
 pub mod ranks;
 mod report;

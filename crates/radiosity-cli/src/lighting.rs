@@ -96,6 +96,9 @@ pub fn run(a: LightingArgs) -> Result<()> {
             bail!("--grid {}: an output would overwrite it", g.display());
         }
     }
+    if let Some(dir) = &a.pictures {
+        crate::false_colour::grid::check_dir(dir)?;
+    }
     let is_gltf = matches!(
         FileFormat::from_path(std::path::Path::new(&a.scene)),
         Some(FileFormat::Gltf | FileFormat::Glb)
@@ -162,6 +165,17 @@ pub fn run(a: LightingArgs) -> Result<()> {
         ));
         points.extend(grid);
     }
+    let pictures = match &a.pictures {
+        Some(dir) => {
+            let unit = clap::ValueEnum::to_possible_value(&a.unit)
+                .map(|v| v.get_name().to_string())
+                .unwrap_or_default();
+            Some(crate::false_colour::grid::GridPictures::prepare(
+                dir, &grids, &a.grid, &points, up, &unit,
+            )?)
+        }
+        None => None,
+    };
     let mut settings = LightingSettings {
         mesh: MeshParams::Patches(a.patches),
         params: SolverParams {
@@ -301,6 +315,11 @@ pub fn run(a: LightingArgs) -> Result<()> {
         write_atomic::<OutputError>(p, |out| writeln!(out, "{v:#}"))
             .context("writing the summary")?;
         println!("wrote       {}", p.display());
+    }
+    if let Some(pictures) = &pictures {
+        for p in pictures.write(&r.total)? {
+            println!("wrote       {}", p.display());
+        }
     }
     Ok(())
 }

@@ -18,6 +18,7 @@ mod experiment;
 mod form_factors;
 mod gltf_lights;
 mod lighting;
+mod lighting_pictures;
 mod mpi;
 mod render;
 mod solve;
