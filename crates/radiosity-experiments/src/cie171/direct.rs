@@ -22,7 +22,7 @@
 
 use super::closed_form::{dot, factor, norm, solid_angle, sub, Rect};
 use super::photometry::{isotropic, lambertian};
-use super::{grey, light, polygon, room_faces, rows, scene, sensor, Case, CaseResult, Row};
+use super::{grey, light, polygon, room_faces, rows, scene, sensor, Case, CaseResult};
 use radiosity::lighting::{Luminaire, SensorPoint};
 use radiosity::pipeline::LightingSettings;
 use radiosity::scene::Material;
@@ -301,7 +301,7 @@ pub(crate) fn flux_emitted() -> f64 {
 
 /// Rows of one variant of a case (the part of the label before ':').
 #[cfg(test)]
-pub(crate) fn variant<'a>(rows: &'a [Row], name: &str) -> Vec<&'a Row> {
+pub(crate) fn variant<'a>(rows: &'a [super::Row], name: &str) -> Vec<&'a super::Row> {
     rows.iter()
         .filter(|r| r.point.split(':').next() == Some(name))
         .collect()
