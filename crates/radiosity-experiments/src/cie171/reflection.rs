@@ -29,6 +29,10 @@
 //!   it is at least 1 m high at both of the obstruction's faces (its height is linear along
 //!   the ray, and the obstruction spans S₂'s whole width): each point therefore sees the part
 //!   z ≥ z_min(P) of S₂ exactly, and the integral runs over that rectangle.
+//!
+//! Both geometries reproduce CIE 171's own factors with S₂ uniformly lit (its Table 17, and
+//! Table 19 as corrected by the published Iray validation, CIE's printed one being among the
+//! report's errata) to every printed digit: `geometry_reproduces_cie_171s_published_factors`.
 
 use super::closed_form::{composite, dot, kernel, norm, sub, Rect, V3};
 use super::photometry::{isotropic, lambertian};

@@ -185,3 +185,62 @@ fn deviations_and_verdicts() {
     }
     assert_eq!(Case::from_id("5.5"), None);
 }
+
+/// The geometry read from the published descriptions reproduces CIE 171's own configuration
+/// factors (E / (ρ E_S₂) in per cent, the reflecting surface uniformly lit) to the digits
+/// printed: 5.6's Table 17 (second scenario), and 5.7's Table 19 as corrected by the Iray
+/// validation (Dau 2016; CIE's printed Table 19 is one of the report's known errata), the
+/// part of S₂ each point sees bounded by `lowest_visible`. Howell's factors, exact.
+#[test]
+fn geometry_reproduces_cie_171s_published_factors() {
+    use closed_form::{factor, Rect};
+    let floor = Rect {
+        axis: 2,
+        at: 0.0,
+        lo: [0.0, 0.0],
+        hi: [4.0, 4.0],
+    };
+    // 5.6: points on S₁-v (facing +y) and S₁-hz (facing down) to the 4 × 4 m floor.
+    let table_17 = [
+        ([2.0, 0.0, 0.75], 1, 1.0, 35.901, 5e-4),
+        ([2.0, 0.0, 1.25], 1, 1.0, 27.992, 5e-4),
+        ([2.0, 0.0, 1.75], 1, 1.0, 21.639, 5e-4),
+        ([2.0, 0.0, 2.25], 1, 1.0, 16.716, 5e-4),
+        ([2.0, 0.0, 2.75], 1, 1.0, 12.967, 5e-4),
+        ([2.0, 0.25, 3.0], 2, -1.0, 26.80, 5e-3),
+        ([2.0, 0.75, 3.0], 2, -1.0, 30.94, 5e-3),
+        ([2.0, 1.25, 3.0], 2, -1.0, 33.98, 5e-3),
+        ([2.0, 1.75, 3.0], 2, -1.0, 35.57, 5e-3),
+    ];
+    for (p, axis, sign, want, half_digit) in table_17 {
+        let got = 100.0 * factor(p, axis, sign, &floor);
+        assert!(
+            (got - want).abs() <= half_digit + 1e-9,
+            "{p:?}: {got} vs {want}"
+        );
+    }
+    // 5.7: points on S₁-v (facing +y) and S₁-hz (facing up) to the part of the wall y = 4
+    // above the obstruction's line of sight.
+    let table_19 = [
+        ([2.0, 0.0, 2.75], 1, 16.07),
+        ([2.0, 0.0, 2.25], 1, 16.33),
+        ([2.0, 0.0, 1.75], 1, 15.40),
+        ([2.0, 0.0, 1.25], 1, 13.32),
+        ([2.0, 0.0, 0.75], 1, 10.32),
+        ([2.0, 0.0, 0.25], 1, 7.08),
+        ([2.0, 0.25, 0.0], 2, 3.38),
+        ([2.0, 0.75, 0.0], 2, 3.63),
+        ([2.0, 1.25, 0.0], 2, 3.01),
+    ];
+    for (p, axis, want) in table_19 {
+        let z_min = reflection::lowest_visible(p[1], p[2]).max(0.0);
+        let seen = Rect {
+            axis: 1,
+            at: 4.0,
+            lo: [0.0, z_min],
+            hi: [4.0, 3.0],
+        };
+        let got = 100.0 * factor(p, axis, 1.0, &seen);
+        assert!((got - want).abs() <= 5e-3 + 1e-9, "{p:?}: {got} vs {want}");
+    }
+}
