@@ -230,6 +230,38 @@ pub enum Command {
     /// power per surface, from a boundary-condition table (net-radiation method).
     #[command(after_help = EXAMPLES_THERMAL)]
     Thermal(ThermalArgs),
+    /// Validate the lighting engine against published test cases: `cie171`, the
+    /// electric-lighting cases of CIE 171:2006 (5.2–5.8), each point against a reference
+    /// computed independently. Fails when a case misses this project's target.
+    #[command(after_help = EXAMPLES_VALIDATE)]
+    Validate(ValidateArgs),
+}
+
+const EXAMPLES_VALIDATE: &str = "Examples:
+  radiosity validate cie171                          every case, its table and verdicts
+  radiosity validate cie171 --case 5.2 --csv 5.2.csv one case, its table as CSV";
+
+/// The suites of `radiosity validate`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ValidateSuite {
+    /// CIE 171:2006, "Test cases to assess the accuracy of lighting computer programs":
+    /// the electric-lighting cases 5.2, 5.3, 5.4, 5.6, 5.7 and 5.8.
+    Cie171,
+}
+
+/// `radiosity validate`.
+#[derive(Debug, Args)]
+pub struct ValidateArgs {
+    /// The suite.
+    #[arg(value_enum)]
+    pub suite: ValidateSuite,
+    /// Run one case only: 5.2, 5.3, 5.4, 5.6, 5.7 or 5.8.
+    #[arg(long, value_name = "ID", help_heading = RUN)]
+    pub case: Option<String>,
+    /// Write the table: `case,point,x,y,z,reference,ours,deviation_percent` (lux, or lumens
+    /// for case 5.4's surfaces; positions in metres).
+    #[arg(long, value_name = "table.csv", help_heading = OUTPUT)]
+    pub csv: Option<PathBuf>,
 }
 
 const EXAMPLES_THERMAL: &str = "Examples:

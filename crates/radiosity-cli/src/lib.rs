@@ -13,6 +13,7 @@ pub mod ranks;
 mod report;
 pub mod settings;
 mod thermal;
+mod validate;
 mod view_factors;
 
 use anyhow::{Context, Result};
@@ -46,6 +47,7 @@ fn run(command: Command) -> Result<()> {
         Command::Experiment(a) => single("experiment").and_then(|()| experiment::run(a)),
         Command::Lighting(a) => single("lighting").and_then(|()| lighting::run(a)),
         Command::Thermal(a) => thermal::run(a),
+        Command::Validate(a) => single("validate").and_then(|()| validate::run(a)),
     }
 }
 

@@ -4,12 +4,15 @@
 //!   iteration of every solver on the office, the dim and bright cube and random sparse systems
 //!   (its figures 3–8), also against CPU time;
 //! - [`complexity`]: the claims of Szirmay-Kalos & Márton (1995) — time, iterations and memory of the
-//!   form-factor methods and the solvers as N grows, with fitted exponents beside the paper's.
+//!   form-factor methods and the solvers as N grows, with fitted exponents beside the paper's;
+//! - [`cie171`]: the electric-lighting test cases of CIE 171:2006 (5.2–5.8) through the lighting
+//!   pipeline, each point against a reference computed here by closed forms and quadratures.
 //!
 //! [`random`] makes the random systems. Memory is measured through a [`MemoryProbe`] that the
 //! program provides (a library cannot own the global allocator); progress is reported to an
 //! [`Observer`].
 
+pub mod cie171;
 pub mod complexity;
 pub mod convergence;
 pub mod plot;

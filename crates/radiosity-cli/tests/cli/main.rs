@@ -24,4 +24,5 @@ mod render;
 mod solve;
 mod solve_system;
 mod thermal;
+mod validate;
 mod view;
