@@ -304,7 +304,9 @@ fn luminaires(
         result.groups.join(", ")
     );
     crate::lighting::print_books(&result.groups, &result.books);
-    println!("time        lighting {lighting_s:.3} s, picture {render_s:.3} s, write {write_s:.3} s");
+    println!(
+        "time        lighting {lighting_s:.3} s, picture {render_s:.3} s, write {write_s:.3} s"
+    );
     if let Some((cpu, _)) = report::resources() {
         println!("cpu         {cpu:.2} s (user and system, all threads)");
     }

@@ -19,6 +19,7 @@ mod form_factors;
 mod lighting;
 mod mpi;
 mod render;
+mod render_lighting;
 mod solve;
 mod solve_system;
 mod thermal;
