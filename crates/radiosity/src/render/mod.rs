@@ -310,6 +310,15 @@ pub struct SamplePoint {
     pub patch: u32,
 }
 
+/// A worker's buffers for one image row of [`render_rows_with`], reused row after row: the
+/// camera samples' hits (front sides), the hits as points, and the row pass's values.
+#[derive(Default)]
+struct RowBuffers {
+    hits: Vec<Option<(Ray, Hit)>>,
+    points: Vec<SamplePoint>,
+    values: Vec<f64>,
+}
+
 /// [`render_with`] with a pass over each image row before it is shaded (`mesh` gives the
 /// hits' normals): the row's camera
 /// samples are cast first (the same jitter, from the same streams), `row_pass` is handed the
@@ -341,8 +350,12 @@ where
     let done = std::sync::atomic::AtomicU32::new(0);
     let mut pixels = vec![[0.0f32; 3]; (w * h) as usize];
     pixels.par_chunks_mut(w as usize).enumerate().for_each_init(
-        || (Vec::new(), Vec::new(), Vec::new()),
-        |(hits, points, values): &mut (Vec<Option<(Ray, Hit)>>, Vec<SamplePoint>, Vec<f64>),
+        RowBuffers::default,
+        |RowBuffers {
+             hits,
+             points,
+             values,
+         },
          (y, row)| {
             let mut rng = stream(params.seed, 0x5245_4e44, y as u64, 0);
             let mut shading = stream(params.seed, 0x5348_4144, y as u64, 0);

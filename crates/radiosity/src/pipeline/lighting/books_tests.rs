@@ -187,7 +187,7 @@ fn an_open_floor_lets_the_rest_escape() {
 fn a_black_floor_reports_its_interreflected_light() {
     let s = 3.0f32;
     let v = |x: f32, y: f32, z: f32| Vec3::new(x * s, y * s, z * s);
-    let walls = vec![
+    let walls = [
         vec![v(0., 0., 1.), v(0., 1., 1.), v(1., 1., 1.), v(1., 0., 1.)],
         vec![v(0., 0., 0.), v(0., 0., 1.), v(1., 0., 1.), v(1., 0., 0.)],
         vec![v(0., 1., 0.), v(1., 1., 0.), v(1., 1., 1.), v(0., 1., 1.)],
