@@ -783,6 +783,26 @@ pub struct RenderArgs {
     /// Gather: the irradiance cache's accuracy a (smaller: more records).
     #[arg(long, value_name = "A", default_value_t = 0.1, help_heading = PICTURE)]
     pub cache_accuracy: f32,
+    /// A lighting schedule (as `lighting --luminaires`): the picture is then the lighting
+    /// pipeline's, the luminaires' first shot into the patches and the interreflection
+    /// solved, each camera sample's direct light from the luminaires computed exactly with
+    /// shadow rays and the interreflected gathered. Luminaires light the scene but are not
+    /// seen; the scene's emission is luminous exitance in lm/m².
+    #[arg(long, value_name = "schedule.csv", help_heading = SCENE)]
+    pub luminaires: Option<PathBuf>,
+    /// With --luminaires: the length unit of the scene and the schedule (distances in metres
+    /// make lux) [default: m].
+    #[arg(long, value_enum, value_name = "UNIT", help_heading = SCENE)]
+    pub unit: Option<UnitArg>,
+    /// With --luminaires: the scene's vertical, what "down" means for a luminaire with no aim
+    /// (`lighting --up`; here --up is the camera's) [default: z].
+    #[arg(long, value_enum, value_name = "AXIS", help_heading = SCENE)]
+    pub vertical: Option<UpArg>,
+    /// Write luminance in cd/m² (.exr or .pfm only): each pixel's photometric Y (BT.709
+    /// weights of the linear RGB radiance) in all three channels, unscaled. The scene's
+    /// emission is read as luminous exitance in lm/m².
+    #[arg(long, help_heading = OUTPUT)]
+    pub luminance: bool,
 }
 
 /// How `render` computes pixels.

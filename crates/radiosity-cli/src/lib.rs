@@ -10,6 +10,7 @@ mod experiment;
 pub mod false_colour;
 mod lighting;
 pub mod ranks;
+mod render;
 mod report;
 pub mod settings;
 mod thermal;
@@ -17,9 +18,7 @@ mod validate;
 mod view_factors;
 
 use anyhow::{Context, Result};
-use args::{
-    Cli, Command, RenderArgs, ReportFormat, SolveArgs, SolveCmdArgs, SolveSystemArgs, ViewArgs,
-};
+use args::{Cli, Command, ReportFormat, SolveArgs, SolveCmdArgs, SolveSystemArgs, ViewArgs};
 use clap::Parser;
 use radiosity::export::bake::{self, Bake};
 use radiosity::export::{
@@ -39,7 +38,7 @@ use std::time::Instant;
 fn run(command: Command) -> Result<()> {
     let single = |what: &str| ranks::refuse_unless_single(what);
     match command {
-        Command::Render(a) => single("render").and_then(|()| render(a)),
+        Command::Render(a) => single("render").and_then(|()| render::run(a)),
         Command::Solve(a) => solve(a),
         Command::View(a) => single("view").and_then(|()| view(a)),
         Command::SolveSystem(a) => single("solve-system").and_then(|()| solve_system(a)),
@@ -249,166 +248,6 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
     );
     println!("wrote       {}", a.out.display());
     capped_at(a.flags.max_iterations, info, &a.out)
-}
-
-fn render(mut a: RenderArgs) -> Result<()> {
-    use args::IntegratorArg;
-    a.solve.picture = true;
-    let out = a
-        .out
-        .clone()
-        .unwrap_or_else(|| default_output(&a.solve.scene, "png"));
-    ImageFormat::from_path(&out)?;
-    settings::check_output(&out)?;
-    if let Some(t) = &a.solve.trace {
-        settings::check_output(t)?;
-    }
-    let integrator = if a.gather {
-        IntegratorArg::Gather
-    } else {
-        a.integrator
-    };
-    let settings = settings::settings(&a.solve)?;
-    let default_spp = match integrator {
-        IntegratorArg::Path => 256,
-        IntegratorArg::Gather => 16,
-        IntegratorArg::Radiosity => 4,
-    };
-    let params = settings::image(&a.image, a.solve.seed, default_spp)?;
-    if !a.exposure.is_finite() {
-        anyhow::bail!(
-            "--exposure {}: must be a finite number of stops",
-            a.exposure
-        );
-    }
-    if a.direct_samples == 0 {
-        anyhow::bail!("--direct-samples 0: at least one shadow ray per sample is needed");
-    }
-    if !(a.cache_accuracy.is_finite() && a.cache_accuracy > 0.0) {
-        anyhow::bail!(
-            "--cache-accuracy {}: must be a positive number",
-            a.cache_accuracy
-        );
-    }
-    if !(a.gather_near.is_finite() && a.gather_near >= 0.0) {
-        anyhow::bail!(
-            "--gather-near {}: a number of patch sizes, at least 0",
-            a.gather_near
-        );
-    }
-    if integrator == IntegratorArg::Path {
-        let scene = load_scene(&a.solve.scene, a.solve.one_sided)?;
-        let camera = settings::camera(default_camera_unsolved(&scene), &a.camera)?;
-        let t = Instant::now();
-        let progress = report::Progress::new(settings.tolerance());
-        let image = pipeline::path_trace(&scene, &camera, &params, &progress);
-        progress.finish();
-        let image = image?;
-        let render_s = t.elapsed().as_secs_f64();
-        let scale = auto_exposure(&image) * 2f32.powf(a.exposure);
-        write_image(&out, &image, scale).context("writing the image")?;
-        if a.solve.report == ReportFormat::Json {
-            let res = report::resources();
-            let v = serde_json::json!({
-                "scene": scene.name,
-                "polygons": scene.polygons.len(),
-                "integrator": "path",
-                "samples_per_pixel": params.samples_per_pixel,
-                "seconds": { "render": render_s },
-                "cpu_seconds": res.map(|r| r.0),
-                "memory": { "peak_resident_bytes": res.map(|r| r.1) },
-                "out": out,
-            });
-            println!("{v}");
-            return Ok(());
-        }
-        println!(
-            "path traced {} in {render_s:.2} s ({} paths per pixel)",
-            scene.place(),
-            params.samples_per_pixel
-        );
-        if let Some((cpu, _)) = report::resources() {
-            println!("cpu         {cpu:.2} s (user and system, all threads)");
-        }
-        println!(
-            "wrote       {} ({}×{})",
-            out.display(),
-            params.width,
-            params.height
-        );
-        return Ok(());
-    }
-    let (scene, solution, _) = solve_scene(&a.solve)?;
-    let camera = settings::camera(solution.default_camera(&scene), &a.camera)?;
-    let t = Instant::now();
-    let progress = report::Progress::new(settings.tolerance());
-    let image = match integrator {
-        IntegratorArg::Gather => solution.render_gather(
-            &camera,
-            &params,
-            radiosity::render::gather::GatherParams {
-                direct: a.direct_samples,
-                indirect: a.indirect_samples,
-                near: a.gather_near,
-                cache_samples: a.cache_samples,
-                cache_accuracy: a.cache_accuracy,
-            },
-            &progress,
-        ),
-        _ => solution.render(&camera, &params, &progress),
-    };
-    progress.finish();
-    let render_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let scale = auto_exposure(&image) * 2f32.powf(a.exposure);
-    write_image(&out, &image, scale).context("writing the image")?;
-    let write_s = t.elapsed().as_secs_f64();
-    if a.solve.report == ReportFormat::Json {
-        let mut v = report::summary_json(&scene, &solution, Some((render_s, write_s)));
-        v["integrator"] = serde_json::json!(match integrator {
-            IntegratorArg::Gather => "gather",
-            _ => "radiosity",
-        });
-        v["samples_per_pixel"] = serde_json::json!(params.samples_per_pixel);
-        v["out"] = serde_json::json!(out);
-        println!("{v}");
-        return Ok(());
-    }
-    report::summary(&scene, &solution, Some((render_s, write_s)));
-    println!(
-        "wrote       {} ({}×{}, {} samples per pixel{})",
-        out.display(),
-        params.width,
-        params.height,
-        params.samples_per_pixel,
-        if integrator == IntegratorArg::Gather {
-            format!(
-                ", gather {} direct + {} indirect rays each",
-                a.direct_samples, a.indirect_samples
-            )
-        } else {
-            String::new()
-        }
-    );
-    capped(&a.solve, &solution.info, &out)
-}
-
-/// The camera for a scene rendered without a solution: its own, else from inside when it is
-/// an interior with a known vertical, else framing it (as [`Solution::default_camera`]).
-fn default_camera_unsolved(scene: &Scene) -> radiosity::scene::Camera {
-    match (scene.camera, scene.up) {
-        (Some(c), _) => c,
-        (None, Some(up)) => {
-            match radiosity::mesh::Mesh::build(scene, radiosity::mesh::MeshParams::Faces) {
-                Ok(mesh) => {
-                    let bvh = radiosity::accel::Bvh::build(&mesh);
-                    radiosity::render::camera::default_camera(&bvh, up)
-                }
-                Err(_) => scene.camera_or_default(),
-            }
-        }
-        (None, None) => scene.camera_or_default(),
-    }
 }
 
 /// A solve that the default iteration cap stopped before it converged (the user gave no

@@ -1,13 +1,14 @@
-//! `radiosity lighting`: flags → `pipeline::lighting`, the grid CSV and the summary.
+//! `radiosity lighting`: flags → `pipeline::lighting`, the grid CSV and the summary (with the
+//! energy books, which `render --luminaires` prints too).
 
 use crate::args::{LightingArgs, UpArg};
 use anyhow::{bail, Context, Result};
 use radiosity::io::{write_atomic, FileFormat, OutputError};
 use radiosity::lighting::{
-    gltf_luminaires, read_points, read_schedule, workplane, write_points, Up,
+    gltf_luminaires, read_points, read_schedule, workplane, write_points, Luminaire, Up,
 };
 use radiosity::mesh::MeshParams;
-use radiosity::pipeline::{lighting, LightingSettings};
+use radiosity::pipeline::{lighting, EnergyBooks, LightingSettings};
 use radiosity::solve::SolverParams;
 use std::io::Write as _;
 
@@ -49,6 +50,72 @@ impl Stats {
             0.0
         }
     }
+}
+
+/// Print each photometric file's warnings once (a file shared by several luminaires is read
+/// once).
+pub(crate) fn warn_photometry(luminaires: &[Luminaire]) {
+    let mut warned = std::collections::HashSet::new();
+    for l in luminaires {
+        if warned.insert(std::sync::Arc::as_ptr(&l.photometry)) {
+            for w in &l.photometry.warnings {
+                eprintln!("radiosity: warning: {}: {w}", l.photometry.source);
+            }
+        }
+    }
+}
+
+/// The energy books, one line a group when there are several, then the total: lumens emitted,
+/// reaching surfaces directly, absorbed, escaped and left unshot, and the balance error
+/// (the two counts of the escape apart, as a fraction of the emitted flux).
+pub(crate) fn print_books(groups: &[String], books: &[EnergyBooks]) {
+    let line = |name: &str, b: &EnergyBooks| {
+        println!(
+            "flux        {name}: emitted {:.1} lm, on surfaces directly {:.1} lm, absorbed {:.1} lm, escaped {:.1} lm, unshot {:.1} lm (balance error {:.3} %)",
+            b.emitted,
+            b.direct_to_surfaces,
+            b.absorbed,
+            b.escaped,
+            b.unshot,
+            100.0 * b.balance_error()
+        );
+    };
+    if books.len() > 1 {
+        for (g, b) in groups.iter().zip(books) {
+            line(g, b);
+        }
+    }
+    line("total", &EnergyBooks::total(books));
+}
+
+/// The energy books as JSON: `{"groups": [{"group", "emitted", "direct_to_surfaces",
+/// "absorbed", "escaped", "unshot", "escaped_counted", "balance_error"}, …], "total": {…}}`,
+/// lumens (the balance error a fraction of the emitted flux).
+pub(crate) fn books_json(groups: &[String], books: &[EnergyBooks]) -> serde_json::Value {
+    let one = |b: &EnergyBooks| {
+        serde_json::json!({
+            "emitted": b.emitted,
+            "direct_to_surfaces": b.direct_to_surfaces,
+            "absorbed": b.absorbed,
+            "escaped": b.escaped,
+            "unshot": b.unshot,
+            "escaped_counted": b.escaped_counted,
+            "balance_error": b.balance_error(),
+        })
+    };
+    let per_group: Vec<serde_json::Value> = groups
+        .iter()
+        .zip(books)
+        .map(|(g, b)| {
+            let mut v = one(b);
+            v["group"] = serde_json::json!(g);
+            v
+        })
+        .collect();
+    serde_json::json!({
+        "groups": per_group,
+        "total": one(&EnergyBooks::total(books)),
+    })
 }
 
 /// Run the command.
@@ -124,14 +191,7 @@ pub fn run(a: LightingArgs) -> Result<()> {
         }
         luminaires.extend(own);
     }
-    let mut warned = std::collections::HashSet::new();
-    for l in &luminaires {
-        if warned.insert(std::sync::Arc::as_ptr(&l.photometry)) {
-            for w in &l.photometry.warnings {
-                eprintln!("radiosity: warning: {}: {w}", l.photometry.source);
-            }
-        }
-    }
+    warn_photometry(&luminaires);
     let mut points = Vec::new();
     let mut grids = Vec::new();
     for g in &a.grid {
@@ -290,6 +350,13 @@ pub fn run(a: LightingArgs) -> Result<()> {
             })
         })
         .collect();
+    print_books(&r.groups, &r.books);
+    if !r.converged {
+        eprintln!(
+            "radiosity: warning: the interreflection stopped before its tolerance {}; the light left unshot is in the books",
+            a.tolerance
+        );
+    }
     println!("time        {seconds:.3} s");
     if let Some((cpu, _)) = crate::report::resources() {
         println!("cpu         {cpu:.2} s (user and system, all threads)");
@@ -310,6 +377,8 @@ pub fn run(a: LightingArgs) -> Result<()> {
             "group_flux": r.flux,
             "grids": grid_json,
             "luminaires": luminaire_json,
+            "books": books_json(&r.groups, &r.books),
+            "converged": r.converged,
             "seconds": seconds,
         });
         write_atomic::<OutputError>(p, |out| writeln!(out, "{v:#}"))

@@ -21,6 +21,7 @@ mod lighting;
 mod lighting_pictures;
 mod mpi;
 mod render;
+mod render_lighting;
 mod solve;
 mod solve_system;
 mod thermal;

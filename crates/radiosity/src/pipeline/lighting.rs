@@ -1,5 +1,6 @@
 //! Lighting design: illuminance at sensor points from luminaires with measured photometry, the
-//! diffuse interreflection included.
+//! diffuse interreflection included; the energy books of each light group; and what a picture
+//! of the lit scene in luminance needs.
 //!
 //! Per light group (light scene) the pipeline
 //! 1. computes each patch's direct illuminance from the group's luminaires exactly, by the
@@ -18,26 +19,66 @@
 //! are luminaires beside them. Colour: reflectances are RGB (linear sRGB) and the luminaires
 //! white; illuminance is the photometric Y = 0.2126 R + 0.7152 G + 0.0722 B of the irradiance
 //! (ITU-R BT.709 luminance coefficients), so a grey reflectance ρ acts as ρ.
+//!
+//! # The light arriving at a patch
+//!
+//! The surfaces table reports each patch's arriving illuminance: its direct illuminance plus
+//! what arrived from the surfaces, H_p = Σ_k F_pk B_k (the radiosity equation's own
+//! irradiance, B_p = E_p + ρ_p H_p). Where ρ_p > 0 in every channel it is read back from the
+//! solution, (B_p − E_p)/ρ_p; a patch black in some channel keeps none of it in B, so there
+//! H_p is gathered from the solution along the patch's own row of F (Monte Carlo:
+//! [`BLACK_ROW_RAYS`] cosine rays from uniform points of the patch).
+//!
+//! # The books
+//!
+//! [`EnergyBooks`], per group and in total: the flux emitted, reaching surfaces directly,
+//! absorbed, escaped and left unshot (see [`books`](mod@books) for the definitions and the
+//! balance check).
+//!
+//! # Pictures
+//!
+//! [`lighting_solution`] also hands back a [`LightingSolution`] (the mesh, the per-patch
+//! exitance, the luminaires), whose [`LightingSolution::render`] computes the luminance a
+//! camera sees: L = M/π + ρ (E_direct(x) + E_inter(x))/π at each camera sample's hit x, the
+//! luminaires' E_direct exactly there (the inverse-square cosine law with a shadow ray, as at
+//! the sensor points) and the interreflected E_inter by the final gather over the solution.
+//! Luminaires are light sources, not geometry: a camera does not see them.
+
+mod books;
+#[cfg(test)]
+mod books_tests;
+#[cfg(test)]
+mod render_tests;
+
+pub use books::{EnergyBooks, ESCAPE_BANDS, ESCAPE_SECTORS};
 
 use super::{patch_system, MemoryLimit};
 use crate::accel::Bvh;
 use crate::color::Rgb;
-use crate::formfactor::{Estimator, OnDemandRows};
+use crate::formfactor::{Effort, Estimator, OnDemandRows, Scratch};
 use crate::geom::Vec3;
 use crate::lighting::{direct_illuminance, Luminaire, SensorPoint};
 use crate::mesh::{Mesh, MeshParams};
 use crate::observe::{Event, Observer, Stage};
 use crate::render::gather::{Gather, GatherParams};
 use crate::render::light::Surfaces;
+use crate::render::{Image, RenderParams};
 use crate::sampling::stream;
-use crate::scene::Scene;
-use crate::solve::{Solver, SolverParams};
-use crate::system::System;
+use crate::scene::{Camera, Scene};
+use crate::solve::{Info, Solver, SolverParams};
+use crate::system::{Operator, System};
 use crate::Error;
 use rayon::prelude::*;
 
 /// The group of the scene's own emitting surfaces when luminaires light it too.
 pub const SCENE_GROUP: &str = "scene";
+
+/// Monte Carlo rays of the row of F along which a black patch's arriving light is gathered
+/// (its relative noise per patch about 1/√(this), far less over a surface's patches).
+pub const BLACK_ROW_RAYS: u32 = 1024;
+
+/// Below this a reflectance channel counts as black (nothing of what arrives is in B).
+const BLACK: f64 = 1e-9;
 
 /// What decides a lighting calculation.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -99,6 +140,11 @@ pub struct LightingResult {
     pub flux: Vec<f64>,
     /// One row per material name, in the scene's material order, every group together.
     pub surfaces: Vec<SurfaceLight>,
+    /// Where each group's flux goes, lumens, in `groups` order ([`EnergyBooks::total`] sums
+    /// them).
+    pub books: Vec<EnergyBooks>,
+    /// Whether every group's interreflection reached the solver's tolerance.
+    pub converged: bool,
 }
 
 /// The light on the surfaces of one material name.
@@ -110,7 +156,8 @@ pub struct SurfaceLight {
     pub area: f64,
     /// Photometric (luminance-weighted) reflectance.
     pub reflectance: f64,
-    /// Area-weighted mean illuminance arriving, lux (direct and interreflected).
+    /// Area-weighted mean illuminance arriving, lux (direct and interreflected; black
+    /// surfaces included, see the module documentation).
     pub illuminance: f64,
     /// Area-weighted mean luminous exitance leaving, lm/m² (emission included).
     pub exitance: f64,
@@ -118,8 +165,31 @@ pub struct SurfaceLight {
     pub luminance: f64,
 }
 
+/// What rendering the lit scene needs: the interreflection's patches and their exitance,
+/// every group together, and the luminaires ([`lighting_solution`]).
+#[derive(Debug)]
+pub struct LightingSolution {
+    /// The patches.
+    pub mesh: Mesh,
+    /// The hierarchy over them.
+    pub bvh: Bvh,
+    /// Each patch's reflectance.
+    pub reflectance: Vec<Rgb>,
+    /// Each patch's own emission (the scene's emitting surfaces), lm/m².
+    pub emission: Vec<Rgb>,
+    /// Each patch's luminous exitance, lm/m²: the luminaires' light reflected once and
+    /// interreflected, and the patch's own emission, every group together, as the solver
+    /// leaves it.
+    pub exitance: Vec<Rgb>,
+    /// The luminaires, whose direct light a picture computes at each hit.
+    pub luminaires: Vec<Luminaire>,
+    /// Metres per scene unit.
+    pub unit_metres: f64,
+}
+
 /// Illuminance at `points` in `scene` from `luminaires` (and the scene's own emitting
-/// surfaces), interreflection included. Errors: bad settings, a scene without light, meshing.
+/// surfaces), interreflection included, with the surfaces table and the energy books. Errors:
+/// bad settings, a scene without light, meshing.
 pub fn lighting(
     scene: &Scene,
     luminaires: &[Luminaire],
@@ -127,6 +197,124 @@ pub fn lighting(
     settings: &LightingSettings,
     observer: &dyn Observer,
 ) -> Result<LightingResult, Error> {
+    Ok(compute(scene, luminaires, points, settings, observer)?.result)
+}
+
+/// [`lighting`], and the solution a picture of the lit scene needs ([`LightingSolution`]):
+/// the same computation, whose mesh and exitance [`lighting`] drops.
+pub fn lighting_solution(
+    scene: &Scene,
+    luminaires: &[Luminaire],
+    points: &[SensorPoint],
+    settings: &LightingSettings,
+    observer: &dyn Observer,
+) -> Result<(LightingResult, LightingSolution), Error> {
+    let c = compute(scene, luminaires, points, settings, observer)?;
+    let solution = LightingSolution {
+        mesh: c.mesh,
+        bvh: c.bvh,
+        reflectance: c.system.reflectance,
+        emission: c.system.emission,
+        exitance: c.exitance,
+        luminaires: luminaires.to_vec(),
+        unit_metres: settings.unit_metres,
+    };
+    Ok((c.result, solution))
+}
+
+impl LightingSolution {
+    /// The solution's surfaces for the ray-traced integrators (the scene's own emission as the
+    /// emitters).
+    pub fn surfaces(&self) -> Surfaces<'_> {
+        Surfaces {
+            mesh: &self.mesh,
+            bvh: &self.bvh,
+            reflectance: &self.reflectance,
+            emission: &self.emission,
+        }
+    }
+
+    /// The view for `scene`: its own camera, else one inside it when its vertical is known and
+    /// it is an interior, else one framing it (as [`super::Solution::default_camera`]).
+    pub fn default_camera(&self, scene: &Scene) -> Camera {
+        match (scene.camera, scene.up) {
+            (Some(c), _) => c,
+            (None, Some(up)) => crate::render::camera::default_camera(&self.bvh, up),
+            (None, None) => scene.camera_or_default(),
+        }
+    }
+
+    /// The lit scene as a camera sees it, RGB radiance whose Y is luminance in cd/m²: at each
+    /// camera sample's hit x on a patch of reflectance ρ and emission M,
+    /// L = M/π + ρ (E_direct(x) + E_inter(x))/π, with E_direct the luminaires' direct
+    /// illuminance at x computed exactly ([`direct_illuminance`], a shadow ray a luminaire; in
+    /// one batch per image row) and E_inter the light arriving from the surfaces, gathered
+    /// from the solution's exitance by [`Gather`] (its irradiance cache when `gather` keeps
+    /// one; the scene's emitting surfaces sampled by shadow rays). A gather ray's near hit
+    /// reads the solution there ([`GatherParams::near`] is taken as 0 when there are
+    /// luminaires: a level deeper would light the hit by the emitters alone). Luminaires are
+    /// not geometry: they light the scene but are not seen. Errors: a scene unit that is not
+    /// a finite length > 0.
+    pub fn render(
+        &self,
+        camera: &Camera,
+        params: &RenderParams,
+        gather: GatherParams,
+        observer: &dyn Observer,
+    ) -> Result<Image, Error> {
+        // The unit is checked once here, so the rows below cannot fail.
+        direct_illuminance(&[], &self.luminaires, None, self.unit_metres)?;
+        let vertex = crate::render::vertex_radiosity(&self.mesh, &self.exitance);
+        // Near hits read the solution rather than going one level deeper, whose direct light
+        // would come from the emitters alone, not the luminaires (see [`GatherParams::near`]).
+        let gather = if self.luminaires.is_empty() {
+            gather
+        } else {
+            GatherParams {
+                near: 0.0,
+                ..gather
+            }
+        };
+        let g = Gather::new(self.surfaces(), &vertex, gather);
+        Ok(
+            g.render_with_irradiance(camera, params, observer, |hits, out| {
+                let sensors: Vec<SensorPoint> = hits
+                    .iter()
+                    .map(|h| SensorPoint {
+                        position: h.position.as_dvec3().to_array(),
+                        normal: h.normal.as_dvec3().to_array(),
+                    })
+                    .collect();
+                if let Ok(d) = direct_illuminance(
+                    &sensors,
+                    &self.luminaires,
+                    Some(&self.bvh),
+                    self.unit_metres,
+                ) {
+                    *out = d.total;
+                }
+            }),
+        )
+    }
+}
+
+/// Everything [`lighting`] computes, before its caller picks what it keeps.
+struct Computed {
+    result: LightingResult,
+    mesh: Mesh,
+    bvh: Bvh,
+    system: System,
+    exitance: Vec<Rgb>,
+}
+
+/// The computation of [`lighting`] and [`lighting_solution`].
+fn compute(
+    scene: &Scene,
+    luminaires: &[Luminaire],
+    points: &[SensorPoint],
+    settings: &LightingSettings,
+    observer: &dyn Observer,
+) -> Result<Computed, Error> {
     scene.validate_geometry()?;
     settings.mesh.validate()?;
     settings.form_factors.validate()?;
@@ -154,6 +342,7 @@ pub fn lighting(
     observer.event(Event::Stage(Stage::Bvh));
     let bvh = Bvh::build(&mesh);
     let base = patch_system(scene, &mesh);
+    let unit2 = settings.unit_metres * settings.unit_metres;
 
     // The luminaires' direct light: at the patches (their first shot) and at the points.
     let centres: Vec<SensorPoint> = mesh
@@ -167,17 +356,29 @@ pub fn lighting(
     let at_patches = direct_illuminance(&centres, luminaires, Some(&bvh), settings.unit_metres)?;
     let at_points = direct_illuminance(points, luminaires, Some(&bvh), settings.unit_metres)?;
     let mut groups = at_points.groups.clone();
-    let mut flux: Vec<f64> = groups
-        .iter()
-        .map(|g| {
-            luminaires
-                .iter()
-                .filter(|l| &l.group == g)
-                .map(|l| l.photometry.flux() * l.multiplier)
-                .sum()
-        })
-        .collect();
     let lum_groups = groups.len();
+    let mut flux = vec![0.0; lum_groups];
+    let mut books = vec![EnergyBooks::default(); lum_groups];
+    // Each luminaire's flux, and what of it reaches no front face, counted by rays.
+    let reach = books::reach(luminaires, &bvh);
+    for (l, r) in luminaires.iter().zip(&reach) {
+        let g = groups.iter().position(|g| *g == l.group).unwrap_or(0);
+        let phi = l.photometry.flux() * l.multiplier;
+        flux[g] += phi;
+        books[g].emitted += phi;
+        books[g].escaped_counted += phi * (1.0 - r);
+    }
+    // The first shot: what reaches each patch, and what of it the patch absorbs (the
+    // luminaires are white: Y((1 − ρ) E) = (1 − Y(ρ)) E).
+    for (p, patch) in mesh.patches.iter().enumerate() {
+        let a = patch.area as f64 * unit2;
+        let keep = 1.0 - luminance(base.reflectance[p]);
+        for (g, b) in books.iter_mut().enumerate() {
+            let phi = a * at_patches.by_group[p * lum_groups + g];
+            b.direct_to_surfaces += phi;
+            b.absorbed += phi * keep;
+        }
+    }
     if scene_emits {
         if luminaires.is_empty() {
             groups.push(crate::lighting::DEFAULT_GROUP.to_string());
@@ -185,6 +386,7 @@ pub fn lighting(
             groups.push(SCENE_GROUP.to_string());
         }
         flux.push(0.0);
+        books.push(EnergyBooks::default());
     }
     let ng = groups.len();
     let n = points.len();
@@ -197,6 +399,15 @@ pub fn lighting(
             *d += e;
         }
     }
+    // Patches black in some channel: their arriving light is gathered along their own rows.
+    let black: Vec<usize> = (0..mesh.len())
+        .filter(|&p| base.reflectance[p].min_channel() <= BLACK)
+        .collect();
+    let black_rows = if black.is_empty() {
+        None
+    } else {
+        Some(Estimator::new(&mesh, &bvh, settings.form_factors)?)
+    };
     // Per patch, every group together: the illuminance arriving (lux) and the exitance
     // leaving (RGB, lm/m²).
     let mut patch_e = vec![0.0f64; mesh.len()];
@@ -206,6 +417,7 @@ pub fn lighting(
             .iter()
             .sum();
     }
+    let mut converged = true;
     for g in 0..ng {
         // The group's initial exitance: the first reflection of its luminaires' light, or the
         // scene's own emission.
@@ -229,39 +441,61 @@ pub fn lighting(
         let mut params = settings.params;
         params.memory_limit = params.memory_limit.min(limit / 2);
         let mut solver = crate::solve::start(settings.solver, &system, &mut rows, &params)?;
-        crate::solve::run(&mut *solver, &mut rows, &params, false, &mut |s, sv| {
+        let info = crate::solve::run(&mut *solver, &mut rows, &params, false, &mut |s, sv| {
             observer.event(Event::Solve(s, sv));
             !observer.cancelled()
         });
+        converged &= info.converged;
         let mut b = Vec::new();
         solver.radiosity(&mut b);
         drop(solver);
-        // What arrived after the first shot: (B − initial exitance) / ρ, by channel. A black
-        // channel reflects nothing, so what arrived there cannot be read back from B: it
-        // counts 0 (a black surface's interreflected illuminance is left out of the surface
-        // table; its direct illuminance is exact).
+        book_solve(&mut books[g], &info, unit2);
+        if g >= lum_groups {
+            // The scene's own emitters: their emission and first shot are the solver's.
+            books[g].emitted = luminance(info.emitted) * unit2;
+            books[g].direct_to_surfaces = first_shot(&system, &mut rows) * unit2;
+        }
+        // What arrived after the first shot: (B − initial exitance) / ρ where ρ > 0; gathered
+        // along the patch's row of F where it is black in some channel.
+        let gathered = match &black_rows {
+            Some(est) => gather_rows(est, &black, &b, g as u64),
+            None => Vec::new(),
+        };
         for p in 0..mesh.len() {
             patch_b[p] += b[p];
             let (rho, m) = (system.reflectance[p], system.emission[p]);
-            let arrived = |b: f64, m: f64, r: f64| if r > 1e-9 { (b - m) / r } else { 0.0 };
-            let inc = Rgb::new(
-                arrived(b[p].r, m.r, rho.r),
-                arrived(b[p].g, m.g, rho.g),
-                arrived(b[p].b, m.b, rho.b),
+            let arrived = Rgb::new(
+                (b[p].r - m.r) / rho.r.max(BLACK),
+                (b[p].g - m.g) / rho.g.max(BLACK),
+                (b[p].b - m.b) / rho.b.max(BLACK),
             );
-            patch_e[p] += luminance(inc).max(0.0);
+            let arrived = match black.binary_search(&p) {
+                Ok(k) => gathered[k],
+                Err(_) => arrived,
+            };
+            patch_e[p] += luminance(arrived).max(0.0);
         }
         // The light arriving at each point from the surfaces, gathered.
+        if points.is_empty() {
+            continue;
+        }
         observer.event(Event::Stage(Stage::Render));
         let vertex = crate::render::vertex_radiosity(&mesh, &b);
         // The first reflection of a luminaire's light is the solution's, not an emitter's:
         // gathered by multiple importance sampling, whose estimate stays bounded for a sensor
         // close to a lit wall (emitter sampling alone would weigh a point on it by 1/d²).
         // The scene's own emitting surfaces stay emitters, sampled by shadow rays.
-        let emitters = if g < lum_groups {
-            vec![Rgb::BLACK; mesh.len()]
+        // A gather ray's near hit is not followed one level deeper for a luminaire group: the
+        // deeper level would sample the emitters for the hit's direct light, and the
+        // luminaires' is not among them (it is in the solution that the hit reads instead).
+        let (emitters, params) = if g < lum_groups {
+            let params = GatherParams {
+                near: 0.0,
+                ..settings.gather
+            };
+            (vec![Rgb::BLACK; mesh.len()], params)
         } else {
-            system.emission.clone()
+            (system.emission.clone(), settings.gather)
         };
         let gather = Gather::new(
             Surfaces {
@@ -271,7 +505,7 @@ pub fn lighting(
                 emission: &emitters,
             },
             &vertex,
-            settings.gather,
+            params,
         );
         let from_surfaces: Vec<f64> = points
             .par_iter()
@@ -291,11 +525,92 @@ pub fn lighting(
             by_group[i * ng + g] += e;
         }
     }
+    for b in &mut books {
+        b.escaped = b.emitted - b.absorbed - b.unshot;
+    }
     let total = (0..n)
         .map(|i| by_group[i * ng..(i + 1) * ng].iter().sum())
         .collect();
-    // One row per material name: area-weighted means over its patches.
-    let unit2 = settings.unit_metres * settings.unit_metres;
+    let surfaces = surface_rows(scene, &mesh, &patch_e, &patch_b, unit2);
+    Ok(Computed {
+        result: LightingResult {
+            groups,
+            total,
+            by_group,
+            direct,
+            patches: mesh.len(),
+            flux,
+            surfaces,
+            books,
+            converged,
+        },
+        mesh,
+        bvh,
+        system: base,
+        exitance: patch_b,
+    })
+}
+
+/// The interreflection's part of a group's books: its solver's absorbed, escaped and unshot
+/// power (lm/m² × square scene units, so × `unit2` for lumens).
+fn book_solve(books: &mut EnergyBooks, info: &Info, unit2: f64) {
+    books.absorbed += luminance(info.absorbed) * unit2;
+    books.escaped_counted += luminance(info.escaped) * unit2;
+    books.unshot += luminance(info.unshot) * unit2;
+}
+
+/// The first shot of emitting patches, Σ_i Y(M_i) A_i Σ_j F_ij (square scene units × lm/m²).
+fn first_shot(system: &System, rows: &mut OnDemandRows<'_>) -> f64 {
+    let total: f64 = system
+        .emission
+        .iter()
+        .zip(&system.area)
+        .map(|(m, a)| luminance(*m).max(0.0) * a)
+        .sum();
+    let mut shot = 0.0;
+    for (i, m) in system.emission.iter().enumerate() {
+        let power = luminance(*m).max(0.0) * system.area[i];
+        if power <= 0.0 {
+            continue;
+        }
+        let reach: f64 = rows
+            .row(i, power / total)
+            .iter()
+            .map(|&(_, f)| f as f64)
+            .sum();
+        shot += power * reach;
+    }
+    shot
+}
+
+/// H_p = Σ_k F_pk B_k for each patch of `patches`, along its own row of F ([`BLACK_ROW_RAYS`]
+/// Monte Carlo rays, streams of their own for each group `g`). Parallel, deterministic.
+fn gather_rows(est: &Estimator<'_>, patches: &[usize], b: &[Rgb], g: u64) -> Vec<Rgb> {
+    let effort = Effort {
+        rays: BLACK_ROW_RAYS,
+        // Streams apart from those the solver's rows draw (versions count up from 0).
+        version: (1 << 40) + g,
+    };
+    patches
+        .par_iter()
+        .map_init(
+            || (Scratch::default(), Vec::new()),
+            |(scratch, row), &p| {
+                est.row_with(p, effort, scratch, row);
+                row.iter().map(|&(k, f)| b[k as usize] * f as f64).sum()
+            },
+        )
+        .collect()
+}
+
+/// One row per material name: area-weighted means over its patches.
+fn surface_rows(
+    scene: &Scene,
+    mesh: &Mesh,
+    patch_e: &[f64],
+    patch_b: &[Rgb],
+    unit2: f64,
+) -> Vec<SurfaceLight> {
     // The row of each material: materials that share a name share a row.
     let mut rows: Vec<SurfaceLight> = Vec::new();
     let mut row_of = Vec::with_capacity(scene.materials.len());
@@ -329,15 +644,7 @@ pub fn lighting(
         row.luminance = row.exitance / std::f64::consts::PI;
     }
     rows.retain(|r| r.area > 0.0);
-    Ok(LightingResult {
-        groups,
-        total,
-        by_group,
-        direct,
-        patches: mesh.len(),
-        flux,
-        surfaces: rows,
-    })
+    rows
 }
 
 /// The photometric Y of an RGB quantity (ITU-R BT.709 luminance coefficients).
@@ -353,7 +660,7 @@ mod tests {
     use std::sync::Arc;
 
     /// An isotropic source of `i0` candela (IES, one horizontal angle, 0–180°).
-    fn isotropic(i0: f64) -> Arc<crate::photometry::Photometry> {
+    pub(super) fn isotropic(i0: f64) -> Arc<crate::photometry::Photometry> {
         let gammas: Vec<String> = (0..=36).map(|k| (5 * k).to_string()).collect();
         let cd = vec![i0.to_string(); 37];
         let text = format!(
@@ -365,7 +672,13 @@ mod tests {
     }
 
     /// An isotropic luminaire of `i0` candela at `at`, aimed down, in `group`.
-    fn lamp(name: &str, i0: f64, at: [f64; 3], multiplier: f64, group: &str) -> Luminaire {
+    pub(super) fn lamp(
+        name: &str,
+        i0: f64,
+        at: [f64; 3],
+        multiplier: f64,
+        group: &str,
+    ) -> Luminaire {
         Luminaire::new(
             name,
             isotropic(i0),
@@ -379,7 +692,7 @@ mod tests {
     }
 
     /// A closed cube of side `s` metres, inward faces, one grey reflectance.
-    fn cube(s: f32, rho: f64) -> Scene {
+    pub(super) fn cube(s: f32, rho: f64) -> Scene {
         let v = |x: f32, y: f32, z: f32| Vec3::new(x * s, y * s, z * s);
         let faces = vec![
             vec![v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)],
@@ -393,7 +706,7 @@ mod tests {
     }
 
     /// Points on every face of the cube, a `k × k` grid each, facing inwards.
-    fn wall_points(s: f64, k: usize) -> Vec<SensorPoint> {
+    pub(super) fn wall_points(s: f64, k: usize) -> Vec<SensorPoint> {
         let mut out = Vec::new();
         for a in 0..k {
             for b in 0..k {

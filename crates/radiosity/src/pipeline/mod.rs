@@ -22,7 +22,8 @@ mod view_factors;
 pub use crate::mesh::patch_system;
 pub use crate::observe::{Event, Observer, Stage};
 pub use lighting::{
-    lighting, luminance, LightingResult, LightingSettings, SurfaceLight, SCENE_GROUP,
+    lighting, lighting_solution, luminance, EnergyBooks, LightingResult, LightingSettings,
+    LightingSolution, SurfaceLight, BLACK_ROW_RAYS, ESCAPE_BANDS, ESCAPE_SECTORS, SCENE_GROUP,
 };
 pub use memory::{available_memory, MemoryCheck, MemoryLimit, BYTES_PER_PATCH};
 pub use radiant::{

@@ -507,15 +507,17 @@ impl<'a> Gather<'a> {
 
     /// Radiance towards the camera at the hit of a camera ray (every sample gathers).
     pub fn radiance(&self, ray: &Ray, hit: &Hit, rng: &mut Rng64) -> Rgb {
-        self.radiance_cached(ray, hit, None, rng)
+        self.radiance_cached(ray, hit, None, Rgb::BLACK, rng)
     }
 
-    /// [`Gather::radiance`], with the indirect irradiance from `cache` where it has records.
+    /// [`Gather::radiance`], with the indirect irradiance from `cache` where it has records,
+    /// and `extra` added to the irradiance reflected (light the solution does not hold).
     fn radiance_cached(
         &self,
         ray: &Ray,
         hit: &Hit,
         cache: Option<CacheAt<'_>>,
+        extra: Rgb,
         rng: &mut Rng64,
     ) -> Rgb {
         let s = &self.surfaces;
@@ -538,9 +540,9 @@ impl<'a> Gather<'a> {
                 );
                 let shift = (key >> 11) as f64 / (1u64 << 53) as f64;
                 let direct = self.direct(x, n, hit.patch, nd, (k * nd, spp * nd, shift), rng);
-                e + rho * (direct + h_ind) * inv_pi
+                e + rho * (direct + h_ind + extra) * inv_pi
             }
-            _ => e + rho * self.incoming(x, n, hit.patch, 0, rng),
+            _ => e + rho * (self.incoming(x, n, hit.patch, 0, rng) + extra * inv_pi),
         }
     }
 
@@ -628,7 +630,41 @@ impl<'a> Gather<'a> {
             observer,
             1.0,
             |ray, hit, pixel, sample, rng| {
-                self.radiance_cached(ray, hit, cache.as_ref().map(|c| (c, pixel, sample)), rng)
+                let cache = cache.as_ref().map(|c| (c, pixel, sample));
+                self.radiance_cached(ray, hit, cache, Rgb::BLACK, rng)
+            },
+        )
+    }
+
+    /// [`Gather::render`] with a white irradiance that the solution does not hold added, at
+    /// each camera sample, to what the hit point reflects: L = E/π + ρ (H_gathered +
+    /// E_extra)/π. `extra` is called once per image row with the row's front-side hits and
+    /// fills their irradiance (in the solution's exitance units), so that it can be computed
+    /// in one batch a row: the luminaires' exact direct light
+    /// ([`crate::pipeline::LightingSolution::render`]). The camera samples and the gather's
+    /// streams are those of [`Gather::render`]: with `extra` 0 the image is the same.
+    pub fn render_with_irradiance<P>(
+        &self,
+        camera: &Camera,
+        params: &RenderParams,
+        observer: &dyn Observer,
+        extra: P,
+    ) -> Image
+    where
+        P: Fn(&[super::SamplePoint], &mut Vec<f64>) + Sync,
+    {
+        let cache = (self.params.cache_samples > 0).then(|| self.build_cache(camera, params));
+        super::render_rows_with(
+            self.surfaces.mesh,
+            self.surfaces.bvh,
+            camera,
+            params,
+            observer,
+            1.0,
+            extra,
+            |ray, hit, pixel, sample, e, rng| {
+                let cache = cache.as_ref().map(|c| (c, pixel, sample));
+                self.radiance_cached(ray, hit, cache, Rgb::splat(e), rng)
             },
         )
     }
@@ -694,6 +730,58 @@ mod tests {
         for (k, p) in image.pixels.iter().enumerate() {
             let v = Rgb::new(p[0] as f64, p[1] as f64, p[2] as f64);
             assert!(close(v, 1e-5), "pixel {k}: {v:?} vs {exact:?}");
+        }
+    }
+
+    /// An irradiance added at every camera sample (a luminaire's direct light) is reflected
+    /// as ρ E/π on top of the gather: in the furnace, whose gather is exact, every pixel is
+    /// (B + ρ E)/π; with nothing added, the picture is [`Gather::render`]'s bit for bit (the
+    /// same camera samples and streams), irradiance cache and near hits included.
+    #[test]
+    fn an_added_irradiance_is_reflected_once() {
+        let scene = crate::scene::builtin::furnace();
+        let f = Fixture::new(&scene, 600);
+        let rho = crate::scene::builtin::FURNACE_REFLECTANCE;
+        let e = crate::scene::builtin::FURNACE_EMISSION;
+        let b = Rgb::new(
+            e.r / (1.0 - rho.r),
+            e.g / (1.0 - rho.g),
+            e.b / (1.0 - rho.b),
+        );
+        let vertex = vec![b; f.mesh.vertices.len()];
+        let camera = scene.camera.unwrap();
+        let params = RenderParams {
+            width: 24,
+            height: 24,
+            samples_per_pixel: 4,
+            seed: 2,
+        };
+        for cache_samples in [0, 64] {
+            let g = Gather::new(
+                f.surfaces(),
+                &vertex,
+                GatherParams {
+                    cache_samples,
+                    ..Default::default()
+                },
+            );
+            let plain = g.render(&camera, &params, &crate::observe::Silent);
+            let none =
+                g.render_with_irradiance(&camera, &params, &crate::observe::Silent, |_, _| {});
+            assert_eq!(plain, none);
+            let extra = 3.0;
+            let lit =
+                g.render_with_irradiance(&camera, &params, &crate::observe::Silent, |hits, out| {
+                    out.extend(hits.iter().map(|_| extra));
+                });
+            let want = (b + rho * extra) * std::f64::consts::FRAC_1_PI;
+            for (k, p) in lit.pixels.iter().enumerate() {
+                let v = Rgb::new(p[0] as f64, p[1] as f64, p[2] as f64);
+                assert!(
+                    v.max_abs_diff(want) < 1e-5 * want.max_channel(),
+                    "pixel {k}: {v:?} vs {want:?}"
+                );
+            }
         }
     }
 

@@ -63,6 +63,27 @@ impl Image {
     pub fn at(&self, x: u32, y: u32) -> [f32; 3] {
         self.pixels[(y * self.width + x) as usize]
     }
+
+    /// The photometric luminance Y = 0.2126 R + 0.7152 G + 0.0722 B of every pixel (ITU-R
+    /// BT.709 coefficients for linear sRGB), rows top to bottom: cd/m² when the scene's
+    /// emission and light are photometric (lm/m², lux).
+    pub fn luminance(&self) -> Vec<f32> {
+        self.pixels
+            .iter()
+            .map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
+            .collect()
+    }
+
+    /// A grey image of `values` (one per pixel, rows top to bottom) in all three channels:
+    /// how a luminance picture is written to OpenEXR or PFM. `None` when the count is not
+    /// `width × height`.
+    pub fn grey(width: u32, height: u32, values: &[f32]) -> Option<Image> {
+        (values.len() as u64 == width as u64 * height as u64).then(|| Image {
+            width,
+            height,
+            pixels: values.iter().map(|&v| [v; 3]).collect(),
+        })
+    }
 }
 
 /// Radiosity at each mesh vertex, interpolated within surfaces and hard between them.
@@ -237,18 +258,7 @@ where
             for (x, px) in row.iter_mut().enumerate() {
                 let mut acc = Rgb::BLACK;
                 for k in 0..spp {
-                    // Stratified: a jittered k × k grid when spp is a square, so edges converge
-                    // as n^(-3/4) rather than n^(-1/2).
-                    let (jx, jy) = if spp == 1 {
-                        (0.5, 0.5)
-                    } else if strata * strata == spp {
-                        (
-                            ((k % strata) as f32 + uniform(&mut rng)) / strata as f32,
-                            ((k / strata) as f32 + uniform(&mut rng)) / strata as f32,
-                        )
-                    } else {
-                        (uniform(&mut rng), uniform(&mut rng))
-                    };
+                    let (jx, jy) = jitter(k, spp, strata, &mut rng);
                     let ray = rays.ray(x as f32 + jx, y as f32 + jy);
                     if let Some(hit) = bvh.closest_hit(&ray, f32::INFINITY) {
                         if hit.front {
@@ -265,6 +275,130 @@ where
                 total: h as u64,
             });
         });
+    Image {
+        width: w,
+        height: h,
+        pixels,
+    }
+}
+
+/// Where in its pixel camera sample `k` of `spp` goes, in pixels from the pixel's corner: the
+/// centre for one sample; stratified, a jittered `strata × strata` grid when `spp` is that
+/// square (so edges converge as n^(-3/4) rather than n^(-1/2)); else uniform.
+#[inline]
+fn jitter(k: u32, spp: u32, strata: u32, rng: &mut Rng64) -> (f32, f32) {
+    if spp == 1 {
+        (0.5, 0.5)
+    } else if strata * strata == spp {
+        (
+            ((k % strata) as f32 + uniform(rng)) / strata as f32,
+            ((k / strata) as f32 + uniform(rng)) / strata as f32,
+        )
+    } else {
+        (uniform(rng), uniform(rng))
+    }
+}
+
+/// A camera sample's front-side hit, as a pass over a whole image row sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SamplePoint {
+    /// The point hit, scene units.
+    pub position: Vec3,
+    /// The hit patch's (front) normal.
+    pub normal: Vec3,
+    /// The hit patch.
+    pub patch: u32,
+}
+
+/// A worker's buffers for one image row of [`render_rows_with`], reused row after row: the
+/// camera samples' hits (front sides), the hits as points, and the row pass's values.
+#[derive(Default)]
+struct RowBuffers {
+    hits: Vec<Option<(Ray, Hit)>>,
+    points: Vec<SamplePoint>,
+    values: Vec<f64>,
+}
+
+/// [`render_with`] with a pass over each image row before it is shaded (`mesh` gives the
+/// hits' normals): the row's camera
+/// samples are cast first (the same jitter, from the same streams), `row_pass` is handed the
+/// front-side hits of the row in sample order and fills one value for each (so that work
+/// which is cheaper in batches, such as the luminaires' shadow rays of a whole row, is done
+/// once a row), then `shade` is called for each hit with its value. The shading streams are
+/// drawn in the same order as by [`render_with`], so with the same `shade` the image is the
+/// same. Deterministic: nothing depends on the thread count.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn render_rows_with<P, F>(
+    mesh: &Mesh,
+    bvh: &Bvh,
+    camera: &Camera,
+    params: &RenderParams,
+    observer: &dyn Observer,
+    scale: f64,
+    row_pass: P,
+    shade: F,
+) -> Image
+where
+    P: Fn(&[SamplePoint], &mut Vec<f64>) + Sync,
+    F: Fn(&Ray, &Hit, (u32, u32), (u32, u32), f64, &mut Rng64) -> Rgb + Sync,
+{
+    observer.event(Event::Stage(Stage::Render));
+    let (w, h) = (params.width.max(1), params.height.max(1));
+    let spp = params.samples_per_pixel.max(1);
+    let strata = (spp as f64).sqrt().round() as u32;
+    let rays = CameraRays::new(camera, w, h);
+    let done = std::sync::atomic::AtomicU32::new(0);
+    let mut pixels = vec![[0.0f32; 3]; (w * h) as usize];
+    pixels.par_chunks_mut(w as usize).enumerate().for_each_init(
+        RowBuffers::default,
+        |RowBuffers {
+             hits,
+             points,
+             values,
+         },
+         (y, row)| {
+            let mut rng = stream(params.seed, 0x5245_4e44, y as u64, 0);
+            let mut shading = stream(params.seed, 0x5348_4144, y as u64, 0);
+            hits.clear();
+            points.clear();
+            for x in 0..w {
+                for k in 0..spp {
+                    let (jx, jy) = jitter(k, spp, strata, &mut rng);
+                    let ray = rays.ray(x as f32 + jx, y as f32 + jy);
+                    let hit = bvh.closest_hit(&ray, f32::INFINITY).filter(|hit| hit.front);
+                    if let Some(hit) = hit {
+                        points.push(SamplePoint {
+                            position: ray.at(hit.t),
+                            normal: mesh.patches[hit.patch as usize].normal,
+                            patch: hit.patch,
+                        });
+                    }
+                    hits.push(hit.map(|hit| (ray, hit)));
+                }
+            }
+            values.clear();
+            row_pass(points, values);
+            values.resize(points.len(), 0.0);
+            let mut next = 0;
+            for (x, px) in row.iter_mut().enumerate() {
+                let mut acc = Rgb::BLACK;
+                for k in 0..spp {
+                    if let Some((ray, hit)) = &hits[x * spp as usize + k as usize] {
+                        let v = values[next];
+                        next += 1;
+                        acc += shade(ray, hit, (x as u32, y as u32), (k, spp), v, &mut shading);
+                    }
+                }
+                let l = acc * (scale / spp as f64);
+                *px = [l.r as f32, l.g as f32, l.b as f32];
+            }
+            observer.event(Event::Progress {
+                stage: Stage::Render,
+                done: done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) as u64 + 1,
+                total: h as u64,
+            });
+        },
+    );
     Image {
         width: w,
         height: h,
