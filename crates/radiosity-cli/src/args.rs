@@ -803,6 +803,10 @@ pub struct RenderArgs {
     /// emission is read as luminous exitance in lm/m².
     #[arg(long, help_heading = OUTPUT)]
     pub luminance: bool,
+    /// With --luminance: also the luminance picture in false colour (PNG), logarithmic bands
+    /// 1–2–5 a decade with a legend in cd/m².
+    #[arg(long = "false-colour", visible_alias = "false-color", value_name = "FILE.png", requires = "luminance", help_heading = OUTPUT)]
+    pub false_colour: Option<PathBuf>,
 }
 
 /// How `render` computes pixels.

@@ -37,6 +37,18 @@ pub fn run(mut a: RenderArgs) -> Result<()> {
         }
     }
     settings::check_output(&out)?;
+    if let Some(p) = &a.false_colour {
+        if !matches!(ImageFormat::from_path(p), Ok(ImageFormat::Png)) {
+            bail!(
+                "--false-colour {}: the false-colour picture is a .png",
+                p.display()
+            );
+        }
+        if p == &out {
+            bail!("--false-colour {}: the same file as --out", p.display());
+        }
+        settings::check_output(p)?;
+    }
     if let Some(t) = &a.solve.trace {
         settings::check_output(t)?;
     }
@@ -92,7 +104,13 @@ pub fn run(mut a: RenderArgs) -> Result<()> {
         progress.finish();
         let image = image?;
         let render_s = t.elapsed().as_secs_f64();
-        write_picture(&out, &image, a.luminance, a.exposure)?;
+        write_picture(
+            &out,
+            &image,
+            a.luminance,
+            a.exposure,
+            a.false_colour.as_deref(),
+        )?;
         if a.solve.report == ReportFormat::Json {
             let res = report::resources();
             let v = serde_json::json!({
@@ -137,7 +155,13 @@ pub fn run(mut a: RenderArgs) -> Result<()> {
     progress.finish();
     let render_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    write_picture(&out, &image, a.luminance, a.exposure)?;
+    write_picture(
+        &out,
+        &image,
+        a.luminance,
+        a.exposure,
+        a.false_colour.as_deref(),
+    )?;
     let write_s = t.elapsed().as_secs_f64();
     if a.solve.report == ReportFormat::Json {
         let mut v = report::summary_json(&scene, &solution, Some((render_s, write_s)));
@@ -189,11 +213,39 @@ fn write_picture(
     image: &Image,
     luminance: bool,
     exposure: f32,
+    false_colour: Option<&Path>,
 ) -> Result<Option<Vec<f32>>> {
     if luminance {
         let y = image.luminance();
         let grey = Image::grey(image.width, image.height, &y)
             .context("the luminance picture has one value a pixel")?;
+        if let Some(p) = false_colour {
+            let values: Vec<f64> = y.iter().map(|&v| v as f64).collect();
+            let mut sorted: Vec<f32> = y.iter().copied().filter(|v| v.is_finite()).collect();
+            sorted.sort_unstable_by(f32::total_cmp);
+            let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+            let max = sorted.last().copied().unwrap_or(0.0);
+            let title = format!(
+                "luminance of {}",
+                out.file_name().map_or_else(
+                    || out.display().to_string(),
+                    |n| n.to_string_lossy().into_owned()
+                )
+            );
+            let caption = format!("median {median:.3} cd/m², max {max:.3} cd/m²");
+            crate::false_colour::write_raster_png(
+                p,
+                &crate::false_colour::Raster {
+                    width: image.width as usize,
+                    height: image.height as usize,
+                    values: &values,
+                    unit: "cd/m²",
+                    title: &title,
+                    caption: &caption,
+                    scale: crate::false_colour::Scale::Log,
+                },
+            )?;
+        }
         write_image(out, &grey, 1.0).context("writing the image")?;
         return Ok(Some(y));
     }
@@ -266,8 +318,13 @@ fn luminaires(
     let image = image?;
     let render_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    // The luminance values stay at hand for a false-colour picture of them.
-    let _luminance = write_picture(out, &image, a.luminance, a.exposure)?;
+    write_picture(
+        out,
+        &image,
+        a.luminance,
+        a.exposure,
+        a.false_colour.as_deref(),
+    )?;
     let write_s = t.elapsed().as_secs_f64();
     if a.solve.report == ReportFormat::Json {
         let res = report::resources();

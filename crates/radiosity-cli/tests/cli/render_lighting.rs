@@ -2,6 +2,7 @@
 //! inverse-square cosine law; the energy books in `lighting`'s summary; bad combinations.
 
 use crate::common::*;
+use radiosity_cli::false_colour::{Bands, RasterFrame, Scale};
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -90,6 +91,8 @@ fn render_luminance_follows_the_cosine_cubed_law() {
             "--luminance",
             "-o",
             "floor.pfm",
+            "--false-colour",
+            "floor.png",
             "--eye",
             "0.3,0.2,6",
             "--target",
@@ -156,6 +159,36 @@ fn render_luminance_follows_the_cosine_cubed_law() {
     );
     assert!((f("escaped") - (f("emitted") - f("absorbed") - f("unshot"))).abs() < 1e-9 * emitted);
     assert_eq!(v["luminance"], true);
+    // The false-colour picture: every pixel of the drawn raster has the legend colour of the
+    // band of the luminance it shows (the bands are the picture's own: logarithmic over the
+    // same values).
+    let y: Vec<f64> = (0..32 * 32)
+        .map(|k| {
+            let (row, col) = (k / 32, k % 32);
+            pixels[(31 - row) * 32 + col][1] as f64
+        })
+        .collect();
+    let bands = Bands::of_values(&y, Scale::Log);
+    let png = image::open(dir.join("floor.png")).unwrap().to_rgb8();
+    let frame = RasterFrame::of(32, 32);
+    assert_eq!(png.dimensions(), frame.size);
+    let mut seen = std::collections::BTreeSet::new();
+    for py in (frame.origin.1..frame.origin.1 + frame.drawn.1).step_by(7) {
+        for px in (frame.origin.0..frame.origin.0 + frame.drawn.0).step_by(7) {
+            let (c, r) = frame.value_at(px, py, 32, 32).unwrap();
+            let k = bands.band(y[r * 32 + c]);
+            assert_eq!(
+                png.get_pixel(px, py).0,
+                bands.colour(k),
+                "pixel ({px}, {py})"
+            );
+            seen.insert(k);
+        }
+    }
+    assert!(
+        seen.len() >= 3,
+        "the floor's fall-off spans bands: {seen:?}"
+    );
 }
 
 /// A closed black box, two luminaires in two groups: nothing is reflected, so the flux on the
@@ -278,6 +311,18 @@ fn render_refuses_what_luminance_and_luminaires_cannot_do() {
         (
             &["--luminaires", "missing.csv", "-o", "f.exr"][..],
             &["missing.csv"][..],
+        ),
+        (
+            &["--luminance", "-o", "f.exr", "--false-colour", "f.tif"][..],
+            &["--false-colour", "f.tif"][..],
+        ),
+        (
+            &["--luminance", "-o", "f.exr", "--false-colour", "f.exr"][..],
+            &["--false-colour", "f.exr"][..],
+        ),
+        (
+            &["-o", "f.exr", "--false-colour", "f.png"][..],
+            &["--luminance"][..],
         ),
     ] {
         let args: Vec<&str> = base.iter().chain(extra).copied().collect();
