@@ -490,7 +490,7 @@ pub struct ThermalArgs {
     #[arg(long, value_name = "mrt.csv", requires = "grid", help_heading = OUTPUT)]
     pub mrt_out: Option<PathBuf>,
     /// Rays per point over the sphere (and as many over the hemisphere), stratified.
-    #[arg(long, value_name = "N", default_value_t = 4096, help_heading = OUTPUT)]
+    #[arg(long, value_name = "N", default_value_t = 2048, help_heading = OUTPUT)]
     pub mrt_rays: u32,
 }
 

@@ -549,7 +549,7 @@ fn thermal_radiant_temperatures_at_points() {
     );
     let (hot, cold) = (350f64.powi(4), 300f64.powi(4));
     let f = 4.0 / (2.0 * std::f64::consts::PI) * 2.0 / 2f64.sqrt() * (1.0 / 2f64.sqrt()).atan();
-    let n = 4232.0; // 2k², k = 46, for the default 4,096 rays
+    let n = 2048.0; // 2k², k = 32, for the default 2,048 rays
     let bound = 4.0 * (3.0 * f64::sqrt(n)).sqrt() / n * (hot - cold);
     let v = |r: &Vec<String>, c: usize| r[c].parse::<f64>().unwrap();
     let mean = (hot + 5.0 * cold) / 6.0;

@@ -46,7 +46,7 @@ pub struct RadiantParams {
 impl Default for RadiantParams {
     fn default() -> Self {
         Self {
-            rays: 4096,
+            rays: 2048,
             seed: 1,
         }
     }
