@@ -242,3 +242,7 @@ impl Luminaire {
         self.multiplier * self.photometry.intensity_dir(self.to_local(world_dir))
     }
 }
+
+#[cfg(test)]
+#[path = "tilt_tests.rs"]
+mod tilt_tests;
