@@ -46,6 +46,10 @@ pub enum Target {
     Pfm,
     /// IES LM-63 photometry (a luminaire's candela table).
     Ies,
+    /// IES photometry of type B (a floodlight: laterally symmetric, with a tilt table).
+    IesB,
+    /// IES photometry of type A (vertical angles 0..90, CRLF, a tilt table).
+    IesA,
     /// EULUMDAT photometry.
     Ldt,
     /// A luminaire schedule (with its photometric file beside it, unmutated).
@@ -56,7 +60,7 @@ pub enum Target {
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 17] = [
+    pub const ALL: [Target; 19] = [
         Target::Obj,
         Target::Mtl,
         Target::Mgf,
@@ -71,6 +75,8 @@ impl Target {
         Target::BoundaryCsv,
         Target::Pfm,
         Target::Ies,
+        Target::IesB,
+        Target::IesA,
         Target::Ldt,
         Target::Schedule,
         Target::Points,
@@ -93,6 +99,8 @@ impl Target {
             Target::BoundaryCsv => "bc-csv",
             Target::Pfm => "pfm",
             Target::Ies => "ies",
+            Target::IesB => "ies-b",
+            Target::IesA => "ies-a",
             Target::Ldt => "ldt",
             Target::Schedule => "schedule",
             Target::Points => "points",
@@ -108,6 +116,8 @@ const CSV: &str = "area,reflectance,emission\n1,0.5,1\n1,0.5,0\n2,0.25,0\n";
 const VS3: &str = "T two forms\nC encl=1 list=2 eps=1.e-4 maxu=8\nF 3\n! a box\nV 1 0. 0. 0.\nV 2 1. 0. 0.\nV 3 1. 1. 0.\nV 4 0. 1. 0.\nV 5 0. 0. 1.\nV 6 1. 0. 1.\nV 7 1. 1. 1.\nV 8 0. 1. 1.\nS 1 1 2 3 4 0 0 0.50 floor\nS 2 1 4 8 5 0 0 0.50 xeq0\nS 3 1 5 6 2 0 0 0.50 yeq0\nS 4 7 6 5 8 0 0 0.90 top\nS 5 7 3 2 0 0 2 0.50 xeq1a ! combined\nS 6 7 2 6 0 0 2 0.50 xeq1b\nS 7 7 8 4 3 0 0 0.50 yeq1\nO 8 1 2 7 8\nEnd of data\n";
 const VS3A: &str = "T L room\nC encl=1\nF 3a\nS 1 R 0 0 0.90 s1\n  3. 0. 0. 0 90 3. 3.\nS 2 Q 0 0 0.90 s2\n  3. 0. 3. 0 180\n  2. 0. 3. 0. 3. 1. 2. 1.\nS 3 T 0 1 0.90 s3\n 0. 0. 0. 180 0 0. 0. 1. 0. 1. 1.\nO 4 R 1. 1. 1. 45 30 1. 1.\nE\n";
 const IES: &str = "IESNA:LM-63-2002\r\n[TEST] fuzz seed\r\n[MANUFAC] radiosity\r\nTILT=INCLUDE\r\n1\r\n3\r\n0 45 90\r\n1 0.9 0.8\r\n1 1000 1 5 3 1 2 0.6 -0.3 0.1\r\n1 0 0\r\n0 22.5 45 67.5 90\r\n0 90 180\r\n300 280 220 120 10\r\n310 290 230 130 12\r\n320 300 240 140 14\r\n";
+const IES_B: &str = "IESNA:LM-63-1995\n[TEST] fuzz seed, type B\n[LUMINAIRE] floodlight\nTILT=INCLUDE\n3\n4\n0 30 60 90\n1 0.97 0.9 0.85\n1 20000 1.0 7 4 2 1 -1.2 -1.2 0.3\n1.0 1.0 400\n-90 -60 -30 0 30 60 90\n0 30 60 90\n0 200 3000 9000 2500 150 0\n0 150 2500 8000 2000 120 0\n0 60 900 2000 700 50 0\n0 0 0 0 0 0 0\n";
+const IES_A: &str = "IESNA:LM-63-2002\r\n[TEST] fuzz seed, type A\r\nTILT=INCLUDE\r\n2\r\n2\r\n0 90\r\n1 0.5\r\n1 -1 1 4 5 3 2 0.2 0.1 0\r\n1 0 12\r\n0, 10, 45, 90\r\n-90, -20, 0, 20, 90\r\n0 0 0 0\r\n40 20 5 0\r\n900 300 20 0\r\n50 25 5 0\r\n0 0 0 0\r\n";
 const LDT: &str = "radiosity\n1\n2\n4\n90\n5\n22.5\nreport\nfuzz seed\n1\nseed.ldt\n2026-11-28\n600\n300\n80\n580\n280\n0\n0\n0\n0\n95\n80\n1\n0\n1\n2\nLED\n4000\n3000\n80\n40\n0.5\n0.6\n0.7\n0.75\n0.8\n0.85\n0.9\n0.92\n0.95\n0.97\n0\n90\n180\n270\n0\n22.5\n45\n67.5\n90\n300\n280\n220\n120\n10\n310\n290\n230\n130\n12\n320\n300\n240\n140\n14\n";
 const SCHEDULE: &str = "name,file,x,y,z,aim_x,aim_y,aim_z,c0_x,c0_y,c0_z,multiplier,group\nA,lamp.ies,1,2,2.9,,,,,,,0.8,north\n\"B, quoted\",lamp.ies,3,2,2.9,0.1,0,-1,1,0,0,,\n";
 const POINTS: &str =
@@ -157,6 +167,8 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
         Target::Vs3a => vec![s("room.vs3", VS3A)],
         Target::BoundaryCsv => vec![s("bc.csv", BC)],
         Target::Ies => vec![s("lamp.ies", IES)],
+        Target::IesB => vec![s("lamp.ies", IES_B)],
+        Target::IesA => vec![s("lamp.ies", IES_A)],
         Target::Ldt => vec![s("lamp.ldt", LDT)],
         // The schedule first: the mutations fall on the first file.
         Target::Schedule => vec![s("lights.csv", SCHEDULE), s("lamp.ies", IES)],
@@ -280,7 +292,9 @@ fn parse(target: Target, dir: &Path) -> bool {
         Target::Vs3a => scene("room.vs3"),
         Target::BoundaryCsv => radiosity::thermal::read_boundary_csv(&dir.join("bc.csv")).is_ok(),
         Target::Pfm => radiosity::render::compare::read_pfm(&dir.join("ref.pfm")).is_ok(),
-        Target::Ies => radiosity::photometry::read(&dir.join("lamp.ies")).is_ok(),
+        Target::Ies | Target::IesB | Target::IesA => {
+            radiosity::photometry::read(&dir.join("lamp.ies")).is_ok()
+        }
         Target::Ldt => radiosity::photometry::read(&dir.join("lamp.ldt")).is_ok(),
         Target::Schedule => {
             radiosity::lighting::read_schedule(&dir.join("lights.csv"), radiosity::lighting::Up::Z)
@@ -381,6 +395,23 @@ mod tests {
             );
         }
         let _ = std::fs::remove_dir_all(&root);
+    }
+
+    /// The photometric seeds cover every photometric type and every lamp-to-luminaire
+    /// geometry of a tilt table, read as such.
+    #[test]
+    fn the_photometric_seeds_cover_types_b_and_a_and_tilt() {
+        use radiosity::photometry::{parse_bytes, LampGeometry, PhotometricType};
+        for (text, kind, geometry) in [
+            (IES, PhotometricType::C, LampGeometry::Vertical),
+            (IES_B, PhotometricType::B, LampGeometry::AcrossC0),
+            (IES_A, PhotometricType::A, LampGeometry::AlongC0),
+        ] {
+            let p = parse_bytes(text.as_bytes(), "seed.ies").unwrap();
+            assert_eq!(p.kind, kind);
+            assert_eq!(p.tilt.as_ref().map(|t| t.geometry), Some(geometry));
+            assert!(p.flux() > 0.0);
+        }
     }
 
     /// Mutations are reproducible from the seed.

@@ -1,20 +1,35 @@
-//! A luminaire placed in a scene: its photometry, photometric centre, and the orientation of
-//! its C-γ frame in world coordinates.
+//! A luminaire placed in a scene: its photometry, photometric centre, the orientation of its
+//! frame in world coordinates, and its lamp's tilt factor.
 //!
 //! # The frame
 //!
-//! [`crate::photometry`] holds intensities in the luminaire's own frame: nadir (γ = 0) along
-//! −z, C = 0 (γ = 90°) along +x, C = 90° along +y. A [`Luminaire`] stores the world
-//! directions of those axes: `nadir` (world image of −z), `c0` (of +x) and `c90` (of +y). They
-//! are orthonormal and right-handed: `c0 × c90 = −nadir` (the luminaire's "up", world image of
-//! +z), so C increases counter-clockwise seen from above the luminaire, as LM-63 and
-//! EULUMDAT turn. [`Luminaire::new`] builds them from an aiming direction and a C0 hint:
+//! [`crate::photometry`] holds intensities in the luminaire's own frame: the photometric axis
+//! along −z (type C: the nadir, γ = 0; types B and A: the beam, H = V = 0), +x across it (type
+//! C: C = 0 at γ = 90°; types B and A: V = 90° at H = 0, the top of a floodlight), +y = z × x
+//! (type C: C = 90°; types B and A: H = −90°, the left seen from behind the luminaire). A
+//! [`Luminaire`] stores the world directions of those axes: `nadir` (world image of −z),
+//! `c0` (of +x) and `c90` (of +y). They are orthonormal and right-handed: `c0 × c90 = −nadir`
+//! (the luminaire's "up", world image of +z), so C increases counter-clockwise seen from above
+//! the luminaire, as LM-63 and EULUMDAT turn, and a floodlight's H = 90° lies along
+//! `nadir × c0`, to the right of its beam. [`Luminaire::new`] builds them from an aiming
+//! direction and a C0 hint:
 //!
 //! 1. `nadir` = aim / |aim|;
 //! 2. `c0` = the hint made perpendicular to the nadir by one Gram–Schmidt step,
 //!    c0 − (c0 · nadir) nadir, normalised; without a hint, world +x, and where +x is parallel
 //!    to the aim (a luminaire aimed along ±x) world +y instead;
 //! 3. `c90` = c0 × nadir (so that c0 × c90 = −nadir).
+//!
+//! # Lamp tilt
+//!
+//! A photometric file with a tilt table ([`crate::photometry::Tilt`], IES `TILT=INCLUDE`)
+//! rates the lamp at one tilt; installed at another, its light is multiplied by the table's
+//! factor at the installed tilt angle. That angle depends on the luminaire's orientation and
+//! the world's vertical, so it is applied per luminaire by [`Luminaire::with_lamp_tilt`]
+//! (the schedule does, with the scene's up): the world's up is expressed in the luminaire's
+//! frame, [`crate::photometry::Tilt::installed_angle`] gives the angle for the file's
+//! lamp-to-luminaire geometry, the factor is interpolated linearly and multiplies
+//! `multiplier`; an angle outside the table takes the nearer end's factor, with a warning.
 
 use super::{cross, dot, norm, scale, sub, unit};
 use crate::photometry::Photometry;
@@ -37,6 +52,8 @@ pub enum FrameError {
     C0ParallelToAim,
     /// The multiplier is negative or not finite.
     Multiplier,
+    /// The world's up direction is zero or not finite.
+    Up,
 }
 
 impl fmt::Display for FrameError {
@@ -49,11 +66,24 @@ impl fmt::Display for FrameError {
                 "the C0 direction is parallel to the aim, so it names no C = 0 half-plane"
             }
             FrameError::Multiplier => "the multiplier must be a finite number >= 0",
+            FrameError::Up => "the up direction is zero or not finite",
         })
     }
 }
 
 impl std::error::Error for FrameError {}
+
+/// The lamp tilt applied to a luminaire ([`Luminaire::with_lamp_tilt`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LampTilt {
+    /// The installed tilt angle, degrees, as the file's lamp-to-luminaire geometry defines it
+    /// ([`crate::photometry::LampGeometry`]).
+    pub angle: f64,
+    /// The tilt table's factor at that angle (already in [`Luminaire::multiplier`]).
+    pub factor: f64,
+    /// False when the angle lies outside the table's angles (the factor is the nearer end's).
+    pub in_table: bool,
+}
 
 /// A luminaire in the scene: a point source at `position` sending
 /// `multiplier × photometry` in the frame `(c0, c90, −nadir)` (see the module documentation).
@@ -65,16 +95,26 @@ pub struct Luminaire {
     pub photometry: Arc<Photometry>,
     /// The photometric centre, scene units.
     pub position: [f64; 3],
-    /// Unit world direction of γ = 0 (the luminaire's −z).
+    /// Unit world direction of the photometric axis (the luminaire's −z): type C's γ = 0,
+    /// types B and A's H = V = 0.
     pub nadir: [f64; 3],
-    /// Unit world direction of C = 0, γ = 90° (the luminaire's +x), perpendicular to `nadir`.
+    /// Unit world direction of the luminaire's +x, perpendicular to `nadir`: type C's C = 0,
+    /// γ = 90°; types B and A's V = 90° at H = 0.
     pub c0: [f64; 3],
-    /// Unit world direction of C = 90°, γ = 90° (the luminaire's +y): `c0 × nadir`.
+    /// Unit world direction of the luminaire's +y, `c0 × nadir`: type C's C = 90°, γ = 90°;
+    /// types B and A's H = −90° at V = 0.
     pub c90: [f64; 3],
-    /// Scales every intensity (light-loss factor, dimming); finite and ≥ 0.
+    /// Scales every intensity: the light-loss factor and dimming it was built with, times the
+    /// lamp's tilt factor once [`Luminaire::with_lamp_tilt`] has applied it; finite and ≥ 0.
+    /// The luminaire's flux is `photometry.flux() × multiplier`.
     pub multiplier: f64,
     /// The light scene (switching group) it belongs to.
     pub group: String,
+    /// The lamp tilt applied, if any ([`Luminaire::with_lamp_tilt`]).
+    pub tilt: Option<LampTilt>,
+    /// What was doubtful in placing it (a tilt angle outside the file's tilt table), one line
+    /// each; the photometry's own warnings are in [`Photometry::warnings`].
+    pub warnings: Vec<String>,
 }
 
 impl Luminaire {
@@ -129,7 +169,45 @@ impl Luminaire {
             c90,
             multiplier,
             group: group.into(),
+            tilt: None,
+            warnings: Vec::new(),
         })
+    }
+
+    /// The luminaire with its lamp's tilt factor applied, installed in a scene whose
+    /// vertical is `up` (world coordinates; need not be unit length): see the module
+    /// documentation. Without a tilt table in the photometry, or once applied already, it
+    /// is returned as it is. Refused: a zero or non-finite `up`.
+    pub fn with_lamp_tilt(mut self, up: [f64; 3]) -> Result<Luminaire, FrameError> {
+        let up = unit(up).ok_or(FrameError::Up)?;
+        let Some(table) = self.photometry.tilt.as_ref() else {
+            return Ok(self);
+        };
+        if self.tilt.is_some() {
+            return Ok(self);
+        }
+        let angle = table
+            .installed_angle(self.to_local(up))
+            .ok_or(FrameError::Up)?;
+        let (factor, in_table) = table.factor(angle);
+        if !in_table {
+            let (first, last) = (
+                table.angles.first().copied().unwrap_or(0.0),
+                table.angles.last().copied().unwrap_or(0.0),
+            );
+            self.warnings.push(format!(
+                "{}: the lamp's tilt, {angle:.1}°, is outside the tilt table's {first}..{last}° \
+                 of {}: the factor at the nearer end, {factor}, is used",
+                self.name, self.photometry.source
+            ));
+        }
+        self.multiplier *= factor;
+        self.tilt = Some(LampTilt {
+            angle,
+            factor,
+            in_table,
+        });
+        Ok(self)
     }
 
     /// The luminaire's "up", the world image of its +z: `−nadir` (= `c0 × c90`).
@@ -164,3 +242,7 @@ impl Luminaire {
         self.multiplier * self.photometry.intensity_dir(self.to_local(world_dir))
     }
 }
+
+#[cfg(test)]
+#[path = "tilt_tests.rs"]
+mod tilt_tests;

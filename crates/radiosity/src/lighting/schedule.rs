@@ -16,8 +16,8 @@
 //! | `name` | the luminaire's name, unique in the schedule | refused |
 //! | `file` | its `.ies` or `.ldt` file, relative to the schedule's folder (or absolute) | refused |
 //! | `x,y,z` | the photometric centre, scene units | refused |
-//! | `aim_x,aim_y,aim_z` | the direction of γ = 0 (photometric nadir); need not be unit | −up (straight down) |
-//! | `c0_x,c0_y,c0_z` | the direction of the C = 0 half-plane, made perpendicular to the aim | +x (+y where +x is parallel to the aim) |
+//! | `aim_x,aim_y,aim_z` | the photometric axis: type C's γ = 0 (nadir), types B and A's H = V = 0 (the beam); need not be unit | −up (straight down) |
+//! | `c0_x,c0_y,c0_z` | made perpendicular to the aim: type C's C = 0 half-plane; types B and A's V = 90° (the top of a floodlight) | type C: +x (+y where +x is parallel to the aim); types B and A: up (+x where up is parallel to the aim) |
 //! | `multiplier` | scales intensities (light-loss factor × dimming), finite, ≥ 0 | 1 |
 //! | `group` | the light scene (switching group) | [`DEFAULT_GROUP`] |
 //!
@@ -25,6 +25,10 @@
 //! (`"a, b"`, a quote inside doubled: `""`) but may not hold a line end; blanks around a
 //! field are dropped. Blank lines are skipped. Line ends may be LF, CRLF or CR; the bytes are
 //! UTF-8, else Latin-1.
+//!
+//! Each luminaire's lamp tilt is applied for the scene's up
+//! ([`Luminaire::with_lamp_tilt`]): rows sharing a file but aimed differently get their own
+//! factors.
 //!
 //! Duplicate names are refused (the second names the line of the first): reports and
 //! per-luminaire outputs are keyed by name, and two rows of one name are almost always a
@@ -34,9 +38,9 @@
 //! Every error is one line naming the schedule's file and line; a photometric file that
 //! cannot be read gives its own error (naming that file) after the schedule's place.
 
-use super::luminaire::Luminaire;
-use super::{invalid, name_of, read_text, LightingError};
-use crate::photometry::{self, shown, Lines, Photometry};
+use super::luminaire::{Luminaire, PARALLEL_SIN};
+use super::{dot, invalid, name_of, read_text, LightingError};
+use crate::photometry::{self, shown, Lines, PhotometricType, Photometry};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -175,7 +179,17 @@ pub fn parse_schedule(
                 p
             }
         };
+        // A floodlight (types B and A) keeps its top (V = 90°) up unless told otherwise.
+        let c0 = match (c0, photometry.kind) {
+            (None, PhotometricType::B | PhotometricType::A) => {
+                let u = up.vector();
+                let along = dot(u, aim) / dot(aim, aim).sqrt();
+                (along.is_finite() && along.abs() < 1.0 - PARALLEL_SIN).then_some(u)
+            }
+            (c0, _) => c0,
+        };
         let luminaire = Luminaire::new(lum_name, photometry, position, aim, c0, multiplier, group)
+            .and_then(|l| l.with_lamp_tilt(up.vector()))
             .map_err(|e| at(e.to_string()))?;
         out.push(luminaire);
     }

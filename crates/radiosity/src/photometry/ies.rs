@@ -18,8 +18,9 @@
 //! separated by blanks, commas or line ends, wrapped anywhere.
 
 use super::{
-    check_angles, invalid, last_line, number, prepare, shown, Lines, NumberReader, Opening,
-    PhotometricType, Photometry, PhotometryError, Symmetry, Table, Words, MAX_TABLE_VALUES,
+    check_angles, invalid, last_line, mirror, number, prepare, shown, LampGeometry, Lines,
+    NumberReader, Opening, PhotometricType, Photometry, PhotometryError, Symmetry, Table, Tilt,
+    Words, MAX_TABLE_VALUES,
 };
 
 /// Metres in a foot (exact, by the international yard and pound agreement of 1959).
@@ -68,14 +69,21 @@ type Reader<'a> = NumberReader<'a>;
 /// Parse the text of an IES LM-63 file; `name` is the file's name, for messages and
 /// [`Photometry::source`].
 ///
-/// Type C photometry (LM-63 photometric type 1) is read into a [`Photometry`]; the horizontal
-/// angles may run 0 (one angle: rotationally symmetric), 0–90 (symmetric in each quadrant),
-/// 0–180 (symmetric about the C0–C180 plane), 0 to more than 180 up to 360 (no symmetry) or
-/// 90–270 (symmetric about the C90–C270 plane), and the vertical angles 0–90, 90–180 or 0–180
-/// (other ranges within 0–180 are read with a warning). Files of type B (2) or A (3) are read
-/// and checked whole, then refused: type B/A photometry is not supported for lighting yet. A
-/// file naming an external tilt file (`TILT=<file>`) is refused; an included tilt table is
-/// checked and skipped.
+/// Type C photometry (LM-63 photometric type 1): the horizontal angles may run 0 (one angle:
+/// rotationally symmetric), 0–90 (symmetric in each quadrant), 0–180 (symmetric about the
+/// C0–C180 plane), 0 to more than 180 up to 360 (no symmetry) or 90–270 (symmetric about the
+/// C90–C270 plane), and the vertical angles 0–90, 90–180 or 0–180 (other ranges within 0–180
+/// are read with a warning).
+///
+/// Types B (2) and A (3): the horizontal angles run −90–90, or 0–90 for a laterally symmetric
+/// distribution (the same at −H; mirrored), the vertical angles −90–90 or 0–90 (as for type
+/// C's vertical angles, a range is where the light is: a table of 0–90 sends nothing below
+/// V = 0; LM-63 names a symmetry only for the horizontal angles). Other ranges are read with a
+/// warning where the geometry allows them: the latitude (B's H, A's V) within −90–90, the
+/// longitude (B's V, A's H) within −180–180. At least two angles of each are needed.
+///
+/// An included tilt table (`TILT=INCLUDE`) is read into [`Photometry::tilt`]; a file naming
+/// an external tilt file (`TILT=<file>`) is refused.
 pub fn parse_ies(text: &str, name: &str) -> Result<Photometry, PhotometryError> {
     let text = prepare(text, name)?;
     let end_line = last_line(text);
@@ -113,10 +121,12 @@ pub fn parse_ies(text: &str, name: &str) -> Result<Photometry, PhotometryError> 
         end_line,
         parse: number,
     };
-    if tilt.eq_ignore_ascii_case("INCLUDE") {
-        skip_tilt_table(&mut r)?;
-        warnings.push("the included tilt table is not applied".to_string());
-    } else if !tilt.eq_ignore_ascii_case("NONE") {
+    let tilt_table = if tilt.eq_ignore_ascii_case("INCLUDE") {
+        Some(read_tilt_table(&mut r)?)
+    } else {
+        None
+    };
+    if tilt_table.is_none() && !tilt.eq_ignore_ascii_case("NONE") {
         return Err(invalid(
             name,
             tilt_line,
@@ -136,7 +146,7 @@ pub fn parse_ies(text: &str, name: &str) -> Result<Photometry, PhotometryError> 
     let (lumens_per_lamp, _) = r.number("the lumens per lamp")?;
     let (multiplier, multiplier_line) = r.number("the candela multiplier")?;
     let (n_v, n_v_line) = r.count("the number of vertical angles", 2)?;
-    let (n_h, _) = r.count("the number of horizontal angles", 1)?;
+    let (n_h, n_h_line) = r.count("the number of horizontal angles", 1)?;
     let (kind, kind_line) = r.number("the photometric type")?;
     let (units, units_line) = r.number("the units type")?;
     let (width, _) = r.number("the luminous opening's width")?;
@@ -312,59 +322,37 @@ pub fn parse_ies(text: &str, name: &str) -> Result<Photometry, PhotometryError> 
     }
     trailing(&mut r, &mut warnings, n_v_line)?;
 
-    if kind != PhotometricType::C {
-        return Err(invalid(
-            name,
-            kind_line,
-            format!(
-                "photometric type {kind}: type B/A photometry is not supported for lighting yet \
-                 (only type C, photometric type 1)"
-            ),
-        ));
-    }
-
-    // Type C ranges.
-    check_angles(
-        &vertical,
-        &v_lines,
-        "vertical angle",
-        &declared_v,
-        0.0,
-        180.0,
-    )
-    .map_err(|(line, m)| invalid(name, line, m))?;
-    let (v0, v1) = (vertical[0], vertical[n_v - 1]);
-    let standard = [(0.0, 90.0), (90.0, 180.0), (0.0, 180.0)];
-    if !standard.iter().any(|&(a, b)| same(v0, a) && same(v1, b)) {
-        warnings.push(format!(
-            "vertical angles run {v0}..{v1}: LM-63 expects 0..90, 90..180 or 0..180"
-        ));
-    }
-    let (h0, h1) = (horizontal[0], horizontal[n_h - 1]);
-    let symmetry = if n_h == 1 {
-        if !same(h0, 0.0) {
-            warnings.push(format!(
-                "a single horizontal angle of {h0}: read as 0 (rotationally symmetric)"
-            ));
+    let angles = Angles {
+        file: name,
+        horizontal: &horizontal,
+        h_lines: &h_lines,
+        declared_h: &declared_h,
+        vertical: &vertical,
+        v_lines: &v_lines,
+        declared_v: &declared_v,
+    };
+    // Type C's symmetry is expanded with the table's ([`Table::into_photometry`]); a
+    // laterally symmetric type B or A table is mirrored here.
+    let (symmetry, horizontal, mut candela) = match kind {
+        PhotometricType::C => (angles.type_c(&mut warnings)?, horizontal, candela),
+        PhotometricType::B | PhotometricType::A => {
+            if n_h < 2 {
+                return Err(invalid(
+                    name,
+                    n_h_line,
+                    format!(
+                        "{n_h} horizontal angle: type {kind} photometry needs at least 2 (it has \
+                         no rotational symmetry)"
+                    ),
+                ));
+            }
+            if angles.type_b_or_a(kind, &mut warnings)? {
+                let (h, c) = mirror(&horizontal, &candela, n_v);
+                (Symmetry::None, h, c)
+            } else {
+                (Symmetry::None, horizontal, candela)
+            }
         }
-        Symmetry::Rotational
-    } else if same(h0, 0.0) && same(h1, 90.0) {
-        Symmetry::Quadrant
-    } else if same(h0, 0.0) && same(h1, 180.0) {
-        Symmetry::AboutC0
-    } else if same(h0, 0.0) && h1 > 180.0 && h1 <= 360.0 + 1e-9 {
-        Symmetry::None
-    } else if same(h0, 90.0) && same(h1, 270.0) {
-        Symmetry::AboutC90
-    } else {
-        return Err(invalid(
-            name,
-            h_lines[0],
-            format!(
-                "horizontal angles run {h0}..{h1}: type C wants 0 alone, 0..90, 0..180, \
-                 0..(more than 180, up to 360) or 90..270"
-            ),
-        ));
     };
 
     let scale = multiplier * ballast * lamp_factor;
@@ -387,6 +375,7 @@ pub fn parse_ies(text: &str, name: &str) -> Result<Photometry, PhotometryError> 
         round: width < 0.0 || length < 0.0,
     };
     Ok(Table {
+        kind,
         symmetry,
         c_angles: horizontal,
         gamma_angles: vertical,
@@ -394,22 +383,124 @@ pub fn parse_ies(text: &str, name: &str) -> Result<Photometry, PhotometryError> 
         lumens,
         rated_flux,
         opening,
+        tilt: tilt_table,
         warnings,
     }
     .into_photometry(name))
 }
 
+/// A file's angle lists with the lines they were read at, for the checks of each photometric
+/// type's ranges.
+struct Angles<'a> {
+    file: &'a str,
+    horizontal: &'a [f64],
+    h_lines: &'a [usize],
+    declared_h: &'a str,
+    vertical: &'a [f64],
+    v_lines: &'a [usize],
+    declared_v: &'a str,
+}
+
+impl Angles<'_> {
+    /// Type C's ranges: vertical angles within 0..180 (a range other than LM-63's three with a
+    /// warning), horizontal angles one of the five forms; the symmetry they declare.
+    fn type_c(&self, warnings: &mut Vec<String>) -> Result<Symmetry, PhotometryError> {
+        let (name, vertical, horizontal) = (self.file, self.vertical, self.horizontal);
+        check_angles(
+            vertical,
+            self.v_lines,
+            "vertical angle",
+            self.declared_v,
+            0.0,
+            180.0,
+        )
+        .map_err(|(line, m)| invalid(name, line, m))?;
+        let (v0, v1) = (vertical[0], vertical[vertical.len() - 1]);
+        let standard = [(0.0, 90.0), (90.0, 180.0), (0.0, 180.0)];
+        if !standard.iter().any(|&(a, b)| same(v0, a) && same(v1, b)) {
+            warnings.push(format!(
+                "vertical angles run {v0}..{v1}: LM-63 expects 0..90, 90..180 or 0..180"
+            ));
+        }
+        let (h0, h1) = (horizontal[0], horizontal[horizontal.len() - 1]);
+        Ok(if horizontal.len() == 1 {
+            if !same(h0, 0.0) {
+                warnings.push(format!(
+                    "a single horizontal angle of {h0}: read as 0 (rotationally symmetric)"
+                ));
+            }
+            Symmetry::Rotational
+        } else if same(h0, 0.0) && same(h1, 90.0) {
+            Symmetry::Quadrant
+        } else if same(h0, 0.0) && same(h1, 180.0) {
+            Symmetry::AboutC0
+        } else if same(h0, 0.0) && h1 > 180.0 && h1 <= 360.0 + 1e-9 {
+            Symmetry::None
+        } else if same(h0, 90.0) && same(h1, 270.0) {
+            Symmetry::AboutC90
+        } else {
+            return Err(invalid(
+                name,
+                self.h_lines[0],
+                format!(
+                    "horizontal angles run {h0}..{h1}: type C wants 0 alone, 0..90, 0..180, \
+                     0..(more than 180, up to 360) or 90..270"
+                ),
+            ));
+        })
+    }
+
+    /// Types B and A: the latitude (B's horizontal, A's vertical angles) within −90..90 (the
+    /// longitude's −180..180 is checked with every type's); ranges other than LM-63's −90..90
+    /// and 0..90 with a warning. True for lateral symmetry: horizontal angles from 0.
+    fn type_b_or_a(
+        &self,
+        kind: PhotometricType,
+        warnings: &mut Vec<String>,
+    ) -> Result<bool, PhotometryError> {
+        let (latitude, lines, what, declared) = if kind == PhotometricType::B {
+            (self.horizontal, self.h_lines, "horizontal", self.declared_h)
+        } else {
+            (self.vertical, self.v_lines, "vertical", self.declared_v)
+        };
+        check_angles(
+            latitude,
+            lines,
+            &format!("type {kind} {what} angle"),
+            declared,
+            -90.0,
+            90.0,
+        )
+        .map_err(|(line, m)| invalid(self.file, line, m))?;
+        for (list, what) in [(self.horizontal, "horizontal"), (self.vertical, "vertical")] {
+            let (a, b) = (list[0], list[list.len() - 1]);
+            if !((same(a, -90.0) || same(a, 0.0)) && same(b, 90.0)) {
+                warnings.push(format!(
+                    "type {kind} {what} angles run {a}..{b}: LM-63 expects -90..90 or 0..90 \
+                     (outside the table the intensity is 0)"
+                ));
+            }
+        }
+        Ok(same(self.horizontal[0], 0.0))
+    }
+}
+
 /// Read and check the tilt table of `TILT=INCLUDE`: geometry (1, 2 or 3), the number of
 /// pairs, the angles (increasing), the multiplying factors (not negative).
-fn skip_tilt_table(r: &mut Reader<'_>) -> Result<(), PhotometryError> {
+fn read_tilt_table(r: &mut Reader<'_>) -> Result<Tilt, PhotometryError> {
     let (geometry, line) = r.number("the tilt table's lamp-to-luminaire geometry")?;
-    if ![1.0, 2.0, 3.0].contains(&geometry) {
-        return Err(invalid(
-            r.file,
-            line,
-            format!("lamp-to-luminaire geometry {geometry}: expected 1, 2 or 3"),
-        ));
-    }
+    let geometry = match geometry {
+        1.0 => LampGeometry::Vertical,
+        2.0 => LampGeometry::AlongC0,
+        3.0 => LampGeometry::AcrossC0,
+        g => {
+            return Err(invalid(
+                r.file,
+                line,
+                format!("lamp-to-luminaire geometry {g}: expected 1, 2 or 3"),
+            ))
+        }
+    };
     let (pairs, pairs_line) = r.count("the number of tilt angles", 1)?;
     let left = r.words.remaining();
     if left < 2 * pairs {
@@ -422,6 +513,7 @@ fn skip_tilt_table(r: &mut Reader<'_>) -> Result<(), PhotometryError> {
             ),
         ));
     }
+    let mut angles = Vec::with_capacity(pairs);
     let mut previous = f64::NEG_INFINITY;
     for _ in 0..pairs {
         let (angle, line) = r.number("tilt angle")?;
@@ -433,7 +525,9 @@ fn skip_tilt_table(r: &mut Reader<'_>) -> Result<(), PhotometryError> {
             ));
         }
         previous = angle;
+        angles.push(angle);
     }
+    let mut factors = Vec::with_capacity(pairs);
     for _ in 0..pairs {
         let (factor, line) = r.number("tilt multiplying factor")?;
         if factor < 0.0 {
@@ -443,8 +537,13 @@ fn skip_tilt_table(r: &mut Reader<'_>) -> Result<(), PhotometryError> {
                 format!("tilt multiplying factor {factor} is negative"),
             ));
         }
+        factors.push(factor);
     }
-    Ok(())
+    Ok(Tilt {
+        geometry,
+        angles,
+        factors,
+    })
 }
 
 /// What follows the candela table: numbers mean the counts are wrong (an error); other words

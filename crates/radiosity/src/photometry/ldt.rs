@@ -42,7 +42,7 @@
 
 use super::{
     check_angles, count, invalid, last_line, number, prepare, shown, Lines, NumberReader, Opening,
-    Photometry, PhotometryError, Symmetry, Table, Words, MAX_TABLE_VALUES,
+    PhotometricType, Photometry, PhotometryError, Symmetry, Table, Words, MAX_TABLE_VALUES,
 };
 
 /// A number as EULUMDAT writes it: a decimal point or a single decimal comma.
@@ -386,6 +386,7 @@ pub fn parse_ldt(text: &str, name: &str) -> Result<Photometry, PhotometryError> 
         round,
     };
     Ok(Table {
+        kind: PhotometricType::C,
         symmetry,
         c_angles: if symmetry == Symmetry::Rotational {
             vec![0.0]
@@ -397,6 +398,7 @@ pub fn parse_ldt(text: &str, name: &str) -> Result<Photometry, PhotometryError> 
         lumens: Some(flux),
         rated_flux,
         opening,
+        tilt: None,
         warnings,
     }
     .into_photometry(name))

@@ -21,28 +21,46 @@
 //! [`read`] reads either from a file, by its extension (case-insensitive), decoding Latin-1
 //! where the bytes are not UTF-8 (real files are Latin-1) and taking CRLF, LF or CR line ends.
 //!
-//! # The C-γ coordinate system
+//! # The coordinate systems
 //!
-//! Every distribution is held in type C coordinates (CIE's C-γ system; IES "type C"): γ is the
-//! angle from the photometric nadir (γ = 0 straight down out of the luminaire, 90° horizontal,
-//! 180° straight up); the C-planes are half-planes hinged on the nadir–zenith axis, C = 0 the
-//! reference half-plane (along the luminaire's length, for a linear one), C increasing
-//! counter-clockwise seen from above (LM-63-2002 defines type C horizontal angles as
-//! counter-clockwise; EULUMDAT's C angles turn the same way).
+//! A table is held in the coordinates it was measured in ([`PhotometricType`]), and every
+//! system is placed in one frame of the luminaire, the frame [`Photometry::intensity_dir`]
+//! takes: **−z** is the photometric axis (the aim: type C's nadir, types B and A's beam),
+//! **+x** the reference direction across it (C0; the top of a floodlight) and **+y** = z × x
+//! (C90). The luminous opening's length lies along x, its width along y, its height along z.
 //!
-//! In the luminaire's own frame, as [`Photometry::intensity_dir`] and
-//! [`Photometry::direction`] use it: the nadir is **−z**, C = 0 (γ = 90°) is **+x**, C = 90°
-//! (γ = 90°) is **+y**; so a direction `(x, y, z)` has γ = acos(−z/|d|) and C = atan2(y, x).
-//! The luminous opening's length lies along x, its width along y, its height along z.
+//! - **Type C** (CIE's C-γ system; all of EULUMDAT): the polar axis is the luminaire's
+//!   vertical axis; γ is the angle from the photometric nadir (γ = 0 straight down out of the
+//!   luminaire, 90° horizontal, 180° straight up); the C-planes are half-planes hinged on the
+//!   polar axis, C = 0 the reference half-plane (along the luminaire's length, for a linear
+//!   one), C increasing counter-clockwise seen from above (LM-63-2002 defines type C
+//!   horizontal angles as counter-clockwise; EULUMDAT's C angles turn the same way). A
+//!   direction `(x, y, z)` has γ = acos(−z/|d|) and C = atan2(y, x) ([`Photometry::angles`]).
+//! - **Type B** (CIE's B-β system, IES photometric type 2; floodlights): the polar axis is
+//!   the luminaire's lateral axis, horizontal and across the beam (LM-63: "the polar axis
+//!   coincides with the minor axis (width) of the luminaire", here y). The **vertical angle
+//!   V** turns the planes hinged on that axis (B): V = 0 holds the beam, V > 0 tilts up
+//!   towards +x; the **horizontal angle H** is measured within a plane (β), from the plane
+//!   through the beam and the top, positive to the right seen from behind the luminaire
+//!   looking along the beam (clockwise seen from above the aimed floodlight), that is
+//!   towards −y. A unit direction is `(cos H sin V, −sin H, −cos H cos V)`: H = asin(−y),
+//!   V = atan2(x, −z).
+//! - **Type A** (CIE's A-α system, IES photometric type 3; automotive lamps): the polar axis
+//!   is the luminaire's top–bottom axis across the beam (LM-63: "the polar axis coincides
+//!   with the major axis (length) of the luminaire", here x). The **horizontal angle H**
+//!   turns the planes hinged on it (A), H > 0 to the right (towards −y); the **vertical angle
+//!   V** is the elevation within a plane (α), V > 0 up (towards +x). A unit direction is
+//!   `(sin V, −cos V sin H, −cos V cos H)`: H = atan2(−y, −z), V = asin(x).
 //!
-//! Types B and A (LM-63 photometric types 2 and 3) turn the polar axis through 90°: in type B
-//! the planes share a horizontal axis (floodlights), in type A a vertical axis with angles
-//! counted from the horizontal (automotive lamps); their horizontal angles turn clockwise.
-//! Converting them needs a resampling onto a C-γ grid and the choice of which luminaire axis
-//! the other systems' axes map to; that is not done yet: an IES file of type B or A is read and
-//! checked whole, then refused with an error saying that type B/A photometry is not supported
-//! for lighting yet (see [`parse_ies`]). EULUMDAT is always C-γ. [`PhotometricType`] keeps
-//! the kind so that a later conversion can record where a table came from.
+//! In both B and A the photometric axis H = V = 0 is −z, V = 90° at H = 0 is +x and H = 90°
+//! at V = 0 is −y; they differ off those two great circles (B's H is a latitude and V a
+//! longitude; A's the other way round). These are the goniometers of CIE 70 and LM-75 (type
+//! B: a fixed vertical axis carrying a horizontal one that carries the luminaire; type A: a
+//! fixed horizontal axis carrying a vertical one), and LM-63's lateral symmetry of B and A
+//! (horizontal angles from 0: the same either side of a vertical plane) is H → −H in both.
+//! Radiance's `source.cal` puts the type B photometric axis at −z with V towards +x and H
+//! towards −y as well (it approximates H by a plane angle). [`crate::lighting`] aims −z
+//! and turns +x as its schedule says (`aim`, `c0`).
 //!
 //! # What is applied
 //!
@@ -50,14 +68,21 @@
 //! IES values times the candela multiplier and the ballast factor (and, for the 1986 and 1991
 //! revisions, the ballast-lamp photometric factor, a field later revisions leave to "future
 //! use"); EULUMDAT values (cd/klm) times the first lamp set's total flux / 1000 and the
-//! conversion factor. An IES tilt table (`TILT=INCLUDE`) is read and checked but not applied
-//! (the luminaire is taken at the tilt it was measured at). Symmetric tables are expanded to
-//! the full circle of C-planes, 0° to 360° both included.
+//! conversion factor. Type C tables are expanded to the full circle of C-planes, 0° to 360°
+//! both included; type B and A tables with lateral symmetry (horizontal angles from 0) are
+//! mirrored to negative horizontal angles.
 //!
-//! [`Photometry::flux`] integrates the table over the sphere (exact for distributions linear
-//! in cos γ between tabulated angles: a constant and a cosine law come out exactly), and
-//! [`Photometry::flux_mismatch`] compares it with the flux the file states; a mismatch past
-//! 5 % is also noted in [`Photometry::warnings`].
+//! An IES tilt table (`TILT=INCLUDE`) is kept as [`Photometry::tilt`]: the multiplying factor
+//! of the lamp's light output against the tilt angle, which depends on how the luminaire is
+//! installed; [`crate::lighting::Luminaire::with_lamp_tilt`] applies it to each placed
+//! luminaire ([`Tilt`] says which angle each lamp-to-luminaire geometry means). The
+//! photometry itself is the luminaire at the tilt it was measured at.
+//!
+//! [`Photometry::flux`] integrates the table over the sphere (type C: exact for
+//! distributions linear in cos γ between tabulated angles, so a constant and a cosine law
+//! come out exactly; types B and A: the exact integral of the interpolated distribution),
+//! and [`Photometry::flux_mismatch`] compares it with the flux the file states; a mismatch
+//! past 5 % is also noted in [`Photometry::warnings`].
 
 mod ies;
 mod ldt;
@@ -92,10 +117,11 @@ pub enum PhotometricType {
     /// Type C: C-planes through the vertical axis, γ from the nadir (IES type 1; all of
     /// EULUMDAT).
     C,
-    /// Type B: planes through a horizontal axis (IES type 2; floodlights).
+    /// Type B: planes (V) through the horizontal lateral axis, H within them (IES type 2;
+    /// floodlights).
     B,
-    /// Type A: planes through a vertical axis, angles from the horizontal (IES type 3;
-    /// automotive lamps).
+    /// Type A: planes (H) through the luminaire's top–bottom axis, V the elevation within
+    /// them (IES type 3; automotive lamps).
     A,
 }
 
@@ -124,19 +150,97 @@ pub struct Opening {
     pub round: bool,
 }
 
-/// A luminaire's luminous intensity distribution, in C-γ coordinates over the full sphere of
-/// C-planes.
+/// How the lamp sits in the luminaire, which says what a tilt table's angle is (LM-63's
+/// "lamp-to-luminaire geometry"; its wording, and the reading taken here).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LampGeometry {
+    /// 1: "the lamp base is vertical (base up or base down) when the luminaire is aimed
+    /// straight down": the lamp lies along the photometric axis (z), and the tilt angle is
+    /// the angle between the photometric axis and straight down, 0..=180° (90° aimed
+    /// horizontally, 180° straight up).
+    Vertical,
+    /// 2: "the lamp is horizontal and remains horizontal when the luminaire is aimed straight
+    /// down or rotated about the zero-degree horizontal plane": the lamp lies along the C0
+    /// axis (x), and the tilt angle is the lamp's inclination to the horizontal, 0..=90°
+    /// (Radiance's `ies2rad` reads 2 as "horizontal in the 0° plane" too).
+    AlongC0,
+    /// 3: "the lamp is horizontal when the luminaire is pointed straight down, but does not
+    /// remain horizontal when rotated about the zero-degree horizontal plane": the lamp lies
+    /// along the C90 axis (y), and the tilt angle is its inclination to the horizontal,
+    /// 0..=90°.
+    AcrossC0,
+}
+
+/// A lamp's tilt table (IES `TILT=INCLUDE`): the factor its light output is multiplied by
+/// against the tilt angle (metal-halide lamps give less light tilted off their design
+/// burning position). LM-63: the candela values are multiplied by the factor at the tilt
+/// angle of the installed luminaire.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tilt {
+    /// What the angle measures.
+    pub geometry: LampGeometry,
+    /// Tilt angles, degrees, increasing.
+    pub angles: Vec<f64>,
+    /// The multiplying factor at each angle, ≥ 0.
+    pub factors: Vec<f64>,
+}
+
+impl Tilt {
+    /// The tilt angle, degrees, of a luminaire installed so that `up`, the world's vertical,
+    /// is the direction `up` in the luminaire's frame (photometric axis −z, C0 +x, C90 +y;
+    /// need not be unit length): see [`LampGeometry`]. A luminaire aimed straight down
+    /// (`up` = +z) has tilt 0 in every geometry. `None` for a zero or non-finite `up`.
+    pub fn installed_angle(&self, up: [f64; 3]) -> Option<f64> {
+        let [x, y, z] = up;
+        let len = (x * x + y * y + z * z).sqrt();
+        if len == 0.0 || !len.is_finite() {
+            return None;
+        }
+        Some(match self.geometry {
+            // The photometric axis −z against straight down −up: acos(z · up).
+            LampGeometry::Vertical => (z / len).clamp(-1.0, 1.0).acos().to_degrees(),
+            // The lamp axis's angle with the horizontal plane: asin |axis · up|.
+            LampGeometry::AlongC0 => x.abs().atan2(y.hypot(z)).to_degrees(),
+            LampGeometry::AcrossC0 => y.abs().atan2(x.hypot(z)).to_degrees(),
+        })
+    }
+
+    /// The factor at `angle` degrees, linear between the tabulated angles, and whether
+    /// `angle` lies within the table (outside, the factor of the nearer end). A non-finite
+    /// angle gives the first factor, outside.
+    pub fn factor(&self, angle: f64) -> (f64, bool) {
+        let n = self.angles.len().min(self.factors.len());
+        if n == 0 {
+            return (1.0, false);
+        }
+        let (first, last) = (self.angles[0], self.angles[n - 1]);
+        if !angle.is_finite() {
+            return (self.factors[0], false);
+        }
+        let inside = angle >= first - ANGLE_EPS && angle <= last + ANGLE_EPS;
+        let (k, t) = locate(&self.angles[..n], angle.clamp(first, last));
+        let f = lerp(self.factors[k], self.factors[(k + 1).min(n - 1)], t);
+        (f, inside)
+    }
+}
+
+/// A luminaire's luminous intensity distribution: a table over the horizontal and vertical
+/// angles of its [`PhotometricType`] (see the module documentation for the three systems).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Photometry {
-    /// The C-plane angles, degrees, increasing from 0 to 360 (both included: the last plane
-    /// closes the circle), after expanding the file's symmetry.
+    /// The horizontal angles, degrees, increasing. Type C: the C-planes, from 0 to 360 (both
+    /// included: the last plane closes the circle), after expanding the file's symmetry.
+    /// Types B and A: H, within −90..=90 (B) or −180..=180 (A), a laterally symmetric
+    /// table mirrored to negative angles.
     pub c_angles: Vec<f64>,
-    /// The γ angles, degrees, increasing, within 0..=180 (0 = nadir); the table's range, which
-    /// need not be the whole 0..=180: outside it the intensity is 0.
+    /// The vertical angles, degrees, increasing. Type C: γ, within 0..=180 (0 = nadir).
+    /// Type B: V, within −180..=180; type A: V, within −90..=90. The table's range, which need
+    /// not be the whole sphere: outside it the intensity is 0.
     pub gamma_angles: Vec<f64>,
-    /// Intensities, candela, one row per C-plane (`c_angles.len()` rows) and one column per γ
-    /// angle: the value at `c_angles[i]`, `gamma_angles[j]` is `candela[i * gamma_angles.len()
-    /// + j]`. Absolute: the file's multipliers, lamp flux and ballast factor applied.
+    /// Intensities, candela, one row per horizontal angle (`c_angles.len()` rows) and one
+    /// column per vertical angle: the value at `c_angles[i]`, `gamma_angles[j]` is
+    /// `candela[i * gamma_angles.len() + j]`. Absolute: the file's multipliers, lamp flux and
+    /// ballast factor applied (a tilt factor is not: see [`Photometry::tilt`]).
     pub candela: Vec<f64>,
     /// The file's rated lamp lumens (IES: number of lamps × lumens per lamp; EULUMDAT: the
     /// first lamp set's total flux, which for absolute photometry is the luminaire's), or
@@ -148,9 +252,11 @@ pub struct Photometry {
     /// EULUMDAT, lamp flux × light output ratio × conversion factor. `None` when the file
     /// states none.
     pub rated_flux: Option<f64>,
-    /// The coordinate system the file was measured in (always C for tables this module
-    /// returns today; see the module documentation).
+    /// The coordinate system the table is in (see the module documentation).
     pub kind: PhotometricType,
+    /// The lamp's tilt table (IES `TILT=INCLUDE`), applied per installed luminaire by
+    /// [`crate::lighting::Luminaire::with_lamp_tilt`]; `None` for `TILT=NONE` and EULUMDAT.
+    pub tilt: Option<Tilt>,
     /// The luminous opening.
     pub opening: Opening,
     /// The file's name, as given to the parser.
@@ -302,67 +408,131 @@ pub(crate) fn prepare<'a>(text: &'a str, name: &str) -> Result<&'a str, Photomet
 }
 
 impl Photometry {
-    /// The intensity, candela, towards C = `c_deg`, γ = `gamma_deg` (degrees): bilinear
-    /// interpolation in (C, γ) between the tabulated angles, so it never leaves the range of
-    /// the four values around it; C is periodic over 360°; γ outside the table's range gives
-    /// 0 (a table of 0..=90 sends nothing upwards). Non-finite angles give 0.
-    pub fn intensity(&self, c_deg: f64, gamma_deg: f64) -> f64 {
-        let (c, g) = (&self.c_angles, &self.gamma_angles);
-        let (nc, ng) = (c.len(), g.len());
-        if !c_deg.is_finite()
-            || !gamma_deg.is_finite()
-            || nc == 0
-            || ng == 0
-            || self.candela.len() != nc * ng
+    /// The intensity, candela, at the table's own angles, degrees: C = `h_deg`, γ = `v_deg`
+    /// for type C, H = `h_deg`, V = `v_deg` for types B and A. Bilinear interpolation
+    /// between the tabulated angles, so it never leaves the range of the four values around
+    /// it. Type C: C is periodic over 360°, γ outside the table's range gives 0 (a table of
+    /// 0..=90 sends nothing upwards). Types B and A: either angle outside the table's range
+    /// gives 0. Non-finite angles give 0.
+    pub fn intensity(&self, h_deg: f64, v_deg: f64) -> f64 {
+        let (h, v) = (&self.c_angles, &self.gamma_angles);
+        let (nh, nv) = (h.len(), v.len());
+        if !h_deg.is_finite()
+            || !v_deg.is_finite()
+            || nh == 0
+            || nv == 0
+            || self.candela.len() != nh * nv
         {
             return 0.0;
         }
-        if gamma_deg < g[0] - ANGLE_EPS || gamma_deg > g[ng - 1] + ANGLE_EPS {
+        let outside =
+            |xs: &[f64], x: f64| x < xs[0] - ANGLE_EPS || x > xs[xs.len() - 1] + ANGLE_EPS;
+        if outside(v, v_deg) {
             return 0.0;
         }
-        let (j, tg) = locate(g, gamma_deg.clamp(g[0], g[ng - 1]));
-        let (i, tc) = locate(c, c_deg.rem_euclid(360.0));
-        let at = |i: usize, j: usize| self.candela[i * ng + j];
-        let (j1, i1) = ((j + 1).min(ng - 1), (i + 1).min(nc - 1));
-        let lo = lerp(at(i, j), at(i, j1), tg);
-        let hi = lerp(at(i1, j), at(i1, j1), tg);
-        lerp(lo, hi, tc)
+        let h_deg = match self.kind {
+            PhotometricType::C => h_deg.rem_euclid(360.0),
+            PhotometricType::B | PhotometricType::A if outside(h, h_deg) => return 0.0,
+            PhotometricType::B | PhotometricType::A => h_deg.clamp(h[0], h[nh - 1]),
+        };
+        let (j, tv) = locate(v, v_deg.clamp(v[0], v[nv - 1]));
+        let (i, th) = locate(h, h_deg);
+        let at = |i: usize, j: usize| self.candela[i * nv + j];
+        let (j1, i1) = ((j + 1).min(nv - 1), (i + 1).min(nh - 1));
+        let lo = lerp(at(i, j), at(i, j1), tv);
+        let hi = lerp(at(i1, j), at(i1, j1), tv);
+        lerp(lo, hi, th)
     }
 
-    /// The intensity, candela, towards `dir` in the luminaire's frame (nadir −z, C0 +x, C90
-    /// +y; need not be unit length). A zero or non-finite direction gives 0.
+    /// The intensity, candela, towards `dir` in the luminaire's frame (photometric axis −z,
+    /// +x the reference across it, +y = z × x; see the module documentation; need not be unit
+    /// length), for a table of any type. A zero or non-finite direction gives 0.
     pub fn intensity_dir(&self, dir: [f64; 3]) -> f64 {
-        match angles_of(dir) {
-            Some((c, gamma)) => self.intensity(c, gamma),
+        match self.table_angles(dir) {
+            Some((h, v)) => self.intensity(h, v),
             None => 0.0,
         }
     }
 
-    /// The unit direction, in the luminaire's frame, of C = `c_deg`, γ = `gamma_deg`: the
-    /// inverse of the mapping [`Photometry::intensity_dir`] uses.
+    /// The table's angles (horizontal, vertical), degrees, of a direction in the luminaire's
+    /// frame: (C, γ) with C in [0, 360) for type C ([`Photometry::angles`]); (H, V) for type
+    /// B, H = asin(−y) in [−90, 90] and V = atan2(x, −z) in (−180, 180]; (H, V) for type A,
+    /// H = atan2(−y, −z) in (−180, 180] and V = asin(x) in [−90, 90] (for a unit direction).
+    /// `None` for a zero or non-finite direction. On a type B or A pole (±y, ±x) the
+    /// longitude is 0.
+    pub fn table_angles(&self, dir: [f64; 3]) -> Option<(f64, f64)> {
+        let [x, y, z] = dir;
+        let len = (x * x + y * y + z * z).sqrt();
+        if len == 0.0 || !len.is_finite() {
+            return None;
+        }
+        // A latitude from its sine and the other two components: atan2 keeps it accurate
+        // next to the pole, where asin loses digits.
+        let latitude = |s: f64, a: f64, b: f64| s.atan2(a.hypot(b)).to_degrees();
+        match self.kind {
+            PhotometricType::C => angles_of(dir),
+            PhotometricType::B => Some((latitude(-y, x, z), x.atan2(-z).to_degrees())),
+            PhotometricType::A => Some(((-y).atan2(-z).to_degrees(), latitude(x, y, z))),
+        }
+    }
+
+    /// The unit direction, in the luminaire's frame, of the table's angles `h_deg`, `v_deg`
+    /// (degrees): the inverse of [`Photometry::table_angles`].
+    pub fn table_direction(&self, h_deg: f64, v_deg: f64) -> [f64; 3] {
+        let (h, v) = (h_deg.to_radians(), v_deg.to_radians());
+        match self.kind {
+            PhotometricType::C => Photometry::direction(h_deg, v_deg),
+            PhotometricType::B => [h.cos() * v.sin(), -h.sin(), -h.cos() * v.cos()],
+            PhotometricType::A => [v.sin(), -v.cos() * h.sin(), -v.cos() * h.cos()],
+        }
+    }
+
+    /// The unit direction, in the luminaire's frame, of C = `c_deg`, γ = `gamma_deg` (type C
+    /// angles): the inverse of [`Photometry::angles`].
     pub fn direction(c_deg: f64, gamma_deg: f64) -> [f64; 3] {
         let (c, g) = (c_deg.to_radians(), gamma_deg.to_radians());
         [g.sin() * c.cos(), g.sin() * c.sin(), -g.cos()]
     }
 
-    /// The angles (C, γ), degrees, of a direction in the luminaire's frame, C in [0, 360);
-    /// `None` for a zero or non-finite direction. Straight down and straight up have C = 0.
+    /// The type C angles (C, γ), degrees, of a direction in the luminaire's frame, C in
+    /// [0, 360); `None` for a zero or non-finite direction. Straight down and straight up have
+    /// C = 0.
     pub fn angles(dir: [f64; 3]) -> Option<(f64, f64)> {
         angles_of(dir)
     }
 
-    /// The luminous flux, lumens, the table sends out: Σ over the cells of the (C, γ) grid
-    /// of the mean of the four corner intensities times the cell's exact solid angle
-    /// (cos γ₁ − cos γ₂)·ΔC (ΔC in radians; over a full zone, 2π(cos γ₁ − cos γ₂)·ΔC/360°).
-    /// That is the trapezoid rule in C and in cos γ: exact for any distribution linear in
-    /// cos γ between tabulated angles, a constant (4π I) and a cosine law (π I₀ over the lower
-    /// hemisphere) included, whatever the angle step. It differs from the integral of
-    /// [`Photometry::intensity`], which is linear in γ, by O(Δγ²).
+    /// The luminous flux, lumens, the table sends out.
+    ///
+    /// Type C: Σ over the cells of the (C, γ) grid of the mean of the four corner intensities
+    /// times the cell's exact solid angle (cos γ₁ − cos γ₂)·ΔC (ΔC in radians; over a full
+    /// zone, 2π(cos γ₁ − cos γ₂)·ΔC/360°). That is the trapezoid rule in C and in cos γ: exact
+    /// for any distribution linear in cos γ between tabulated angles, a constant (4π I) and a
+    /// cosine law (π I₀ over the lower hemisphere) included, whatever the angle step. It
+    /// differs from the integral of [`Photometry::intensity`], which is linear in γ, by
+    /// O(Δγ²).
+    ///
+    /// Types B and A: the exact integral of [`Photometry::intensity`] over the table, with
+    /// the solid angle dΩ = cos φ dφ dλ of the latitude φ (B: H; A: V) and the longitude λ
+    /// (B: V; A: H). The interpolant is Σ I_ij h_i(H) h_j(V) with hat functions h, and the
+    /// weight factorises, so Φ = Σ I_ij w_i w_j with w the integrals of the hats against
+    /// cos φ (in closed form) or 1 (the trapezoid weights).
     pub fn flux(&self) -> f64 {
         let (c, g) = (&self.c_angles, &self.gamma_angles);
         let (nc, ng) = (c.len(), g.len());
         if nc < 2 || ng < 2 || self.candela.len() != nc * ng {
             return 0.0;
+        }
+        if self.kind != PhotometricType::C {
+            let (wh, wv) = match self.kind {
+                PhotometricType::B => (latitude_weights(c), longitude_weights(g)),
+                _ => (longitude_weights(c), latitude_weights(g)),
+            };
+            return self
+                .candela
+                .chunks(ng)
+                .zip(&wh)
+                .map(|(row, w)| w * row.iter().zip(&wv).map(|(i, w)| i * w).sum::<f64>())
+                .sum();
         }
         let cos: Vec<f64> = g.iter().map(|a| a.to_radians().cos()).collect();
         let mut total = 0.0;
@@ -389,18 +559,53 @@ impl Photometry {
         Some((self.flux() - rated).abs() / rated)
     }
 
-    /// The largest tabulated intensity, candela.
+    /// The largest intensity, candela: the largest tabulated value, which the interpolation
+    /// never exceeds.
     pub fn max_intensity(&self) -> f64 {
         self.candela.iter().copied().fold(0.0, f64::max)
     }
 
-    /// The intensities of C-plane `i` (`c_angles[i]`), one a γ angle.
+    /// The intensities of horizontal angle `i` (`c_angles[i]`: a C-plane for type C), one a
+    /// vertical angle.
     pub fn plane(&self, i: usize) -> &[f64] {
         let ng = self.gamma_angles.len();
         self.candela
             .get(i * ng..(i + 1) * ng)
             .unwrap_or(&self.candela[..0])
     }
+}
+
+/// The integrals ∫ h_k(λ) dλ of the hat functions of the angles `deg` (degrees, increasing)
+/// over their range, λ in radians: the trapezoid weights (h_{k−1} + h_k)/2.
+fn longitude_weights(deg: &[f64]) -> Vec<f64> {
+    let mut w = vec![0.0; deg.len()];
+    for k in 0..deg.len().saturating_sub(1) {
+        let half = 0.5 * (deg[k + 1] - deg[k]).to_radians();
+        w[k] += half;
+        w[k + 1] += half;
+    }
+    w
+}
+
+/// The integrals ∫ h_k(φ) cos φ dφ of the hat functions of the latitudes `deg` (degrees,
+/// increasing) over their range, in closed form: on a cell [φ₀, φ₁] of width h and middle m,
+/// the falling hat gives (cos φ₀ − cos φ₁)/h − sin φ₀ and the rising one
+/// sin φ₁ − (cos φ₀ − cos φ₁)/h, with (cos φ₀ − cos φ₁)/h = sin m · sin(h/2)/(h/2) written
+/// so that a narrow cell loses no digits. The two add up to sin φ₁ − sin φ₀, the cell's
+/// ∫ cos φ dφ.
+fn latitude_weights(deg: &[f64]) -> Vec<f64> {
+    let mut w = vec![0.0; deg.len()];
+    for k in 0..deg.len().saturating_sub(1) {
+        let (a, b) = (deg[k].to_radians(), deg[k + 1].to_radians());
+        let h = b - a;
+        if h <= 0.0 {
+            continue;
+        }
+        let chord = ((a + b) / 2.0).sin() * (h / 2.0).sin() / (h / 2.0);
+        w[k] += chord - a.sin();
+        w[k + 1] += b.sin() - chord;
+    }
+    w
 }
 
 fn angles_of(dir: [f64; 3]) -> Option<(f64, f64)> {
@@ -448,12 +653,14 @@ pub(crate) enum Symmetry {
     AboutC0,
     /// Planes 90..=270, mirrored about the C90–C270 plane: I(C) = I(180° − C).
     AboutC90,
-    /// Planes given over the whole circle.
+    /// Planes given over the whole circle (type C), or the table as given (types B and A,
+    /// whose lateral symmetry the IES reader mirrors itself: [`mirror`]).
     None,
 }
 
 /// What a parser hands over to be expanded into a [`Photometry`].
 pub(crate) struct Table {
+    pub kind: PhotometricType,
     pub symmetry: Symmetry,
     /// The stored planes' C angles (increasing).
     pub c_angles: Vec<f64>,
@@ -464,21 +671,27 @@ pub(crate) struct Table {
     pub lumens: Option<f64>,
     pub rated_flux: Option<f64>,
     pub opening: Opening,
+    pub tilt: Option<Tilt>,
     pub warnings: Vec<String>,
 }
 
 impl Table {
-    /// Expand the symmetry to C-planes over 0..=360 and note a flux mismatch.
+    /// Expand a type C table's symmetry to C-planes over 0..=360 (types B and A come whole)
+    /// and note a flux mismatch.
     pub(crate) fn into_photometry(self, source: &str) -> Photometry {
         let ng = self.gamma_angles.len();
-        let (c_angles, candela) = expand(self.symmetry, &self.c_angles, &self.candela, ng);
+        let (c_angles, candela) = match self.kind {
+            PhotometricType::C => expand(self.symmetry, &self.c_angles, &self.candela, ng),
+            PhotometricType::B | PhotometricType::A => (self.c_angles, self.candela),
+        };
         let mut photometry = Photometry {
             c_angles,
             gamma_angles: self.gamma_angles,
             candela,
             lumens: self.lumens,
             rated_flux: self.rated_flux,
-            kind: PhotometricType::C,
+            kind: self.kind,
+            tilt: self.tilt,
             opening: self.opening,
             source: source.to_string(),
             warnings: self.warnings,
@@ -559,6 +772,22 @@ fn expand(symmetry: Symmetry, angles: &[f64], rows: &[f64], ng: usize) -> (Vec<f
         out.extend_from_slice(&wrap);
     }
     (c_out, out)
+}
+
+/// The rows of horizontal angles `angles` (from 0, increasing; rows of `ng` values in `rows`)
+/// and their mirror images at −H, in increasing order: the lateral symmetry of types B and A.
+pub(crate) fn mirror(angles: &[f64], rows: &[f64], ng: usize) -> (Vec<f64>, Vec<f64>) {
+    let n = angles.len();
+    let mut h = Vec::with_capacity(2 * n);
+    let mut out = Vec::with_capacity(2 * n * ng);
+    // 0 itself (the first angle) is its own image.
+    for k in (1..n).rev() {
+        h.push(-angles[k]);
+        out.extend_from_slice(&rows[k * ng..(k + 1) * ng]);
+    }
+    h.extend_from_slice(angles);
+    out.extend_from_slice(rows);
+    (h, out)
 }
 
 /// Lines of a text, numbered from 1: `"\r\n"`, `"\n"` and a lone `"\r"` each end one.

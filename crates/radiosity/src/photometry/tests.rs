@@ -15,7 +15,7 @@ use std::path::PathBuf;
 struct Ies {
     header: &'static str,
     labels: &'static str,
-    tilt: &'static str,
+    tilt: String,
     lamps: f64,
     lumens: f64,
     multiplier: f64,
@@ -41,7 +41,7 @@ impl Ies {
         Ies {
             header: "IESNA:LM-63-2002",
             labels: "[TEST] unit test\n[MANUFAC] radiosity\n",
-            tilt: "TILT=NONE\n",
+            tilt: "TILT=NONE\n".into(),
             lamps: 1.0,
             lumens: 1000.0,
             multiplier: 1.0,
@@ -62,7 +62,7 @@ impl Ies {
             writeln!(s, "{}", self.header).unwrap();
         }
         s.push_str(self.labels);
-        s.push_str(self.tilt);
+        s.push_str(&self.tilt);
         let [w, l, h] = self.dims;
         writeln!(
             s,
@@ -604,23 +604,44 @@ fn openings_in_feet_metres_millimetres_and_round() {
 }
 
 #[test]
-fn an_included_tilt_table_is_read_and_skipped() {
+fn an_included_tilt_table_is_read_and_kept_for_the_installed_luminaire() {
     let f = |c: f64, g: f64| about_c0(c, g);
     let plain = Ies::of(&steps(0.0, 180.0, 6), &steps(0.0, 180.0, 18), f);
     let mut tilted = plain.clone();
-    tilted.tilt = "TILT=INCLUDE\n1\n7\n0 15 30 45\n60 75 90\n1.0 .95 .94 .90\n.88 .87 .94\n";
+    tilted.tilt = "TILT=INCLUDE\n1\n7\n0 15 30 45\n60 75 90\n1.0 .95 .94 .90\n.88 .87 .94\n".into();
     let (a, b) = (ies(&plain.text()), ies(&tilted.text()));
+    // The table is the luminaire as measured; the factor belongs to the installed one.
     same_distribution(&a, &b, "tilt");
     assert!(
-        b.warnings.iter().any(|w| w.contains("tilt")),
+        !b.warnings.iter().any(|w| w.contains("tilt")),
         "{:?}",
         b.warnings
     );
+    assert_eq!(a.tilt, None);
+    let t = b.tilt.as_ref().unwrap();
+    assert_eq!(t.geometry, LampGeometry::Vertical);
+    assert_eq!(t.angles, steps(0.0, 90.0, 6));
+    assert_eq!(t.factors, vec![1.0, 0.95, 0.94, 0.90, 0.88, 0.87, 0.94]);
+    // Linear between the angles, the end values outside (and said so).
+    assert_eq!(t.factor(15.0), (0.95, true));
+    assert!((t.factor(37.5).0 - 0.92).abs() < 1e-15);
+    assert_eq!(t.factor(120.0), (0.94, false));
+    assert_eq!(t.factor(-1.0), (1.0, false));
+    for (geometry, g) in [
+        (1, LampGeometry::Vertical),
+        (2, LampGeometry::AlongC0),
+        (3, LampGeometry::AcrossC0),
+    ] {
+        let mut other = tilted.clone();
+        let text = format!("TILT=INCLUDE\n{geometry}\n2\n0 90\n1 0.5\n");
+        other.tilt = text;
+        assert_eq!(ies(&other.text()).tilt.unwrap().geometry, g);
+    }
     // Broken tilt tables are refused at their line.
-    tilted.tilt = "TILT=INCLUDE\n1\n7\n0 15 30 45\n60 50 90\n1.0 .95 .94 .90\n.88 .87 .94\n";
+    tilted.tilt = "TILT=INCLUDE\n1\n7\n0 15 30 45\n60 50 90\n1.0 .95 .94 .90\n.88 .87 .94\n".into();
     let msg = error_of(&tilted.text(), "tilt.ies");
     assert!(msg.starts_with("tilt.ies:8: tilt angle 50"), "{msg}");
-    tilted.tilt = "TILT=INCLUDE\n4\n";
+    tilted.tilt = "TILT=INCLUDE\n4\n".into();
     let msg = error_of(&tilted.text(), "tilt.ies");
     assert!(msg.contains("geometry 4"), "{msg}");
 }
@@ -898,17 +919,12 @@ fn unsupported_forms_are_refused_in_one_line() {
     let msg = error_of(&file.text().replace("TILT=NONE\n", ""), "lamp.ies");
     assert!(msg.contains("no TILT= line"), "{msg}");
 
-    // Type B: read whole, refused at the type.
+    // Types B and A are read; a broken one is reported as broken.
     let mut b = Ies::of(&steps(-90.0, 90.0, 4), &steps(-90.0, 90.0, 6), |_, _| 5.0);
     b.kind = 2;
-    let msg = error_of(&b.text(), "flood.ies");
-    assert!(
-        msg.starts_with("flood.ies:5: photometric type B: type B/A photometry is not supported for lighting yet"),
-        "{msg}"
-    );
+    assert_eq!(ies(&b.text()).kind, PhotometricType::B);
     b.kind = 3;
-    assert!(error_of(&b.text(), "a.ies").contains("photometric type A"));
-    // … but a broken type B file is reported as broken.
+    assert_eq!(ies(&b.text()).kind, PhotometricType::A);
     b.candela[3] = -1.0;
     assert!(error_of(&b.text(), "a.ies").contains("is negative"));
     b.kind = 4;
@@ -1072,6 +1088,434 @@ fn read_goes_by_extension_and_names_the_file() {
         "bad.ldt:3: the symmetry indicator Isym 'five' is not a number"
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Types B and A.
+
+/// Unit direction of type B angles (H, V), degrees, written from the definitions (module
+/// documentation): the polar axis is y, V turns the plane about it from −z towards +x, H is
+/// the angle out of that plane towards −y.
+fn dir_b(h: f64, v: f64) -> [f64; 3] {
+    let (h, v) = (h.to_radians(), v.to_radians());
+    [h.cos() * v.sin(), -h.sin(), -h.cos() * v.cos()]
+}
+
+/// Unit direction of type A angles (H, V): the polar axis is x, H turns the plane about it
+/// from −z towards −y, V is the elevation out of that plane towards +x.
+fn dir_a(h: f64, v: f64) -> [f64; 3] {
+    let (h, v) = (h.to_radians(), v.to_radians());
+    [v.sin(), -v.cos() * h.sin(), -v.cos() * h.cos()]
+}
+
+/// A type B (`kind` 2) or A (3) IES file of `f(direction)` on the given angles, absolute
+/// photometry (so that no flux is stated to differ from).
+fn ies_ba(kind: u8, horizontal: &[f64], vertical: &[f64], f: impl Fn([f64; 3]) -> f64) -> Ies {
+    let dir = if kind == 2 { dir_b } else { dir_a };
+    let mut file = Ies::of(horizontal, vertical, |h, v| f(dir(h, v)));
+    file.kind = kind;
+    file.lumens = -1.0;
+    file
+}
+
+fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// A random unit direction (uniform on the sphere).
+fn random_dir(seed: &mut u64) -> [f64; 3] {
+    let u = |seed: &mut u64| (lcg(seed) % 1_000_000_000) as f64 / 1e9;
+    let z = 2.0 * u(seed) - 1.0;
+    let phi = 2.0 * PI * u(seed);
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    [r * phi.cos(), r * phi.sin(), z]
+}
+
+#[test]
+fn type_b_and_a_angles_sit_on_the_documented_axes() {
+    let b = ies(&ies_ba(2, &steps(-90.0, 90.0, 6), &steps(-90.0, 90.0, 6), |_| 1.0).text());
+    let a = ies(&ies_ba(3, &steps(-90.0, 90.0, 6), &steps(-90.0, 90.0, 6), |_| 1.0).text());
+    let near = |x: [f64; 3], y: [f64; 3]| (0..3).all(|k| (x[k] - y[k]).abs() < 1e-12);
+    for p in [&b, &a] {
+        // The beam along −z, V = 90° up (+x), H = 90° to the right of the beam seen from
+        // behind: (−z) × (+x) = −y.
+        assert!(near(p.table_direction(0.0, 0.0), [0.0, 0.0, -1.0]));
+        assert!(near(p.table_direction(0.0, 90.0), [1.0, 0.0, 0.0]));
+        assert!(near(p.table_direction(90.0, 0.0), [0.0, -1.0, 0.0]));
+        assert!(near(p.table_direction(-90.0, 0.0), [0.0, 1.0, 0.0]));
+    }
+    // Off those two circles the systems differ: B's H is a latitude about y, A's V one
+    // about x.
+    let s = 0.5f64.sqrt();
+    assert!(near(b.table_direction(45.0, 45.0), [0.5, -s, -0.5]));
+    assert!(near(a.table_direction(45.0, 45.0), [s, -0.5, -0.5]));
+    // Angles and directions are inverse, the written-out definitions agree, and the
+    // length of a direction does not matter.
+    let mut seed = 3u64;
+    for _ in 0..2000 {
+        let h = (lcg(&mut seed) % 180_000) as f64 / 1000.0 - 90.0;
+        let v = (lcg(&mut seed) % 360_000) as f64 / 1000.0 - 180.0;
+        for (p, (hh, vv), want) in [(&b, (h, v), dir_b(h, v)), (&a, (v, h), dir_a(v, h))] {
+            assert!(near(p.table_direction(hh, vv), want), "{hh} {vv}");
+            let (x, y) = p.table_angles(want.map(|c| 4.0 * c)).unwrap();
+            assert!(
+                (x - hh).abs() < 1e-9 && (y - vv).abs() < 1e-9,
+                "({hh}, {vv}) → ({x}, {y})"
+            );
+        }
+    }
+    assert_eq!(b.table_angles([0.0; 3]), None);
+    assert_eq!(a.table_angles([f64::NAN, 0.0, 1.0]), None);
+    assert_eq!(a.intensity_dir([0.0; 3]), 0.0);
+}
+
+/// One distribution over the lower hemisphere (the side of the photometric axis −z),
+/// tabulated as type C (C 0..360, γ 0..90), B and A (H, V −90..90), all at a step Δ = 5°:
+///
+///   f(e) = 100 + 60 (e·a) + 40 (e·b)²,   a, b unit.
+///
+/// Bilinear interpolation on a cell of sides Δ errs by at most (Δ²/8)(max|f_uu| + max|f_vv|)
+/// in the table's angles u, v (radians). Along any coordinate line of the three systems a
+/// unit direction moves on a circle of radius ≤ 1 at a rate ≤ 1, so |e'| ≤ 1, |e''| ≤ 1 and
+/// |f''| ≤ 60 + 40·2·(1 + 1) = 220: each table is within E = 55 Δ² = 0.42 cd of f, two
+/// tables within 2E of each other. Past the hemisphere all three send nothing.
+///
+/// The flux: f integrates over the hemisphere to 200π + 60π (a·(−z)) + 40·2π/3 (∫ e dΩ = π
+/// times the axis, ∫ e eᵀ dΩ = 2π/3 I over a hemisphere). B and A integrate their
+/// interpolant exactly, within 2π E of it; type C's rule (trapezoid in C and cos γ) is second
+/// order too and is held to the same bound.
+#[test]
+fn one_distribution_as_type_c_b_and_a_gives_the_same_light() {
+    let norm = |v: [f64; 3]| {
+        let l = dot3(v, v).sqrt();
+        v.map(|c| c / l)
+    };
+    let (a, b) = (norm([0.3, -0.5, -0.8]), norm([0.7, 0.2, 0.4]));
+    let f = |e: [f64; 3]| 100.0 + 60.0 * dot3(e, a) + 40.0 * dot3(e, b).powi(2);
+    let step = 5.0f64;
+    let bound = 55.0 * step.to_radians().powi(2);
+    let c = ies(
+        &Ies::of(&steps(0.0, 360.0, 72), &steps(0.0, 90.0, 18), |c, g| {
+            f(Photometry::direction(c, g))
+        })
+        .text(),
+    );
+    let full = steps(-90.0, 90.0, 36);
+    let b_table = ies(&ies_ba(2, &full, &full, f).text());
+    let a_table = ies(&ies_ba(3, &full, &full, f).text());
+    assert!(b_table.warnings.is_empty() && a_table.warnings.is_empty());
+    let mut seed = 17u64;
+    let mut worst = 0.0f64;
+    for _ in 0..20_000 {
+        let e = random_dir(&mut seed);
+        let values = [
+            c.intensity_dir(e),
+            b_table.intensity_dir(e),
+            a_table.intensity_dir(e),
+        ];
+        if e[2] > 0.0 {
+            assert_eq!(values, [0.0; 3], "{e:?}: light above the table");
+            continue;
+        }
+        let want = f(e);
+        for (x, what) in values.iter().zip(["C", "B", "A"]) {
+            worst = worst.max((x - want).abs());
+            assert!((x - want).abs() <= bound, "{what} {e:?}: {x} vs f = {want}");
+        }
+        assert!((values[1] - values[2]).abs() <= 2.0 * bound);
+        assert!((values[0] - values[1]).abs() <= 2.0 * bound);
+    }
+    assert!(
+        worst > 0.01 * bound,
+        "the tables are not exercised off their nodes"
+    );
+    let exact = 200.0 * PI + 60.0 * PI * -a[2] + 40.0 * 2.0 * PI / 3.0;
+    for (p, what) in [(&c, "C"), (&b_table, "B"), (&a_table, "A")] {
+        let flux = p.flux();
+        assert!(
+            (flux - exact).abs() <= 2.0 * PI * bound,
+            "{what}: flux {flux} vs {exact} (bound {})",
+            2.0 * PI * bound
+        );
+    }
+    assert_eq!(
+        b_table.max_intensity(),
+        b_table.candela.iter().copied().fold(0.0, f64::max)
+    );
+}
+
+/// Closed forms of the B and A flux rule, which integrates the interpolated table exactly:
+/// a constant I over the front hemisphere sends 2π I on any grid; I = a + b|φ| in the
+/// latitude φ (B's H, A's V; a node at 0, so the table is that function exactly) sends
+/// π ∫ (a + b|φ|) cos φ dφ = π (2a + b(π − 2)); and the cosine lobe I₀ cos H cos V = I₀ (e·axis)
+/// sends π I₀, within 2π (Δ²/8)(I₀ + I₀) of its interpolant.
+#[test]
+fn type_b_and_a_flux_closed_forms() {
+    let full = steps(-90.0, 90.0, 18);
+    let uneven = [-90.0, -71.0, -40.0, -3.0, 0.0, 2.5, 30.0, 88.0, 90.0];
+    for kind in [2u8, 3] {
+        for (h, v) in [
+            (&full[..], &full[..]),
+            (&uneven[..], &full[..]),
+            (&full[..], &uneven[..]),
+        ] {
+            let p = ies(&ies_ba(kind, h, v, |_| 321.0).text());
+            assert!(
+                close(p.flux(), 2.0 * PI * 321.0, 1e-12),
+                "{kind}: {}",
+                p.flux()
+            );
+        }
+        let (a, b) = (200.0, 150.0);
+        let latitude = |e: [f64; 3]| {
+            if kind == 2 {
+                (-e[1]).asin()
+            } else {
+                e[0].asin()
+            }
+        };
+        for grid in [&full[..], &uneven[..]] {
+            let p = ies(&ies_ba(kind, grid, grid, |e| a + b * latitude(e).abs()).text());
+            let want = PI * (2.0 * a + b * (PI - 2.0));
+            assert!(
+                close(p.flux(), want, 1e-12),
+                "{kind}: {} vs {want}",
+                p.flux()
+            );
+        }
+        let i0 = 1000.0;
+        let step = 2.5f64;
+        let grid = steps(-90.0, 90.0, 72);
+        let p = ies(&ies_ba(kind, &grid, &grid, |e| i0 * -e[2]).text());
+        let bound = 2.0 * PI * step.to_radians().powi(2) / 8.0 * 2.0 * i0;
+        assert!(
+            (p.flux() - PI * i0).abs() <= bound,
+            "{kind}: {} vs {}",
+            p.flux(),
+            PI * i0
+        );
+        assert!(
+            (p.flux() - PI * i0).abs() > 1e-6 * bound,
+            "the lobe is not interpolated"
+        );
+    }
+}
+
+/// Every LM-63 form of a type B or A file reads as the full table: horizontal angles 0..90
+/// (lateral symmetry, mirrored) as −90..90 of a distribution symmetric about the vertical
+/// plane y = 0; vertical angles 0..90 as the −90..90 table above V = 0 and nothing below.
+#[test]
+fn every_type_b_and_a_form_reads_as_the_full_table() {
+    let lateral = |e: [f64; 3]| 300.0 + 80.0 * e[0] + 50.0 * e[2] * e[2] + 40.0 * e[1] * e[1];
+    let (full, half) = (steps(-90.0, 90.0, 24), steps(0.0, 90.0, 12));
+    let mut seed = 29u64;
+    for kind in [2u8, 3] {
+        let reference = ies(&ies_ba(kind, &full, &full, lateral).text());
+        for (what, h, v) in [
+            ("H 0..90", &half, &full),
+            ("V 0..90", &full, &half),
+            ("H and V 0..90", &half, &half),
+        ] {
+            let p = ies(&ies_ba(kind, h, v, lateral).text());
+            assert!(p.warnings.is_empty(), "{kind} {what}: {:?}", p.warnings);
+            assert_eq!(p.c_angles, full, "{kind} {what}: the mirrored angles");
+            for _ in 0..5000 {
+                let e = random_dir(&mut seed);
+                let (x, y) = (p.intensity_dir(e), reference.intensity_dir(e));
+                let below = reference.table_angles(e).unwrap().1 < 0.0;
+                if v[0] == 0.0 && below {
+                    assert_eq!(x, 0.0, "{kind} {what}: {e:?} below V = 0");
+                } else {
+                    assert!(close(x, y, 1e-12), "{kind} {what}: {e:?}: {x} vs {y}");
+                }
+            }
+            if v[0] == 0.0 {
+                // The flux of V ≥ 0 and of V ≤ 0 add up to the whole (each rule exact on
+                // its cells).
+                let below = ies(&ies_ba(kind, &full, &steps(-90.0, 0.0, 12), lateral).text());
+                assert!(
+                    close(p.flux() + below.flux(), reference.flux(), 1e-12),
+                    "{kind} {what}"
+                );
+            } else {
+                assert!(close(p.flux(), reference.flux(), 1e-12), "{kind} {what}");
+            }
+        }
+        // Other ranges the geometry allows are read with a warning, nothing outside them.
+        let narrow = ies(&ies_ba(kind, &steps(-60.0, 60.0, 8), &full, lateral).text());
+        assert!(narrow
+            .warnings
+            .iter()
+            .any(|w| w.contains("horizontal angles run -60..60")));
+        assert_eq!(narrow.intensity(61.0, 0.0), 0.0);
+        assert!(close(
+            narrow.intensity(60.0, 0.0),
+            reference.intensity(60.0, 0.0),
+            1e-12
+        ));
+    }
+}
+
+#[test]
+fn type_b_and_a_interpolation_stays_between_the_neighbours() {
+    let h = [-90.0, -50.0, -49.0, 0.0, 10.0, 90.0];
+    let v = steps(-90.0, 90.0, 9);
+    let mut seed = 5u64;
+    for kind in [2u8, 3] {
+        let mut file = ies_ba(kind, &h, &v, |_| 0.0);
+        for x in &mut file.candela {
+            *x = if lcg(&mut seed) % 3 == 0 {
+                0.0
+            } else {
+                (lcg(&mut seed) % 100_000) as f64
+            };
+        }
+        let p = ies(&file.text());
+        for _ in 0..20_000 {
+            let e = random_dir(&mut seed);
+            let Some((x, y)) = p.table_angles(e) else {
+                continue;
+            };
+            let x_val = p.intensity_dir(e);
+            if e[2] > 0.0 && x_val == 0.0 {
+                continue;
+            }
+            let i = h.partition_point(|&a| a <= x).clamp(1, h.len() - 1) - 1;
+            let j = v.partition_point(|&a| a <= y).clamp(1, v.len() - 1) - 1;
+            let corners = [
+                p.plane(i)[j],
+                p.plane(i)[j + 1],
+                p.plane(i + 1)[j],
+                p.plane(i + 1)[j + 1],
+            ];
+            let lo = corners.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = corners.iter().copied().fold(0.0, f64::max);
+            assert!(
+                lo <= x_val && x_val <= hi,
+                "{kind}: I({x}, {y}) = {x_val} outside {lo}..{hi}"
+            );
+        }
+        assert!(p.max_intensity() >= p.candela.iter().copied().fold(0.0, f64::max));
+    }
+}
+
+#[test]
+fn hostile_type_b_and_a_files_are_refused_at_their_line() {
+    // Line 5 holds the counts, 6 the ballast, 7.. the vertical angles (8 a line), then the
+    // horizontal angles, then the candela (7 a line).
+    let (h, v) = (steps(-90.0, 90.0, 4), steps(-90.0, 90.0, 6));
+    let base = ies_ba(2, &h, &v, |_| 10.0);
+    // A latitude past the pole: B's horizontal, A's vertical angle.
+    let mut bad = base.clone();
+    bad.horizontal[4] = 120.0;
+    let msg = error_of(&bad.text(), "b.ies");
+    assert!(
+        msg.starts_with("b.ies:8: type B horizontal angle 120 is outside -90..90"),
+        "{msg}"
+    );
+    let mut bad = base.clone();
+    bad.kind = 3;
+    bad.vertical[0] = -100.0;
+    let msg = error_of(&bad.text(), "a.ies");
+    assert!(
+        msg.starts_with("a.ies:7: type A vertical angle -100 is outside -90..90"),
+        "{msg}"
+    );
+    // A longitude past ±180.
+    let mut bad = base.clone();
+    bad.vertical[6] = 200.0;
+    let msg = error_of(&bad.text(), "b.ies");
+    assert!(
+        msg.starts_with("b.ies:7: vertical angle 200 is outside -180..180"),
+        "{msg}"
+    );
+    // Angles that do not increase.
+    let mut bad = base.clone();
+    bad.horizontal[2] = -60.0;
+    let msg = error_of(&bad.text(), "b.ies");
+    assert!(
+        msg.starts_with("b.ies:8: horizontal angle -60 does not increase"),
+        "{msg}"
+    );
+    // One horizontal angle: no rotational symmetry in B or A.
+    for kind in [2u8, 3] {
+        let one = ies_ba(kind, &[0.0], &v, |_| 10.0);
+        let msg = error_of(&one.text(), "one.ies");
+        assert!(
+            msg.starts_with("one.ies:5: 1 horizontal angle: type"),
+            "{msg}"
+        );
+    }
+    // A negative or non-numeric candela value, at its line (the first candela line is 9).
+    let mut bad = base.clone();
+    bad.candela[8] = -3.0;
+    let msg = error_of(&bad.text(), "b.ies");
+    assert!(
+        msg.starts_with("b.ies:10: candela value -3 is negative"),
+        "{msg}"
+    );
+    let text = base.text().replacen("10 10 10", "10 x 10", 1);
+    let msg = error_of(&text, "b.ies");
+    assert!(
+        msg.starts_with("b.ies:9: candela value 'x' is not a number"),
+        "{msg}"
+    );
+    // Cut short: at the end.
+    let text = base.text();
+    let cut = text.trim_end().rsplit_once(' ').unwrap().0;
+    let msg = error_of(cut, "b.ies");
+    assert!(msg.contains("expected 35 candela values"), "{msg}");
+    // Every truncation of a B file with a tilt table is an error or a table, never a panic.
+    let mut tilted = ies_ba(3, &steps(0.0, 90.0, 3), &v, |e| 5.0 + e[0]);
+    tilted.tilt = "TILT=INCLUDE\n3\n3\n0 45 90\n1 .8 .6\n".into();
+    let text = tilted.text();
+    for cut in 0..text.len() {
+        let _ = parse_ies(&text[..cut], "cut.ies");
+    }
+    assert!(ies(&text).tilt.is_some());
+}
+
+#[test]
+fn the_installed_tilt_angle_follows_the_lamp_geometry() {
+    let table = |geometry| Tilt {
+        geometry,
+        angles: vec![0.0, 90.0, 180.0],
+        factors: vec![1.0, 0.5, 0.25],
+    };
+    let (v, along, across) = (
+        table(LampGeometry::Vertical),
+        table(LampGeometry::AlongC0),
+        table(LampGeometry::AcrossC0),
+    );
+    let deg = |t: &Tilt, up: [f64; 3]| t.installed_angle(up).unwrap();
+    let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
+    // Aimed straight down: up is the luminaire's +z; nothing is tilted.
+    for t in [&v, &along, &across] {
+        assert!(near(deg(t, [0.0, 0.0, 2.0]), 0.0));
+        assert_eq!(t.installed_angle([0.0; 3]), None);
+    }
+    // Tilted 30° in the C0 plane (about y): the world's up leans towards −x in the frame.
+    let (s, c) = (30f64.to_radians().sin(), 30f64.to_radians().cos());
+    let up = [-s, 0.0, c];
+    assert!(near(deg(&v, up), 30.0));
+    assert!(near(deg(&along, up), 30.0), "a lamp along C0 tilts with it");
+    assert!(
+        near(deg(&across, up), 0.0),
+        "a lamp along C90 stays horizontal"
+    );
+    // Tilted 30° about x: the other way round.
+    let up = [0.0, s, c];
+    assert!(near(deg(&v, up), 30.0));
+    assert!(near(deg(&along, up), 0.0));
+    assert!(near(deg(&across, up), 30.0));
+    // Aimed straight up: the vertical lamp is base over, the horizontal ones level.
+    assert!(near(deg(&v, [0.0, 0.0, -1.0]), 180.0));
+    assert!(near(deg(&along, [0.0, 0.0, -1.0]), 0.0));
+    // Aimed horizontally, C0 up: 90° for the vertical lamp and the one along C0.
+    assert!(near(deg(&v, [1.0, 0.0, 0.0]), 90.0));
+    assert!(near(deg(&along, [1.0, 0.0, 0.0]), 90.0));
+    assert!(near(deg(&across, [1.0, 0.0, 0.0]), 0.0));
+    assert!(near(v.factor(45.0).0, 0.75) && near(v.factor(135.0).0, 0.375));
 }
 
 // ---------------------------------------------------------------------------------------------
