@@ -62,6 +62,10 @@ pub(crate) fn warn_photometry(luminaires: &[Luminaire]) {
                 eprintln!("radiosity: warning: {}: {w}", l.photometry.source);
             }
         }
+        // The luminaire's own (its lamp's installed tilt outside the file's tilt table).
+        for w in &l.warnings {
+            eprintln!("radiosity: warning: luminaire '{}': {w}", l.name);
+        }
     }
 }
 
@@ -347,6 +351,12 @@ pub fn run(a: LightingArgs) -> Result<()> {
                 "lumens": l.photometry.rated_flux,
                 "flux": l.photometry.flux() * l.multiplier,
                 "multiplier": l.multiplier,
+                "kind": l.photometry.kind.to_string(),
+                "tilt": l.tilt.map(|t| serde_json::json!({
+                    "angle": t.angle,
+                    "factor": t.factor,
+                    "in_table": t.in_table,
+                })),
             })
         })
         .collect();

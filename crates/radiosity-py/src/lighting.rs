@@ -13,16 +13,19 @@ use radiosity::mesh::MeshParams;
 use radiosity::pipeline::{lighting as run_lighting, LightingSettings};
 use std::path::PathBuf;
 
-/// A photometric file (IES LM-63 or EULUMDAT) as a dict: `c_angles` (degrees, the full
-/// 0–360), `gamma_angles` (degrees), `candela` (C-planes × γ, absolute candela), `lumens`
-/// (the file's rated lumens, or None for absolute photometry), `rated_flux`, `flux` (lumens
-/// integrated from the distribution), `source` and `warnings`.
+/// A photometric file (IES LM-63 or EULUMDAT) as a dict: `kind` ("C", "B" or "A", the
+/// photometric type), `c_angles` (degrees: type C's C-planes over the full 0–360; for types B
+/// and A the horizontal angles H), `gamma_angles` (degrees: type C's γ; for B and A the
+/// vertical angles V), `candela` (planes × angles, absolute candela), `lumens` (the file's
+/// rated lumens, or None for absolute photometry), `rated_flux`, `flux` (lumens integrated
+/// from the distribution), `source` and `warnings`.
 #[pyfunction]
 pub(crate) fn read_photometry<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let p = radiosity::photometry::read(&path).map_err(value_error)?;
     let (nc, ng) = (p.c_angles.len(), p.gamma_angles.len());
     let candela = Array2::from_shape_vec((nc, ng), p.candela.clone()).map_err(value_error)?;
     let d = PyDict::new(py);
+    d.set_item("kind", p.kind.to_string())?;
     d.set_item(
         "c_angles",
         Array1::from(p.c_angles.clone()).into_pyarray(py),

@@ -71,6 +71,8 @@ pub fn gltf_luminaires(path: &Path) -> Result<(Vec<Luminaire>, Vec<String>), cra
             multiplier,
             DEFAULT_GROUP,
         )
+        // A profile's lamp tilt table (TILT=INCLUDE) applies as installed: glTF is y-up.
+        .and_then(|l| l.with_lamp_tilt([0.0, 1.0, 0.0]))
         .map_err(|e| {
             crate::lighting::LightingError::Parameter(format!(
                 "{}: light '{}': {e}",
