@@ -56,11 +56,14 @@ pub enum Target {
     Schedule,
     /// Calculation points in Radiance's points format.
     Points,
+    /// A glTF file's lights (`KHR_lights_punctual` point and spot, `EXT_lights_ies` profiles
+    /// in a data URI), read as luminaires.
+    GltfLights,
 }
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 19] = [
+    pub const ALL: [Target; 20] = [
         Target::Obj,
         Target::Mtl,
         Target::Mgf,
@@ -80,6 +83,7 @@ impl Target {
         Target::Ldt,
         Target::Schedule,
         Target::Points,
+        Target::GltfLights,
     ];
 
     /// Its name.
@@ -104,6 +108,7 @@ impl Target {
             Target::Ldt => "ldt",
             Target::Schedule => "schedule",
             Target::Points => "points",
+            Target::GltfLights => "gltf-lights",
         }
     }
 }
@@ -115,6 +120,9 @@ const MTX: &str = "%%MatrixMarket matrix coordinate real general\n% a closed pai
 const CSV: &str = "area,reflectance,emission\n1,0.5,1\n1,0.5,0\n2,0.25,0\n";
 const VS3: &str = "T two forms\nC encl=1 list=2 eps=1.e-4 maxu=8\nF 3\n! a box\nV 1 0. 0. 0.\nV 2 1. 0. 0.\nV 3 1. 1. 0.\nV 4 0. 1. 0.\nV 5 0. 0. 1.\nV 6 1. 0. 1.\nV 7 1. 1. 1.\nV 8 0. 1. 1.\nS 1 1 2 3 4 0 0 0.50 floor\nS 2 1 4 8 5 0 0 0.50 xeq0\nS 3 1 5 6 2 0 0 0.50 yeq0\nS 4 7 6 5 8 0 0 0.90 top\nS 5 7 3 2 0 0 2 0.50 xeq1a ! combined\nS 6 7 2 6 0 0 2 0.50 xeq1b\nS 7 7 8 4 3 0 0 0.50 yeq1\nO 8 1 2 7 8\nEnd of data\n";
 const VS3A: &str = "T L room\nC encl=1\nF 3a\nS 1 R 0 0 0.90 s1\n  3. 0. 0. 0 90 3. 3.\nS 2 Q 0 0 0.90 s2\n  3. 0. 3. 0 180\n  2. 0. 3. 0. 3. 1. 2. 1.\nS 3 T 0 1 0.90 s3\n 0. 0. 0. 180 0 0. 0. 1. 0. 1. 1.\nO 4 R 1. 1. 1. 45 30 1. 1.\nE\n";
+/// A point, a spot aimed down and an IES profile (a data URI of a cosine downlight), each on
+/// its own node.
+const GLTF_LIGHTS: &str = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0,1,2]}],"extensionsUsed":["KHR_lights_punctual","EXT_lights_ies"],"extensions":{"KHR_lights_punctual":{"lights":[{"type":"point","intensity":120,"color":[1,0.9,0.8]},{"type":"spot","intensity":500,"range":9,"spot":{"innerConeAngle":0.3,"outerConeAngle":0.6}}]},"EXT_lights_ies":{"lights":[{"name":"down","uri":"data:application/octet-stream;base64,SUVTTkE6TE0tNjMtMjAwMgpUSUxUPU5PTkUKMSAtMSAxIDMgMSAxIDIgMCAwIDAKMSAxIDAKMCA0NSA5MAowCjIwMCAxNDEuNCAwCg=="}]}},"nodes":[{"name":"bulb","translation":[0,2.5,0],"extensions":{"KHR_lights_punctual":{"light":0}}},{"translation":[1,3,0],"rotation":[-0.7071067811865476,0,0,0.7071067811865476],"extensions":{"KHR_lights_punctual":{"light":1}}},{"translation":[2,3,1],"rotation":[-0.7071067811865476,0,0,0.7071067811865476],"extensions":{"EXT_lights_ies":{"light":0,"multiplier":2,"color":[0.5,1,1]}}}]}"#;
 const IES: &str = "IESNA:LM-63-2002\r\n[TEST] fuzz seed\r\n[MANUFAC] radiosity\r\nTILT=INCLUDE\r\n1\r\n3\r\n0 45 90\r\n1 0.9 0.8\r\n1 1000 1 5 3 1 2 0.6 -0.3 0.1\r\n1 0 0\r\n0 22.5 45 67.5 90\r\n0 90 180\r\n300 280 220 120 10\r\n310 290 230 130 12\r\n320 300 240 140 14\r\n";
 const IES_B: &str = "IESNA:LM-63-1995\n[TEST] fuzz seed, type B\n[LUMINAIRE] floodlight\nTILT=INCLUDE\n3\n4\n0 30 60 90\n1 0.97 0.9 0.85\n1 20000 1.0 7 4 2 1 -1.2 -1.2 0.3\n1.0 1.0 400\n-90 -60 -30 0 30 60 90\n0 30 60 90\n0 200 3000 9000 2500 150 0\n0 150 2500 8000 2000 120 0\n0 60 900 2000 700 50 0\n0 0 0 0 0 0 0\n";
 const IES_A: &str = "IESNA:LM-63-2002\r\n[TEST] fuzz seed, type A\r\nTILT=INCLUDE\r\n2\r\n2\r\n0 90\r\n1 0.5\r\n1 -1 1 4 5 3 2 0.2 0.1 0\r\n1 0 12\r\n0, 10, 45, 90\r\n-90, -20, 0, 20, 90\r\n0 0 0 0\r\n40 20 5 0\r\n900 300 20 0\r\n50 25 5 0\r\n0 0 0 0\r\n";
@@ -173,6 +181,7 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
         // The schedule first: the mutations fall on the first file.
         Target::Schedule => vec![s("lights.csv", SCHEDULE), s("lamp.ies", IES)],
         Target::Points => vec![s("desk.pts", POINTS)],
+        Target::GltfLights => vec![s("lights.gltf", GLTF_LIGHTS)],
         Target::Pfm => vec![("ref.pfm".into(), {
             let mut b = b"PF\n2 2\n-1.0\n".to_vec();
             for k in 0..12u32 {
@@ -301,6 +310,9 @@ fn parse(target: Target, dir: &Path) -> bool {
                 .is_ok()
         }
         Target::Points => radiosity::lighting::read_points(&dir.join("desk.pts")).is_ok(),
+        Target::GltfLights => {
+            radiosity::lighting::gltf_luminaires(&dir.join("lights.gltf")).is_ok()
+        }
         Target::MatrixMarket | Target::PatchesCsv => {
             let m = matrix_market::read(&dir.join("f.mtx"));
             let p = patches_csv::read(&dir.join("p.csv"));
