@@ -452,7 +452,7 @@ fn hostile_inputs_get_one_line_errors_quickly() {
         (solve("array.mgf"), vec!["array.mgf:1", "transform"]),
         (
             solve("nested.mgf"),
-            vec!["nested.mgf:3", "nested transform arrays"],
+            vec!["nested.mgf:2", "transform arrays would make 1001000 copies"],
         ),
         (solve("big.obj"), vec!["big.obj:20003", "at most 4096"]),
         (solve("repeat.obj"), vec!["repeat.obj:4", "at most 4096"]),
@@ -824,5 +824,51 @@ fn thermal_refuses_temperatures_and_fluxes_that_overflow() {
     for r in &rows {
         let q: f64 = r[flux].parse().unwrap();
         assert!((q - expected).abs() < 1e-9 * expected, "{q} vs {expected}");
+    }
+}
+
+/// Absurd requests are refused before the work: a hierarchical link error below what f32
+/// geometry can resolve, an MGF array of 10⁵ copies; an include of a device names the file
+/// and line that include it.
+#[test]
+fn absurd_requests_are_refused_quickly() {
+    let dir = scratch("hostile-absurd");
+    write(
+        &dir,
+        "arr.mgf",
+        "m light =\n c\n ed 10\nv a =\n p 0 0 1\n n 0 0 -1\nv b =\n p 1 0 1\n n 0 0 -1\nv c =\n p 0 1 1\n n 0 0 -1\nxf -a 100000\nf a b c\nxf\n",
+    );
+    write(&dir, "dev.mgf", "# a device\ni /dev/zero\n");
+    let keep = ["arr.mgf", "dev.mgf"];
+    for (args, needles) in [
+        (
+            &[
+                "solve",
+                "cornell",
+                "--solver",
+                "hierarchical",
+                "--link-error",
+                "1e-9",
+                "-o",
+                "a.csv",
+            ][..],
+            &["--link-error", "1e-7"][..],
+        ),
+        (
+            &["solve", "arr.mgf", "-o", "a.csv"],
+            &["arr.mgf:13", "100000 copies", "10000"],
+        ),
+        (
+            &["solve", "dev.mgf", "-o", "a.csv"],
+            &["dev.mgf:2", "/dev/zero", "not a regular file"],
+        ),
+    ] {
+        let t = std::time::Instant::now();
+        fails(args, &dir, needles, &keep);
+        assert!(
+            t.elapsed().as_secs_f64() < 10.0,
+            "{args:?} took {:?}",
+            t.elapsed()
+        );
     }
 }
