@@ -484,3 +484,22 @@ pub fn form_factor_files(scene: &str, out: &Path, patches_out: Option<&Path>) ->
     }
     distinct_files(&[("scene", scene)], &outputs)
 }
+
+/// Refuse, in one line and before any work, a dense View3D exchange-factor table
+/// (`--format view3d` with emissivities: Hottel's script-F needs the dense inverse) whose
+/// memory, [`radiosity::io::view3d::script_f_bytes`], passes half of what is available. The plain
+/// view-factor table needs no dense copy when written with
+/// [`radiosity::io::view3d::write_rows`].
+pub fn dense_exchange_memory(surfaces: usize) -> Result<()> {
+    let needed = radiosity::io::view3d::script_f_bytes(surfaces);
+    if let Some(free) = radiosity::pipeline::available_memory() {
+        if needed > free / 2 {
+            bail!(
+                "--format view3d: the total exchange factors of {surfaces} surfaces need a dense inverse of about {} MiB, more than half the {} MiB available; write view factors without emissivities, or Matrix Market",
+                needed >> 20,
+                free >> 20
+            );
+        }
+    }
+    Ok(())
+}
