@@ -122,6 +122,42 @@ pub fn run(a: &PicturesArgs) -> Result<()> {
     if a.reference_spp == 0 {
         bail!("--reference-spp 0: at least one path per pixel is needed");
     }
+    let read_reference = |path: &Path| -> Result<radiosity::render::Image> {
+        let image = read_pfm(path)?;
+        if (image.width, image.height) != (a.size, a.size) {
+            bail!(
+                "{}: the reference is {}×{}, the pictures {}×{} (give --size)",
+                path.display(),
+                image.width,
+                image.height,
+                a.size,
+                a.size
+            );
+        }
+        // A relative error needs a reference with some light and nothing but numbers.
+        if let Some(k) = image
+            .pixels
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            bail!(
+                "{}: pixel {} of the reference is not a finite number (NaN or infinity); give a finite PFM",
+                path.display(),
+                k
+            );
+        }
+        if image.pixels.iter().all(|p| p.iter().all(|&c| c == 0.0)) {
+            bail!(
+                "{}: the reference is black everywhere; a relative error against it is undefined",
+                path.display()
+            );
+        }
+        Ok(image)
+    };
+    // Given references are checked before the output folder is made, so a refused one leaves
+    // nothing behind.
+    let given = a.reference.as_deref().map(read_reference).transpose()?;
+    let given_b = a.reference_b.as_deref().map(read_reference).transpose()?;
     let exe = crate::radiosity_exe()?;
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create {}", a.out.display()))?;
@@ -143,26 +179,14 @@ pub fn run(a: &PicturesArgs) -> Result<()> {
             p
         }
     };
-    let read_reference = |path: &Path| -> Result<radiosity::render::Image> {
-        let image = read_pfm(path)?;
-        if (image.width, image.height) != (a.size, a.size) {
-            bail!(
-                "{}: the reference is {}×{}, the pictures {}×{} (give --size)",
-                path.display(),
-                image.width,
-                image.height,
-                a.size,
-                a.size
-            );
-        }
-        Ok(image)
+    let mut reference = match given {
+        Some(r) => r,
+        None => read_reference(&reference_path)?,
     };
-    let mut reference = read_reference(&reference_path)?;
     // With a second reference: the noise of one is their difference over √2, and the pictures
     // are compared with their average, whose noise is that over √2 again.
-    let measured_var = match &a.reference_b {
-        Some(p) => {
-            let b = read_reference(p)?;
+    let measured_var = match given_b {
+        Some(b) => {
             let one = difference(&reference, &b).rmse / std::f64::consts::SQRT_2;
             for (x, y) in reference.pixels.iter_mut().zip(&b.pixels) {
                 for c in 0..3 {

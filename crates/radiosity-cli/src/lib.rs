@@ -189,6 +189,15 @@ fn solve_system(a: SolveSystemArgs) -> Result<()> {
     if let Some(t) = &a.trace {
         settings::check_output(t)?;
     }
+    let mut outputs = vec![("--out", a.out.as_path())];
+    outputs.extend(a.trace.as_deref().map(|p| ("--trace", p)));
+    settings::distinct_files(
+        &[
+            ("--matrix", a.matrix.as_path()),
+            ("--patches", a.patches.as_path()),
+        ],
+        &outputs,
+    )?;
     let patches = radiosity::io::patches_csv::read(&a.patches)?;
     let mut matrix = radiosity::io::matrix_market::read(&a.matrix)?;
     if matrix.n() != patches.system.len() {
@@ -303,6 +312,18 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
             settings::check_output(p)?;
         }
     }
+    settings::distinct_files(
+        &[("scene", std::path::Path::new(&a.solve.scene))],
+        &[
+            Some(("--out", a.out.as_path())),
+            a.solve.trace.as_deref().map(|p| ("--trace", p)),
+            a.links_out.as_deref().map(|p| ("--links-out", p)),
+            a.elements_out.as_deref().map(|p| ("--elements-out", p)),
+        ]
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>(),
+    )?;
     settings::settings(&a.solve)?;
     let (scene, solution, distributed) = solve_scene(&a.solve)?;
     if !ranks::is_root() {
@@ -377,6 +398,7 @@ fn view(a: ViewArgs) -> Result<()> {
         .unwrap_or_else(|| default_output(&a.file.to_string_lossy(), "png"));
     ImageFormat::from_path(&out)?;
     settings::check_output(&out)?;
+    settings::distinct_files(&[("file", a.file.as_path())], &[("--out", out.as_path())])?;
     let params = settings::image(&a.image, 1, if a.gather { 16 } else { 4 })?;
     if !matches!(
         FileFormat::from_path(&a.file),

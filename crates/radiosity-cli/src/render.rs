@@ -52,6 +52,12 @@ pub fn run(mut a: RenderArgs) -> Result<()> {
     if let Some(t) = &a.solve.trace {
         settings::check_output(t)?;
     }
+    let mut outputs = vec![("--out", out.as_path())];
+    outputs.extend(a.solve.trace.as_deref().map(|p| ("--trace", p)));
+    outputs.extend(a.false_colour.as_deref().map(|p| ("--false-colour", p)));
+    let mut inputs = vec![("scene", Path::new(&a.solve.scene))];
+    inputs.extend(a.luminaires.as_deref().map(|p| ("--luminaires", p)));
+    settings::distinct_files(&inputs, &outputs)?;
     let integrator = if a.gather {
         IntegratorArg::Gather
     } else {

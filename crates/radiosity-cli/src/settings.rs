@@ -373,3 +373,133 @@ pub fn threads(t: Option<usize>) -> Result<()> {
 pub fn on_worker<T: Send>(f: impl FnOnce() -> T + Send) -> T {
     rayon::scope(|_| f())
 }
+
+/// What a path names, for telling whether two paths are one file: the canonical path of an
+/// existing file (so `./a.csv`, `a.csv`, `dir/../a.csv` and a symbolic link to it agree), or the
+/// canonical folder and the name of a file still to be made. On Unix an existing file is also
+/// known by its device and inode, which catches hard links.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum FileIdentity {
+    Existing {
+        path: std::path::PathBuf,
+        inode: Option<(u64, u64)>,
+        regular: bool,
+    },
+    New(std::path::PathBuf),
+}
+
+impl FileIdentity {
+    fn of(path: &Path) -> Option<Self> {
+        if let Ok(meta) = std::fs::metadata(path) {
+            #[cfg(unix)]
+            let inode = {
+                use std::os::unix::fs::MetadataExt;
+                Some((meta.dev(), meta.ino()))
+            };
+            #[cfg(not(unix))]
+            let inode = None;
+            let path = std::fs::canonicalize(path).ok()?;
+            return Some(FileIdentity::Existing {
+                path,
+                inode,
+                regular: meta.is_file(),
+            });
+        }
+        // A new file (or a dangling link: the link's own place is what a write would replace).
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let dir = std::fs::canonicalize(dir).ok()?;
+        Some(FileIdentity::New(dir.join(path.file_name()?)))
+    }
+
+    fn same(&self, other: &Self) -> bool {
+        match (self, other) {
+            (
+                FileIdentity::Existing {
+                    path: a, inode: ia, ..
+                },
+                FileIdentity::Existing {
+                    path: b, inode: ib, ..
+                },
+            ) => a == b || (ia.is_some() && ia == ib),
+            (FileIdentity::New(a), FileIdentity::New(b)) => a == b,
+            _ => false,
+        }
+    }
+
+    /// A device or a pipe (`/dev/null`, `/dev/stdout`): several outputs may share it.
+    fn is_special(&self) -> bool {
+        matches!(self, FileIdentity::Existing { regular: false, .. })
+    }
+}
+
+/// Refuse, before any work, an output that is one of the command's inputs or another of its
+/// outputs: the same file by identity (canonical paths, hard links), however it is spelt.
+/// `inputs` and `outputs` pair each path with the flag or place that names it (`"--boundary"`,
+/// `"the scene"`); the message names both and the file. A device or pipe (`/dev/null`) may
+/// take several outputs; a path that cannot be resolved (its folder is missing) is left to
+/// [`check_output`]'s message.
+pub fn distinct_files(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)]) -> Result<()> {
+    let ins: Vec<(&str, &Path, FileIdentity)> = inputs
+        .iter()
+        .filter_map(|&(f, p)| FileIdentity::of(p).map(|id| (f, p, id)))
+        // An input that is not a file (a built-in scene's name) cannot be overwritten.
+        .filter(|(_, _, id)| matches!(id, FileIdentity::Existing { .. }))
+        .collect();
+    let mut seen: Vec<(&str, &Path, FileIdentity)> = Vec::new();
+    for &(flag, path) in outputs {
+        let Some(id) = FileIdentity::of(path) else {
+            continue;
+        };
+        if let Some((f, p, _)) = ins.iter().find(|(_, _, i)| i.same(&id)) {
+            bail!(
+                "{flag} {}: is the input {f} {}; writing it would destroy the input (choose another output file)",
+                path.display(),
+                p.display()
+            );
+        }
+        if !id.is_special() {
+            if let Some((f, p, _)) = seen.iter().find(|(_, _, i)| i.same(&id)) {
+                bail!(
+                    "{flag} {}: is also {f} {}; each output needs its own file",
+                    path.display(),
+                    p.display()
+                );
+            }
+        }
+        seen.push((flag, path, id));
+    }
+    Ok(())
+}
+
+/// [`distinct_files`] for `form-factors`: the scene (when it is a file) against `-o` and the
+/// optional `--patches-out`. The command calls it after its output checks, before any work.
+pub fn form_factor_files(scene: &str, out: &Path, patches_out: Option<&Path>) -> Result<()> {
+    let scene = Path::new(scene);
+    let mut outputs = vec![("-o", out)];
+    if let Some(p) = patches_out {
+        outputs.push(("--patches-out", p));
+    }
+    distinct_files(&[("scene", scene)], &outputs)
+}
+
+/// Refuse, in one line and before any work, a dense View3D exchange-factor table
+/// (`--format view3d` with emissivities: Hottel's script-F needs the dense inverse) whose
+/// memory, [`radiosity::io::view3d::script_f_bytes`], passes half of what is available. The plain
+/// view-factor table needs no dense copy when written with
+/// [`radiosity::io::view3d::write_rows`].
+pub fn dense_exchange_memory(surfaces: usize) -> Result<()> {
+    let needed = radiosity::io::view3d::script_f_bytes(surfaces);
+    if let Some(free) = radiosity::pipeline::available_memory() {
+        if needed > free / 2 {
+            bail!(
+                "--format view3d: the total exchange factors of {surfaces} surfaces need a dense inverse of about {} MiB, more than half the {} MiB available; write view factors without emissivities, or Matrix Market",
+                needed >> 20,
+                free >> 20
+            );
+        }
+    }
+    Ok(())
+}

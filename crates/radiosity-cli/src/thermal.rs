@@ -47,6 +47,23 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             );
         }
     }
+    // No output over an input or another output.
+    let inputs: Vec<(&str, &Path)> = [
+        ("scene", Path::new(&a.scene)),
+        ("--boundary", a.boundary.as_path()),
+    ]
+    .into_iter()
+    .chain(a.grid.iter().map(|g| ("--grid", g.as_path())))
+    .collect();
+    let outputs: Vec<(&str, &Path)> = [
+        Some(("--out", a.out.as_path())),
+        a.patches_out.as_deref().map(|p| ("--patches-out", p)),
+        a.mrt_out.as_deref().map(|p| ("--mrt-out", p)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    crate::settings::distinct_files(&inputs, &outputs)?;
     // The points, read before any work.
     let mut points = Vec::new();
     for g in &a.grid {
@@ -56,10 +73,11 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         }
         points.extend(p);
     }
-    if !(a.environment.is_finite() && a.environment >= 0.0) {
+    if !(a.environment.is_finite() && (0.0..=thermal::MAX_TEMPERATURE).contains(&a.environment)) {
         bail!(
-            "--environment {}: a temperature in kelvin, at least 0",
-            a.environment
+            "--environment {:e}: a temperature in kelvin, 0 to {:e} (σT⁴ past that overflows the heat balance)",
+            a.environment,
+            thermal::MAX_TEMPERATURE
         );
     }
     crate::settings::form_factor_numbers(a.resolution, a.samples, a.rays)?;
@@ -226,7 +244,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             boundaries[k].emissivity
         );
     }
-    radiosity::export::write_text(&a.out, &out)?;
+    let mut patches_csv = None;
     if let Some(p) = &a.patches_out {
         let mut s = String::from("patch,name,x,y,z,area,emissivity,temperature,flux,power\n");
         for (i, patch) in mesh.patches.iter().enumerate() {
@@ -246,7 +264,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
                 system.area[i] * solution.flux[i]
             );
         }
-        radiosity::export::write_text(p, &s)?;
+        patches_csv = Some((p, s));
     }
 
     let radiant = if let Some(p) = &a.mrt_out {
@@ -279,11 +297,72 @@ pub fn run(a: ThermalArgs) -> Result<()> {
                 v.sky_view
             );
         }
-        radiosity::export::write_text(p, &s)?;
-        Some((p, r, t.elapsed().as_secs_f64()))
+        Some((p, r, t.elapsed().as_secs_f64(), s))
     } else {
         None
     };
+
+    // Every output or none, and no NaN or infinity in any: the inputs' ranges keep the
+    // physics finite, and this is the last line of defence.
+    let files: Vec<(&Path, &str, &str)> = std::iter::once((a.out.as_path(), "--out", out.as_str()))
+        .chain(
+            patches_csv
+                .as_ref()
+                .map(|(p, s)| (p.as_path(), "--patches-out", s.as_str())),
+        )
+        .chain(
+            radiant
+                .as_ref()
+                .map(|(p, _, _, s)| (p.as_path(), "--mrt-out", s.as_str())),
+        )
+        .collect();
+    let not_finite = |flag: &str, path: &Path, row: Option<usize>| {
+        anyhow::anyhow!(
+            "{flag} {}: {} would hold a value that is not finite; nothing was written (the inputs are outside the range the heat balance can represent)",
+            path.display(),
+            row.map_or("a row".to_string(), |r| format!("line {}", r + 2))
+        )
+    };
+    if let Some(k) = (0..rows.len()).find(|&k| {
+        let (ar, power, t) = per[k];
+        ![ar, power, t, boundaries[k].emissivity]
+            .iter()
+            .all(|v| v.is_finite())
+    }) {
+        return Err(not_finite("--out", &a.out, Some(k)));
+    }
+    if let Some((p, _)) = &patches_csv {
+        if let Some(i) = (0..n).find(|&i| {
+            ![
+                system.area[i],
+                solution.temperature[i],
+                solution.flux[i],
+                system.area[i] * solution.flux[i],
+            ]
+            .iter()
+            .all(|v| v.is_finite())
+        }) {
+            return Err(not_finite("--patches-out", p, Some(i)));
+        }
+    }
+    if let Some((p, r, _, _)) = &radiant {
+        if let Some(i) = r.points.iter().position(|v| {
+            ![
+                v.mean_radiant_temperature,
+                v.plane_radiant_temperature,
+                v.sky_view,
+            ]
+            .iter()
+            .all(|x| x.is_finite())
+        }) {
+            return Err(not_finite("--mrt-out", p, Some(i)));
+        }
+    }
+    let mut staged = radiosity::io::Staged::default();
+    for (path, _, text) in &files {
+        staged.write::<radiosity::io::OutputError>(path, |w| w.write_all(text.as_bytes()))?;
+    }
+    staged.commit::<radiosity::io::OutputError>()?;
 
     // Summary.
     let info = &solution.info;
@@ -372,7 +451,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
     if let Some(p) = &a.patches_out {
         println!("wrote       {}", p.display());
     }
-    if let Some((p, r, seconds)) = &radiant {
+    if let Some((p, r, seconds, _)) = &radiant {
         let (lo, hi) = r
             .points
             .iter()

@@ -452,7 +452,7 @@ fn hostile_inputs_get_one_line_errors_quickly() {
         (solve("array.mgf"), vec!["array.mgf:1", "transform"]),
         (
             solve("nested.mgf"),
-            vec!["nested.mgf:3", "nested transform arrays"],
+            vec!["nested.mgf:2", "transform arrays would make 1001000 copies"],
         ),
         (solve("big.obj"), vec!["big.obj:20003", "at most 4096"]),
         (solve("repeat.obj"), vec!["repeat.obj:4", "at most 4096"]),
@@ -583,4 +583,292 @@ fn located_errors_os_messages_once_and_resident_memory() {
     );
     let text = stdout(&out);
     assert!(text.contains("memory      peak resident"), "{text}");
+}
+
+/// A two-sided plate at 300 K for the thermal cases: `p.obj`, `p.mtl`, `bc.csv`.
+fn thermal_plate(dir: &Path) -> [&'static str; 3] {
+    write(
+        dir,
+        "p.obj",
+        "mtllib p.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl plate\nf 1 2 3 4\nusemtl back\nf 4 3 2 1\n",
+    );
+    write(
+        dir,
+        "p.mtl",
+        "newmtl plate\nKd 0.3 0.3 0.3\nnewmtl back\nKd 0.3 0.3 0.3\n",
+    );
+    write(
+        dir,
+        "bc.csv",
+        "name,emissivity,temperature,flux\nplate,0.5,300,\nback,0.5,300,\n",
+    );
+    ["p.obj", "p.mtl", "bc.csv"]
+}
+
+/// The inputs of a case, byte for byte, to check that a refusal left them alone.
+fn snapshot(dir: &Path, names: &[&str]) -> Vec<Vec<u8>> {
+    names.iter().map(|n| read_bytes(dir, n)).collect()
+}
+
+/// No output is written over an input of its command or over another of its outputs, however
+/// the path is spelt (`./`, a folder and back, a symbolic link).
+#[test]
+fn outputs_never_overwrite_inputs_or_each_other() {
+    let dir = scratch("hostile-same-file");
+    let mut keep = thermal_plate(&dir).to_vec();
+    std::os::unix::fs::symlink("bc.csv", dir.join("link.csv")).unwrap();
+    keep.push("link.csv");
+    std::fs::create_dir(dir.join("sub")).unwrap();
+    keep.push("sub");
+    let t = ["thermal", "p.obj", "--boundary", "bc.csv"];
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (
+            vec!["--out", "bc.csv"],
+            vec!["--out bc.csv", "--boundary bc.csv"],
+        ),
+        (
+            vec!["--out", "s.csv", "--patches-out", "./bc.csv"],
+            vec!["--patches-out ./bc.csv", "--boundary bc.csv"],
+        ),
+        (
+            vec!["--out", "sub/../bc.csv"],
+            vec!["--out sub/../bc.csv", "--boundary bc.csv"],
+        ),
+        (
+            vec!["--out", "link.csv"],
+            vec!["--out link.csv", "--boundary bc.csv"],
+        ),
+        (
+            vec!["--out", "s.csv", "--patches-out", "./s.csv"],
+            vec!["--patches-out ./s.csv", "--out s.csv", "own file"],
+        ),
+        (
+            vec!["--out", "s.csv", "--mrt-out", "s.csv", "--grid", "bc.csv"],
+            vec!["--mrt-out s.csv", "--out s.csv"],
+        ),
+        (
+            vec!["--out", "s.csv", "--mrt-out", "bc.csv", "--grid", "bc.csv"],
+            vec!["--mrt-out bc.csv", "--boundary bc.csv"],
+        ),
+    ];
+    let before = snapshot(&dir, &["p.obj", "p.mtl", "bc.csv"]);
+    for (extra, needles) in cases {
+        let mut args = t.to_vec();
+        args.extend(extra);
+        fails(&args, &dir, &needles, &keep);
+        assert_eq!(snapshot(&dir, &["p.obj", "p.mtl", "bc.csv"]), before);
+    }
+    // solve-system: --out or --trace over its matrix or patch file.
+    write(
+        &dir,
+        "p2.csv",
+        "patch,area,reflectance,emission\n0,1,0.5,1\n",
+    );
+    write(
+        &dir,
+        "m.mtx",
+        "%%MatrixMarket matrix coordinate real general\n1 1 0\n",
+    );
+    keep.extend(["p2.csv", "m.mtx"]);
+    let before = snapshot(&dir, &["p2.csv", "m.mtx"]);
+    for (extra, needles) in [
+        (
+            &["-o", "./p2.csv"][..],
+            &["--out ./p2.csv", "--patches p2.csv"][..],
+        ),
+        (
+            &["-o", "r.csv", "--solver", "jacobi", "--trace", "m.mtx"],
+            &["--trace m.mtx", "--matrix m.mtx"],
+        ),
+    ] {
+        let mut args = vec!["solve-system", "--matrix", "m.mtx", "--patches", "p2.csv"];
+        args.extend_from_slice(extra);
+        fails(&args, &dir, needles, &keep);
+        assert_eq!(snapshot(&dir, &["p2.csv", "m.mtx"]), before);
+    }
+    // solve and render: the output over the scene, or the trace over the output.
+    write(
+        &dir,
+        "x.ply",
+        &ascii_ply(3, "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 1\n"),
+    );
+    keep.push("x.ply");
+    let scene = read_bytes(&dir, "x.ply");
+    fails(
+        &["solve", "x.ply", "--out", "x.ply"],
+        &dir,
+        &["--out x.ply", "scene x.ply"],
+        &keep,
+    );
+    fails(
+        &[
+            "solve", "x.ply", "--out", "o.csv", "--solver", "jacobi", "--trace", "./o.csv",
+        ],
+        &dir,
+        &["--trace ./o.csv", "--out o.csv"],
+        &keep,
+    );
+    assert_eq!(read_bytes(&dir, "x.ply"), scene);
+}
+
+/// Every output of a command is written or none is: thermal's `--out` is not kept when its
+/// `--patches-out` cannot be written (a symbolic link to nothing).
+#[test]
+fn thermal_writes_every_output_or_none() {
+    let dir = scratch("hostile-staged");
+    let mut keep = thermal_plate(&dir).to_vec();
+    std::os::unix::fs::symlink("nowhere/x.csv", dir.join("dangling.csv")).unwrap();
+    keep.push("dangling.csv");
+    let before = snapshot(&dir, &["p.obj", "p.mtl", "bc.csv"]);
+    fails(
+        &[
+            "thermal",
+            "p.obj",
+            "--boundary",
+            "bc.csv",
+            "--out",
+            "s.csv",
+            "--patches-out",
+            "dangling.csv",
+        ],
+        &dir,
+        &["dangling.csv"],
+        &keep,
+    );
+    assert_eq!(snapshot(&dir, &["p.obj", "p.mtl", "bc.csv"]), before);
+    // Both land when both can: the patch rows add up to the surfaces' powers.
+    run_ok(
+        &[
+            "thermal",
+            "p.obj",
+            "--boundary",
+            "bc.csv",
+            "--out",
+            "s.csv",
+            "--patches-out",
+            "q.csv",
+        ],
+        &dir,
+    );
+    assert!(dir.join("s.csv").is_file() && dir.join("q.csv").is_file());
+}
+
+/// Inputs whose σT⁴ would overflow are refused with the range that works, before any work.
+#[test]
+fn thermal_refuses_temperatures_and_fluxes_that_overflow() {
+    let dir = scratch("hostile-overflow");
+    let mut keep = thermal_plate(&dir).to_vec();
+    keep.push("bc2.csv");
+    fails(
+        &[
+            "thermal",
+            "p.obj",
+            "--boundary",
+            "bc.csv",
+            "--out",
+            "s.csv",
+            "--environment",
+            "1e78",
+        ],
+        &dir,
+        &["--environment 1e78", "0 to 1e6"],
+        &keep,
+    );
+    for (row, needles) in [
+        (
+            "plate,0.5,1e100,",
+            &["bc2.csv:2", "1e100 K", "0 to 1e6 K"][..],
+        ),
+        ("plate,0.5,,-1e308", &["bc2.csv:2", "-1e308", "1e17"]),
+    ] {
+        write(
+            &dir,
+            "bc2.csv",
+            &format!("name,emissivity,temperature,flux\n{row}\nback,0.5,300,\n"),
+        );
+        fails(
+            &[
+                "thermal",
+                "p.obj",
+                "--boundary",
+                "bc2.csv",
+                "--out",
+                "s.csv",
+            ],
+            &dir,
+            needles,
+            &keep,
+        );
+    }
+    // The top of the range still solves, finitely: the plate at 10⁶ K facing nothing loses
+    // ε σ T⁴ per square metre and side to surroundings at 0 K.
+    write(
+        &dir,
+        "bc2.csv",
+        "name,emissivity,temperature,flux\nplate,0.5,1e6,\nback,0.5,1e6,\n",
+    );
+    run_ok(
+        &[
+            "thermal",
+            "p.obj",
+            "--boundary",
+            "bc2.csv",
+            "--out",
+            "s.csv",
+        ],
+        &dir,
+    );
+    let (header, rows) = read_csv(&dir.join("s.csv"));
+    let flux = column(&header, "flux");
+    let expected = 0.5 * 5.670_374_419e-8 * 1e24;
+    for r in &rows {
+        let q: f64 = r[flux].parse().unwrap();
+        assert!((q - expected).abs() < 1e-9 * expected, "{q} vs {expected}");
+    }
+}
+
+/// Absurd requests are refused before the work: a hierarchical link error below what f32
+/// geometry can resolve, an MGF array of 10⁵ copies; an include of a device names the file
+/// and line that include it.
+#[test]
+fn absurd_requests_are_refused_quickly() {
+    let dir = scratch("hostile-absurd");
+    write(
+        &dir,
+        "arr.mgf",
+        "m light =\n c\n ed 10\nv a =\n p 0 0 1\n n 0 0 -1\nv b =\n p 1 0 1\n n 0 0 -1\nv c =\n p 0 1 1\n n 0 0 -1\nxf -a 100000\nf a b c\nxf\n",
+    );
+    write(&dir, "dev.mgf", "# a device\ni /dev/zero\n");
+    let keep = ["arr.mgf", "dev.mgf"];
+    for (args, needles) in [
+        (
+            &[
+                "solve",
+                "cornell",
+                "--solver",
+                "hierarchical",
+                "--link-error",
+                "1e-9",
+                "-o",
+                "a.csv",
+            ][..],
+            &["--link-error", "1e-7"][..],
+        ),
+        (
+            &["solve", "arr.mgf", "-o", "a.csv"],
+            &["arr.mgf:13", "100000 copies", "10000"],
+        ),
+        (
+            &["solve", "dev.mgf", "-o", "a.csv"],
+            &["dev.mgf:2", "/dev/zero", "not a regular file"],
+        ),
+    ] {
+        let t = std::time::Instant::now();
+        fails(args, &dir, needles, &keep);
+        assert!(
+            t.elapsed().as_secs_f64() < 10.0,
+            "{args:?} took {:?}",
+            t.elapsed()
+        );
+    }
 }

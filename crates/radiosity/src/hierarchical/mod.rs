@@ -135,7 +135,7 @@ mod refinement;
 mod tests;
 
 pub use links::{Hierarchy, Link};
-pub use params::{HierarchicalError, Info, Parameter, Params};
+pub use params::{HierarchicalError, Info, Parameter, Params, MIN_LINK_ERROR};
 
 use crate::accel::Bvh;
 use crate::color::Rgb;

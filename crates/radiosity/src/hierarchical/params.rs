@@ -2,6 +2,13 @@
 //! [`Params::validate`] checks), why it may refuse to run ([`HierarchicalError`]), and what it
 //! reports ([`Info`]).
 
+/// Smallest [`Params::link_error`]: the geometry is f32, whose relative precision is
+/// 2⁻²⁴ ≈ 6 × 10⁻⁸, so every form factor between elements carries a relative error of about
+/// 10⁻⁷ from the corners' rounding alone. A link error below that refines links to move power
+/// the geometry cannot place, and the refinement (links grow as the error's inverse square)
+/// runs on without bound; it is refused.
+pub const MIN_LINK_ERROR: f64 = 1e-7;
+
 /// What the hierarchical solver is given.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Params {
@@ -101,8 +108,8 @@ impl Params {
                 range,
             })
         };
-        if !(self.link_error.is_finite() && self.link_error > 0.0) {
-            return bad(Parameter::LinkError, self.link_error, "(0, ∞)");
+        if !(self.link_error.is_finite() && self.link_error >= MIN_LINK_ERROR) {
+            return bad(Parameter::LinkError, self.link_error, "[1e-7, ∞)");
         }
         if !(self.min_area.is_finite() && self.min_area >= 0.0) {
             return bad(Parameter::MinArea, self.min_area, "[0, ∞)");

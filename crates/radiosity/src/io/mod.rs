@@ -11,7 +11,7 @@ pub mod patches_csv;
 pub mod view3d;
 
 pub use format::FileFormat;
-pub use output::{write_atomic, OutputError};
+pub use output::{write_atomic, OutputError, Staged};
 
 use crate::loc::FileLoc;
 use std::path::{Path, PathBuf};

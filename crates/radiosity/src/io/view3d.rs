@@ -38,11 +38,39 @@ impl ViewFactorTable {
     }
 }
 
-/// Write `t` in View3D's text format.
+/// Write `t` in View3D's text format (a dense table; [`write_rows`] writes without one).
 pub fn write(path: &Path, t: &ViewFactorTable) -> Result<(), OutputError> {
     let n = t.n();
+    write_rows(
+        path,
+        &t.area,
+        &t.emissivity,
+        t.enclosure,
+        t.emit,
+        |m: usize, row: &mut [f64]| row.copy_from_slice(&t.f[m * n..(m + 1) * n]),
+    )
+}
+
+/// Write View3D's text format row by row: `row(m, out)` fills `out` (length N) with the
+/// factors from surface m, so no N × N copy is ever held (one row of N values is). `area` and
+/// `emissivity` give N. Rows are asked for in order, 0 to N − 1, once each.
+pub fn write_rows(
+    path: &Path,
+    area: &[f64],
+    emissivity: &[f64],
+    enclosure: bool,
+    emit: bool,
+    mut row: impl FnMut(usize, &mut [f64]),
+) -> Result<(), OutputError> {
+    let n = area.len();
     write_atomic(path, |w| {
-        let header = format!("View3D 3.2 0 {} {} {}", t.enclosure as u8, t.emit as u8, n);
+        if emissivity.len() != n {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!("{} areas but {} emissivities", n, emissivity.len()),
+            ));
+        }
+        let header = format!("View3D 3.2 0 {} {} {}", enclosure as u8, emit as u8, n);
         writeln!(w, "{header:<30}")?;
         let line =
             |w: &mut dyn Write, v: &mut dyn Iterator<Item = String>| -> std::io::Result<()> {
@@ -56,15 +84,22 @@ pub fn write(path: &Path, t: &ViewFactorTable) -> Result<(), OutputError> {
                 }
                 w.write_all(b"\n")
             };
-        line(w, &mut t.area.iter().map(|a| format_g(*a)))?;
+        line(w, &mut area.iter().map(|a| format_g(*a)))?;
+        let mut buf = vec![0.0; n];
         for m in 0..n {
-            line(
-                w,
-                &mut t.f[m * n..(m + 1) * n].iter().map(|v| format!("{v:.6}")),
-            )?;
+            row(m, &mut buf);
+            line(w, &mut buf.iter().map(|v| format!("{v:.6}")))?;
         }
-        line(w, &mut t.emissivity.iter().map(|e| format!("{e:.3}")))
+        line(w, &mut emissivity.iter().map(|e| format!("{e:.3}")))
     })
+}
+
+/// Bytes [`script_f`] holds at once for N surfaces: the dense view factors it is given, the
+/// system matrix, its right-hand side, the solution and the result, N² f64 each (the LU
+/// factors are made in place of a copy of the system: one more).
+pub fn script_f_bytes(n: usize) -> u64 {
+    6u64.saturating_mul(8)
+        .saturating_mul((n as u64).saturating_mul(n as u64))
 }
 
 /// C's `%g`: six significant digits, trailing zeros dropped, exponent form outside 1e-4…1e6.
@@ -98,7 +133,8 @@ fn format_g(v: f64) -> String {
 /// `ε_m [(I − F R)⁻¹ F]_mk ε_k` with R = diag(1 − ε), the fraction of what m would emit as a
 /// black body that k absorbs after any number of diffuse reflections (Hottel & Sarofim,
 /// *Radiative Transfer*, 1967, ch. 3; the "script-F" of View3D's `emit=1`). In a closed
-/// enclosure row m sums to ε_m. Dense LU: O(N³).
+/// enclosure row m sums to ε_m. Dense LU: O(N³) time and [`script_f_bytes`] of memory, which
+/// the caller checks against what is available before calling.
 pub fn script_f(f: &[f64], emissivity: &[f64]) -> Vec<f64> {
     use faer::linalg::solvers::Solve;
     let n = emissivity.len();
@@ -120,6 +156,38 @@ pub fn script_f(f: &[f64], emissivity: &[f64]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Rows streamed from a closure give the same bytes as the dense table.
+    #[test]
+    fn streamed_rows_match_the_dense_table() {
+        let dir = std::env::temp_dir().join(format!("view3d-rows-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let t = ViewFactorTable {
+            area: vec![1.0, 2.5, 1e-5],
+            f: (0..9).map(|k| k as f64 / 9.0).collect(),
+            emissivity: vec![0.9, 0.5, 1.0],
+            enclosure: true,
+            emit: false,
+        };
+        write(&dir.join("a.vs3"), &t).unwrap();
+        write_rows(
+            &dir.join("b.vs3"),
+            &t.area,
+            &t.emissivity,
+            true,
+            false,
+            |m, r| {
+                for (k, v) in r.iter_mut().enumerate() {
+                    *v = (m * 3 + k) as f64 / 9.0;
+                }
+            },
+        )
+        .unwrap();
+        let a = std::fs::read(dir.join("a.vs3")).unwrap();
+        assert_eq!(a, std::fs::read(dir.join("b.vs3")).unwrap());
+        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(script_f_bytes(100_000), 48 * 10_000_000_000);
+    }
 
     #[test]
     fn g_format_matches_c() {

@@ -11,7 +11,7 @@
 //!
 //! Blank lines and lines starting with `#` are skipped; fields may be double-quoted.
 
-use super::Condition;
+use super::{Condition, MAX_FLUX, MAX_TEMPERATURE};
 use crate::io::{at, read_text, InputError};
 use std::path::Path;
 
@@ -133,7 +133,21 @@ pub fn parse_boundary_csv(path: &Path, text: &str) -> Result<Vec<BoundaryRow>, I
                     format!("temperature {t} K of '{name}' is negative (kelvin, ≥ 0)"),
                 ))
             }
+            (Some(t), None) if t > MAX_TEMPERATURE => {
+                return Err(at(
+                    path,
+                    line,
+                    format!("temperature {t:e} K of '{name}' is out of range (give 0 to {MAX_TEMPERATURE:e} K; σT⁴ past that overflows the heat balance)"),
+                ))
+            }
             (Some(t), None) => Condition::Temperature(t),
+            (None, Some(q)) if q.abs() > MAX_FLUX => {
+                return Err(at(
+                    path,
+                    line,
+                    format!("flux {q:e} W/m² of '{name}' is out of range (give −{MAX_FLUX:e} to {MAX_FLUX:e} W/m², the black-body exitance at {MAX_TEMPERATURE:e} K)"),
+                ))
+            }
             (None, Some(q)) => Condition::Flux(q),
             (None, None) => Condition::Adiabatic,
         };

@@ -42,6 +42,19 @@ pub use boundary::{read_boundary_csv, BoundaryRow};
 /// Stefan–Boltzmann constant σ, W m⁻² K⁻⁴ (CODATA 2018, exact in the SI since 2019).
 pub const STEFAN_BOLTZMANN: f64 = 5.670_374_419e-8;
 
+/// Highest temperature accepted, K (a boundary's or the surroundings'): σT⁴ = 5.7 × 10¹⁶ W/m².
+///
+/// σT⁴ itself overflows f64 only past 7.5 × 10⁷⁸ K, but the solve multiplies it by areas and
+/// sums it over patches, and its residual norms square those sums. With T ≤ 10⁶ K, the largest
+/// area f32 coordinates can span (≈ 10⁷⁷ m²) and 10⁹ patches, a power sum stays below 10¹⁰³
+/// and its square below 10²⁰⁶, far from f64's 1.8 × 10³⁰⁸; and 10⁶ K is beyond any grey-body
+/// surface (the Sun's photosphere is 5,772 K).
+pub const MAX_TEMPERATURE: f64 = 1e6;
+
+/// Largest prescribed net flux, W/m² (either sign): just above σ·[`MAX_TEMPERATURE`]⁴, so a
+/// flux can ask for any state the temperature range reaches and no more.
+pub const MAX_FLUX: f64 = 1e17;
+
 /// What is known at a surface besides its emissivity.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Condition {
@@ -270,17 +283,26 @@ impl ThermalSystem {
                 ));
             }
             match b.condition {
-                Condition::Temperature(t) if !(t.is_finite() && t >= 0.0) => {
-                    return bad(format!("boundary {k}: temperature {t} K"))
+                Condition::Temperature(t)
+                    if !(t.is_finite() && (0.0..=MAX_TEMPERATURE).contains(&t)) =>
+                {
+                    return bad(format!(
+                        "boundary {k}: temperature {t} K (give 0 to {MAX_TEMPERATURE:e} K)"
+                    ))
                 }
-                Condition::Flux(q) if !q.is_finite() => {
-                    return bad(format!("boundary {k}: flux {q} W/m²"))
+                Condition::Flux(q) if !(q.is_finite() && q.abs() <= MAX_FLUX) => {
+                    return bad(format!(
+                        "boundary {k}: flux {q} W/m² (give −{MAX_FLUX:e} to {MAX_FLUX:e} W/m²)"
+                    ))
                 }
                 _ => {}
             }
         }
-        if !(self.environment.is_finite() && self.environment >= 0.0) {
-            return bad(format!("environment temperature {} K", self.environment));
+        if !(self.environment.is_finite() && (0.0..=MAX_TEMPERATURE).contains(&self.environment)) {
+            return bad(format!(
+                "environment temperature {} K (give 0 to {MAX_TEMPERATURE:e} K)",
+                self.environment
+            ));
         }
         Ok(())
     }

@@ -224,6 +224,9 @@ struct Reader {
     /// Statements read so far, array repetitions and includes counted: bounded by
     /// [`MAX_STATEMENTS`], so that nested arrays cannot make a small file endless.
     statements: u64,
+    /// Copies made by arrays so far (`xf -a`, `i … -a`), nested arrays multiplied: bounded by
+    /// [`MAX_ARRAY_INSTANCES`] before each array is expanded.
+    instances: u64,
     /// Text of files already read (includes are often repeated).
     cache: HashMap<PathBuf, Lines>,
     colours: HashMap<String, Chroma>,
@@ -306,6 +309,14 @@ pub const MAX_INCLUDE_DEPTH: usize = 64;
 pub const MAX_ARRAY_ELEMENTS: usize = 1 << 20;
 /// Most statements read, array repetitions and includes counted.
 pub const MAX_STATEMENTS: u64 = 4_000_000;
+
+/// Most copies made by all the arrays of a scene together (nested arrays multiplied).
+///
+/// Every copy is at least one polygon, meshed, lit and solved; an array of 10⁴ copies is
+/// already a scene of its own (a floor of 100 × 100 tiles), and the radiosity of 10⁵ copies of
+/// one triangle is a run of hours for one polygon's worth of information. Larger repetition
+/// belongs in a mesh format.
+pub const MAX_ARRAY_INSTANCES: u64 = 10_000;
 
 fn check_elements(path: &Path, line: usize, spec: &XfSpec) -> Result<(), SceneError> {
     if spec.elements() > MAX_ARRAY_ELEMENTS {
@@ -400,11 +411,36 @@ fn basis(a: DVec3) -> (DVec3, DVec3) {
 }
 
 impl Reader {
+    /// Count `copies` more array copies, refusing past [`MAX_ARRAY_INSTANCES`] at `line`.
+    fn count_instances(
+        &mut self,
+        path: &Path,
+        line: usize,
+        copies: usize,
+    ) -> Result<(), SceneError> {
+        if copies <= 1 {
+            return Ok(());
+        }
+        self.instances = self.instances.saturating_add(copies as u64);
+        if self.instances > MAX_ARRAY_INSTANCES {
+            return Err(invalid(
+                path,
+                line,
+                format!(
+                    "transform arrays would make {} copies in all, more than {MAX_ARRAY_INSTANCES}; use fewer copies or a mesh format",
+                    self.instances
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     fn new() -> Self {
         Self {
             open: Vec::new(),
             open_canonical: Vec::new(),
             statements: 0,
+            instances: 0,
             cache: HashMap::new(),
             colours: HashMap::new(),
             colour: Chroma::WHITE,
@@ -631,6 +667,11 @@ impl Reader {
                                 ),
                             ));
                         }
+                        // The block's copies, the enclosing arrays' included, counted once, on
+                        // the enclosing arrays' first pass, before any is made.
+                        if spec.elements() > 1 && frames.iter().all(|f| f.element == 0) {
+                            self.count_instances(path, line, nested)?;
+                        }
                         let m = spec.matrix(0);
                         frames.push(Frame {
                             begin: i,
@@ -650,7 +691,14 @@ impl Reader {
                         return Err(invalid(
                             path,
                             line,
-                            format!("included file '{}' not found", target.display()),
+                            if target.exists() {
+                                format!(
+                                    "included file '{}' is not a regular file (a folder or a device)",
+                                    target.display()
+                                )
+                            } else {
+                                format!("included file '{}' not found", target.display())
+                            },
                         ));
                     }
                     let canon = target.canonicalize().unwrap_or(target.clone());
@@ -669,6 +717,19 @@ impl Reader {
                     }
                     let spec = parse_xf(path, line, &args[1..])?;
                     check_elements(path, line, &spec)?;
+                    self.count_instances(path, line, spec.elements())?;
+                    // Read here, so that a file that cannot be read (a device, a folder, no
+                    // permission) is reported at the include that names it.
+                    if !self.cache.contains_key(&target) {
+                        let lines = read_lines(&target).map_err(|e| {
+                            invalid(
+                                path,
+                                line,
+                                format!("cannot include '{}': {e}", target.display()),
+                            )
+                        })?;
+                        self.cache.insert(target.clone(), Rc::new(lines));
+                    }
                     for e in 0..spec.elements() {
                         self.parse_file(&target, Xf::new(xf.m * spec.matrix(e)))?;
                     }
