@@ -3,8 +3,8 @@
 //! dispatches to them and owns the buffers they share.
 
 use super::{
-    adaptive, analytic, hemicube, hemisphere, monte_carlo, projection, tetrahedron, FormFactorError,
-    FormFactorMethod, Matrix, Params, Storage, DENSE_MAX,
+    adaptive, analytic, hemicube, hemisphere, monte_carlo, projection, tetrahedron,
+    FormFactorError, FormFactorMethod, Matrix, Params, Storage, DENSE_MAX,
 };
 use crate::accel::Bvh;
 use crate::geom::Vec3;

@@ -172,9 +172,7 @@ impl Occluders {
             };
             let mid = (lo + hi) / 2;
             self.order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| {
-                centre(a)[axis]
-                    .total_cmp(&centre(b)[axis])
-                    .then(a.cmp(&b))
+                centre(a)[axis].total_cmp(&centre(b)[axis]).then(a.cmp(&b))
             });
             let first = self.nodes.len();
             for _ in 0..2 {
@@ -277,7 +275,10 @@ fn merge_plane(
                 let b = &polys[j].as_ref().expect("live").0;
                 if let Some(union) = join(a, k, b, u, w, nrm, scale) {
                     let (_, pb) = polys[j].take().expect("live");
-                    let (_, pa) = polys[i].as_mut().map(|p| (&mut p.0, &mut p.1)).expect("live");
+                    let (_, pa) = polys[i]
+                        .as_mut()
+                        .map(|p| (&mut p.0, &mut p.1))
+                        .expect("live");
                     pa.extend(pb);
                     polys[i].as_mut().expect("live").0 = union;
                     touched[i] = true;
