@@ -715,7 +715,7 @@ impl Prepared {
                 err: [0.0; 2],
             });
         }
-        let err = [0, 1].map(|k| (parent.value[k] - sum[k]).abs() / 32.0);
+        let err = [0, 1].map(|k| (parent.value[k] - sum[k]).abs() / 4.0);
         for c in &mut cells[first..] {
             c.err = err;
         }
@@ -1141,9 +1141,10 @@ pub(super) fn row(est: &Estimator, i: usize, scratch: &mut super::Scratch) {
         if j == i {
             continue;
         }
-        let g = prep.exchange(i, j, est.bvh, &mut scratch.adaptive);
+        // Rounded as the whole matrix rounds it, so the two give the same bits.
+        let g = prep.exchange(i, j, est.bvh, &mut scratch.adaptive) as f32;
         if g > 0.0 {
-            scratch.add(j as u32, g / ai);
+            scratch.add(j as u32, g as f64 / ai);
         }
     }
     prep.flush(&mut scratch.adaptive.stats);
