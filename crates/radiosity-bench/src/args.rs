@@ -25,6 +25,7 @@ const EXAMPLES: &str = "Examples:
   radiosity-bench rays hosp.mgf --one-sided --rays 2000000
   radiosity-bench scale hosp.mgf --one-sided --sizes 25000,100000 --solver stochastic-jacobi
   radiosity-bench pictures cornell --out pictures
+  radiosity-bench canyon --sizes 500,2000,8000 --closed
   mpirun -np 2 radiosity-bench ranks hosp.mgf --one-sided --patches 100000";
 
 /// The measurements.
@@ -48,6 +49,10 @@ pub enum Mode {
     /// The full face-to-face view-factor matrix of the built-in `city` (19,847 facets) by
     /// monte-carlo and by hemicube, with time and peak memory (`radiosity bench --city`).
     City,
+    /// The adaptive view factors against Monte Carlo on urban canyons written as View3D files
+    /// (3 × 3 box buildings on a ground plane, facets of about equal size): time, CPU time,
+    /// row sums (exact closure with `--closed`), what the method did.
+    Canyon(CanyonArgs),
     /// The distributed methods (Jacobi on stored rows, stochastic Jacobi) on SCENE over the
     /// ranks of this run (run it under `mpirun -np K`; alone it is one rank): time per stage,
     /// per iteration, bytes exchanged, load balance and parallel efficiency against one rank
@@ -75,6 +80,26 @@ pub struct RunsArgs {
     /// Repetitions of each measurement (the median is reported).
     #[arg(long, value_name = "K", default_value_t = 5)]
     pub runs: usize,
+}
+
+/// `canyon`.
+#[derive(Debug, Args)]
+pub struct CanyonArgs {
+    /// About how many facets each canyon has.
+    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1.., default_value = "500,2000,8000")]
+    pub sizes: Vec<usize>,
+    /// Close the canyon with a faceted lid and sides (every row of F then sums to 1).
+    #[arg(long)]
+    pub closed: bool,
+    /// Monte Carlo rays per row.
+    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    pub rays: u32,
+    /// The adaptive method's accuracy.
+    #[arg(long, value_name = "E", default_value_t = radiosity::formfactor::DEFAULT_ACCURACY)]
+    pub accuracy: f64,
+    /// Folder for the View3D files (created if missing).
+    #[arg(long, value_name = "DIR", default_value = "canyon")]
+    pub out: std::path::PathBuf,
 }
 
 /// `cornell`.

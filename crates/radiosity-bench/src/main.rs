@@ -4,6 +4,7 @@
 mod accuracy;
 mod args;
 mod bookkeeping;
+mod canyon;
 mod cornell;
 #[cfg(feature = "embree")]
 mod embree;
@@ -65,6 +66,7 @@ fn run(mode: Mode, threads: Option<usize>) -> Result<()> {
         Mode::Solvers(a) => cornell::solvers(&a),
         Mode::FormFactors(a) => cornell::form_factor_table(a.runs),
         Mode::City => cornell::city(),
+        Mode::Canyon(a) => canyon::run(&a),
         Mode::Ranks(a) => ranks::run(&a),
         Mode::Scale(a) => scale::run(&a, threads),
         Mode::Pictures(a) => pictures::run(&a),

@@ -192,7 +192,8 @@ const EXAMPLES_SOLVE_SYSTEM: &str = "Examples:
 const EXAMPLES_FORM_FACTORS: &str = "Examples:
   radiosity form-factors room.obj --faces --rays 1000000 -o F.mtx --patches-out faces.csv
   radiosity form-factors cube-dim --method hemicube --resolution 256 --symmetrize -o F.mtx
-  radiosity form-factors room.vs3 --format view3d -o room.vf";
+  radiosity form-factors room.vs3 --format view3d -o room.vf
+  radiosity form-factors room.obj --faces --method adaptive --accuracy 1e-6 -o F.mtx";
 
 const EXAMPLES_EXPERIMENT: &str = "Examples:
   radiosity experiment convergence --out docs/experiments
@@ -454,8 +455,12 @@ pub struct ThermalArgs {
     #[arg(long, value_name = "L", help_heading = MESHING)]
     pub max_edge: Option<f32>,
     /// The form-factor method.
-    #[arg(long = "form-factor-method", visible_alias = "form-factors", value_name = "M", value_enum, default_value = "monte-carlo", help_heading = FORM_FACTORS)]
+    #[arg(long = "form-factor-method", visible_alias = "form-factors", value_name = "M", value_enum, default_value = "adaptive", help_heading = FORM_FACTORS)]
     pub method: FormFactorArg,
+    /// adaptive: the accuracy E of every entry of F (relative where a pair sees itself whole,
+    /// absolute where an occluder stands between; see docs/heat-transfer.md).
+    #[arg(long, value_name = "E", default_value_t = radiosity::formfactor::DEFAULT_ACCURACY, help_heading = FORM_FACTORS)]
+    pub accuracy: f64,
     /// Monte Carlo rays per row (default: 10⁶ up to 100 patches, then 10⁸/N, at least 10⁴).
     #[arg(long, value_name = "N", help_heading = FORM_FACTORS)]
     pub rays: Option<u32>,
@@ -533,9 +538,14 @@ pub struct ExperimentArgs {
 pub struct FormFactorsArgs {
     /// A built-in scene or a scene file (.obj, .mgf, .gltf, .glb, .ply, .vs3).
     pub scene: String,
-    /// The form-factor method.
-    #[arg(long, value_name = "M", value_enum, default_value = "monte-carlo", help_heading = FORM_FACTORS)]
-    pub method: FormFactorArg,
+    /// The form-factor method [default: adaptive for a View3D .vs3 scene, monte-carlo
+    /// otherwise].
+    #[arg(long, value_name = "M", value_enum, help_heading = FORM_FACTORS)]
+    pub method: Option<FormFactorArg>,
+    /// adaptive: the accuracy E of every entry of F (relative where a pair sees itself whole,
+    /// absolute where an occluder stands between; see docs/heat-transfer.md).
+    #[arg(long, value_name = "E", default_value_t = radiosity::formfactor::DEFAULT_ACCURACY, help_heading = FORM_FACTORS)]
+    pub accuracy: f64,
     /// P: pixels along a hemicube/tetrahedron face, cells across the hemisphere's disc.
     #[arg(long, value_name = "P", default_value_t = 128, help_heading = FORM_FACTORS)]
     pub resolution: u32,

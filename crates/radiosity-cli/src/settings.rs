@@ -41,23 +41,40 @@ pub fn form_factor_numbers(resolution: u32, samples: u32, rays: Option<u32>) -> 
         ..FormFactorParams::default()
     }
     .validate()
-    .map_err(|e| {
-        let FormFactorError::Parameter {
+    .map_err(flag_error_of_form_factors)
+}
+
+/// `--accuracy` in range, by the library's check.
+pub fn accuracy(accuracy: f64) -> Result<()> {
+    FormFactorParams {
+        accuracy,
+        ..FormFactorParams::default()
+    }
+    .validate()
+    .map_err(flag_error_of_form_factors)
+}
+
+/// A form-factor parameter error as the flag's one-line message.
+fn flag_error_of_form_factors(e: FormFactorError) -> anyhow::Error {
+    match e {
+        FormFactorError::Parameter {
             parameter,
             value,
             min,
             max,
             ..
-        } = e;
-        anyhow::anyhow!(
+        } => anyhow::anyhow!(
             "{} {value}: must be in [{min}, {max}] ({parameter})",
             match parameter {
                 Parameter::Resolution => "--resolution",
                 Parameter::Samples => "--samples",
                 Parameter::Rays => "--rays",
             }
-        )
-    })
+        ),
+        FormFactorError::Accuracy { value, min, max } => {
+            anyhow::anyhow!("--accuracy {value}: must be in [{min:e}, {max}]")
+        }
+    }
 }
 
 /// Library settings from the shared solve options.
@@ -142,6 +159,9 @@ pub fn flag_of(e: &(dyn std::error::Error + 'static)) -> Option<&'static str> {
             Parameter::Samples => "--samples",
             Parameter::Rays => "--rays",
         });
+    }
+    if let Some(FormFactorError::Accuracy { .. }) = e.downcast_ref() {
+        return Some("--accuracy");
     }
     if let Some(HierarchicalError::Parameter { parameter, .. }) = e.downcast_ref() {
         return Some(match parameter {

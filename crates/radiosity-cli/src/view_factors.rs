@@ -3,7 +3,9 @@
 use crate::args::{FormFactorsArgs, MatrixFormatArg};
 use anyhow::{bail, Result};
 use radiosity::export::{write_patch_table, PatchRow};
-use radiosity::formfactor::{aggregate, enforce, summary, Enforce, Params, Storage};
+use radiosity::formfactor::{
+    aggregate, enforce, summary, Enforce, FormFactorMethod, Params, Storage,
+};
 use radiosity::geom::Vec3;
 use radiosity::io::{matrix_market, FileFormat};
 use radiosity::mesh::{Mesh, MeshParams};
@@ -18,8 +20,8 @@ fn ext_is(path: &std::path::Path, format: FileFormat) -> bool {
 
 /// Run the command.
 pub fn run(a: FormFactorsArgs) -> Result<()> {
-    let method = a.method.0;
     crate::settings::form_factor_numbers(a.resolution, a.samples, Some(a.rays))?;
+    crate::settings::accuracy(a.accuracy)?;
     let storage: Storage = a.storage.into();
     let view3d = match a.format {
         Some(MatrixFormatArg::View3d) => true,
@@ -45,6 +47,12 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     }
     let is_vs3 = FileFormat::from_path(Path::new(&a.scene)) == Some(FileFormat::Vs3)
         && Path::new(&a.scene).exists();
+    // View3D's users expect View3D's accuracy: the adaptive method is their default.
+    let method = match a.method {
+        Some(m) => m.0,
+        None if is_vs3 => FormFactorMethod::Adaptive,
+        None => FormFactorMethod::MonteCarlo,
+    };
     // View3D's users and output think in surfaces.
     let mesh_params =
         if a.faces || ((is_vs3 || view3d) && a.patches.is_none() && a.max_edge.is_none()) {
@@ -60,7 +68,7 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         }
         if !v.control.unmapped.is_empty() {
             eprintln!(
-                "radiosity: warning: {}: control {} ignored: parameters of View3D's own integrator (accuracy here is set by --method and --rays)",
+                "radiosity: warning: {}: control {} ignored: parameters of View3D's own integrator (accuracy here is set by --method and --accuracy or --rays)",
                 a.scene,
                 v.control.unmapped.join(", ")
             );
@@ -79,6 +87,7 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         samples: a.samples,
         rays: a.rays,
         seed: a.seed,
+        accuracy: a.accuracy,
         ..Params::default()
     };
     let bar = indicatif::ProgressBar::new(0);
@@ -128,7 +137,16 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     let matrix = matrix.expect("rank 0 holds the matrix");
     let mesh = &mesh;
     if view3d {
-        return write_view3d(&a, &scene, vs3.as_ref(), mesh, &matrix, &area, compute_s);
+        return write_view3d(
+            &a,
+            method,
+            &scene,
+            vs3.as_ref(),
+            mesh,
+            &matrix,
+            &area,
+            compute_s,
+        );
     }
 
     // One row per face, or per patch.
@@ -187,11 +205,13 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
             scene.place()
         ),
         format!(
-            "method {method}, resolution {}, samples {}, rays {}, seed {}, {}",
-            a.resolution,
-            a.samples,
-            a.rays,
-            a.seed,
+            "method {method}, {}, {}",
+            match method {
+                FormFactorMethod::Adaptive => format!("accuracy {:e}", a.accuracy),
+                FormFactorMethod::Analytic => "exact, occlusion ignored".to_string(),
+                FormFactorMethod::MonteCarlo => format!("rays {}, seed {}", a.rays, a.seed),
+                _ => format!("resolution {}, samples {}", a.resolution, a.samples),
+            },
             if faces {
                 "one row per face".to_string()
             } else {
@@ -250,8 +270,10 @@ fn too_big(e: radiosity::Error) -> anyhow::Error {
 
 /// `--format view3d`: one row per View3D surface (combined pieces merged, obstructions left
 /// out) or per input face, enclosure and exchange factors as the .vs3 control line says.
+#[allow(clippy::too_many_arguments)]
 fn write_view3d(
     a: &FormFactorsArgs,
+    method: FormFactorMethod,
     scene: &Scene,
     vs3: Option<&vs3::Vs3>,
     mesh: &Mesh,
@@ -360,7 +382,7 @@ fn write_view3d(
             ""
         }
     );
-    println!("method      {} in {compute_s:.3} s", a.method.0);
+    println!("method      {method} in {compute_s:.3} s");
     println!("row sums    {:.6} … {:.6}", s.min_row_sum, s.max_row_sum);
     println!(
         "reciprocity worst |A_i F_ij − A_j F_ji| / mean area = {:.3e}",

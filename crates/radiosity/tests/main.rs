@@ -1,5 +1,6 @@
 //! Integration tests of the library: physics against closed forms and invariants.
 
+mod adaptive;
 mod distributed;
 mod formfactors;
 mod interchange;

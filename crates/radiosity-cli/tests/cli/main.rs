@@ -13,6 +13,7 @@ mod common;
 #[path = "../../../radiosity/tests/validator.rs"]
 mod validator;
 
+mod adaptive;
 mod errors;
 mod experiment;
 mod form_factors;

@@ -185,6 +185,21 @@ pub fn polygon_factor(
     nj: DVec3,
     scratch: &mut Scratch,
 ) -> f64 {
+    polygon_factor_tol(pi, ni, area_i, pj, nj, 1e-13, scratch)
+}
+
+/// [`polygon_factor`] with each edge pair's outer integral to the relative tolerance `tol`
+/// (of the integral of its integrand's magnitude) instead of 1e-13: the adaptive method asks
+/// for what its accuracy needs.
+pub fn polygon_factor_tol(
+    pi: &[DVec3],
+    ni: DVec3,
+    area_i: f64,
+    pj: &[DVec3],
+    nj: DVec3,
+    tol: f64,
+    scratch: &mut Scratch,
+) -> f64 {
     // A polygon lying in the other's plane sees it at cos θ = 0 everywhere: F = 0 exactly (the
     // contour integral would reach 0 only through the cancellation of singular terms).
     let size = pi
@@ -227,7 +242,7 @@ pub fn polygon_factor(
             }
             let f = |s: f64| log_distance_integral(pa + ep * s, qa, eq);
             let (first, _, abs) = gk15(&f, 0.0, 1.0);
-            let tol = 1e-13 * abs.max(first.abs()).max(1e-300);
+            let tol = tol * abs.max(first.abs()).max(1e-300);
             sum += dot * adaptive(&f, 0.0, 1.0, tol, 24);
         }
     }

@@ -3,8 +3,8 @@
 //! dispatches to them and owns the buffers they share.
 
 use super::{
-    analytic, hemicube, hemisphere, monte_carlo, projection, tetrahedron, FormFactorError,
-    FormFactorMethod, Matrix, Params, Storage, DENSE_MAX,
+    adaptive, analytic, hemicube, hemisphere, monte_carlo, projection, tetrahedron,
+    FormFactorError, FormFactorMethod, Matrix, Params, Storage, DENSE_MAX,
 };
 use crate::accel::Bvh;
 use crate::geom::Vec3;
@@ -22,6 +22,7 @@ pub struct Scratch {
     pub(super) buffers: projection::Buffers,
     pub(super) mc: monte_carlo::RowScratch,
     pub(super) analytic: analytic::Scratch,
+    pub(super) adaptive: adaptive::Scratch,
     pub(super) points: Vec<(Vec3, f64)>,
     pub(super) poly_i: Vec<DVec3>,
     pub(super) poly_j: Vec<DVec3>,
@@ -58,6 +59,7 @@ pub struct Estimator<'a> {
     pub(super) cells: Vec<(f32, f32, f32)>,
     pub(super) near: f32,
     pub(super) offset: f32,
+    pub(super) adaptive: Option<adaptive::Prepared>,
 }
 
 impl<'a> Estimator<'a> {
@@ -83,6 +85,8 @@ impl<'a> Estimator<'a> {
             cells,
             near: bvh.ray_offset() * 0.25,
             offset: bvh.ray_offset(),
+            adaptive: (params.method == FormFactorMethod::Adaptive)
+                .then(|| adaptive::Prepared::new(mesh, params.accuracy)),
         })
     }
 
@@ -99,6 +103,11 @@ impl<'a> Estimator<'a> {
     /// Its parameters.
     pub fn params(&self) -> &Params {
         &self.params
+    }
+
+    /// What the adaptive method prepared (its counts so far), when that is the method.
+    pub fn adaptive(&self) -> Option<&adaptive::Prepared> {
+        self.adaptive.as_ref()
     }
 
     /// Row i of F, `(j, F_ij)` sorted by j, into `out`, with the parameters' effort
@@ -136,6 +145,7 @@ impl<'a> Estimator<'a> {
             FormFactorMethod::Tetrahedron => tetrahedron::row(self, i, scratch),
             FormFactorMethod::Hemisphere => hemisphere::row(self, i, scratch),
             FormFactorMethod::Analytic => analytic::row(self, i, scratch),
+            FormFactorMethod::Adaptive => adaptive::row(self, i, scratch),
         }
         scratch.touched.sort_unstable();
         out.clear();
@@ -151,6 +161,10 @@ impl<'a> Estimator<'a> {
     /// Every row, in parallel (deterministic), stored as asked. `observer` hears of
     /// [`Stage::FormFactors`] and of each row done (from worker threads).
     pub fn matrix(&self, storage: Storage, observer: &dyn Observer) -> Matrix {
+        if self.params.method == FormFactorMethod::Adaptive {
+            // Each pair once, both entries from its exchange area.
+            return adaptive::matrix(self, storage, observer);
+        }
         let n = self.mesh.len();
         observer.event(Event::Stage(Stage::FormFactors));
         let done = std::sync::atomic::AtomicU64::new(0);

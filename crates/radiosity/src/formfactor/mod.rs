@@ -6,7 +6,9 @@
 //! - [`hemicube`] and [`tetrahedron`]: z-buffer projections through the shared [`projection`];
 //! - [`hemisphere`]: Nusselt's analog by casting rays through a disc of cells;
 //! - [`monte_carlo`]: eq. 7, ray shooting;
-//! - [`analytic`]: the exact unoccluded polygon-to-polygon factor.
+//! - [`analytic`]: the exact unoccluded polygon-to-polygon factor;
+//! - [`adaptive`]: each pair to a requested accuracy, exact when unoccluded, shadows clipped
+//!   exactly where occluders stand between (occluders and shafts in [`shaft`]).
 //!
 //! One [`Params`] serves them all. [`Estimator`] computes rows with any of them, and whole
 //! matrices in parallel, dense or sparse; [`OnDemandRows`] hands rows to the solvers when they
@@ -15,6 +17,7 @@
 //! matrix physical, [`summary()`] describes one, [`quadrature`] spreads points over a patch.
 //! This module produces linear systems and knows nothing of the solvers.
 
+pub mod adaptive;
 pub mod analytic;
 pub mod closed_form;
 pub mod enforce;
@@ -25,6 +28,7 @@ pub mod monte_carlo;
 pub mod on_demand;
 pub mod projection;
 pub mod quadrature;
+pub mod shaft;
 pub mod summary;
 pub mod tetrahedron;
 
@@ -66,16 +70,19 @@ pub enum FormFactorMethod {
     MonteCarlo,
     /// Exact unoccluded contour integral ([`analytic`]).
     Analytic,
+    /// Every pair to a requested accuracy, occlusion by exact clipping ([`adaptive`]).
+    Adaptive,
 }
 
 impl FormFactorMethod {
     /// Every method.
-    pub const ALL: [FormFactorMethod; 5] = [
+    pub const ALL: [FormFactorMethod; 6] = [
         FormFactorMethod::Hemicube,
         FormFactorMethod::Hemisphere,
         FormFactorMethod::Tetrahedron,
         FormFactorMethod::MonteCarlo,
         FormFactorMethod::Analytic,
+        FormFactorMethod::Adaptive,
     ];
 
     /// The command-line name.
@@ -86,6 +93,7 @@ impl FormFactorMethod {
             FormFactorMethod::Tetrahedron => "tetrahedron",
             FormFactorMethod::MonteCarlo => "monte-carlo",
             FormFactorMethod::Analytic => "analytic",
+            FormFactorMethod::Adaptive => "adaptive",
         }
     }
 
@@ -101,6 +109,9 @@ impl FormFactorMethod {
                 "ray shooting (Szirmay-Kalos & Márton 1995, eq. 7); rows on demand for shooting"
             }
             FormFactorMethod::Analytic => "exact contour integral, ignoring occlusion",
+            FormFactorMethod::Adaptive => {
+                "each pair to --accuracy: exact contour integrals, shadows clipped exactly (View3D's approach)"
+            }
         }
     }
 
@@ -135,6 +146,9 @@ pub struct Params {
     /// Rows computed on demand ([`OnDemandRows`]): memory budget of their cache, bytes. Rows
     /// beyond it are recomputed when needed; 0 keeps only the last row (O(N) memory).
     pub cache_bytes: usize,
+    /// Adaptive: the accuracy E of each entry (relative for pairs that see each other whole,
+    /// absolute for occluded ones; see [`adaptive`]).
+    pub accuracy: f64,
 }
 
 impl Default for Params {
@@ -149,9 +163,17 @@ impl Default for Params {
             max_rays: 1 << 24,
             seed: 1,
             cache_bytes: 2 << 30,
+            accuracy: DEFAULT_ACCURACY,
         }
     }
 }
+
+/// The adaptive method's default accuracy ([`Params::accuracy`]).
+pub const DEFAULT_ACCURACY: f64 = 1e-5;
+
+/// The range of [`Params::accuracy`]: below 1e-10 the f32 geometry and the stored f32 entries
+/// cannot follow; above 0.1 it is no longer an accuracy.
+pub const ACCURACY_RANGE: (f64, f64) = (1e-10, 0.1);
 
 impl Params {
     /// The preset for shooting solvers on a scene: Monte Carlo rows on demand with 256 rays for
@@ -196,7 +218,7 @@ impl Params {
 
     /// Check every parameter against its range, whichever the method reads (an impossible
     /// value is refused even where the method would ignore it): the resolution in [2, 8192],
-    /// at least one sample point and one ray a row. The one check the command line, the
+    /// at least one sample point and one ray a row, the accuracy in [`ACCURACY_RANGE`]. The one check the command line, the
     /// Python bindings and the pipelines share.
     pub fn validate(&self) -> Result<(), FormFactorError> {
         let range = |parameter, value: u32, min: u32, max: u32| {
@@ -214,7 +236,16 @@ impl Params {
         };
         range(Parameter::Resolution, self.resolution, 2, MAX_RESOLUTION)?;
         range(Parameter::Samples, self.samples, 1, u32::MAX)?;
-        range(Parameter::Rays, self.rays, 1, u32::MAX)
+        range(Parameter::Rays, self.rays, 1, u32::MAX)?;
+        let (lo, hi) = ACCURACY_RANGE;
+        if !(self.accuracy >= lo && self.accuracy <= hi) {
+            return Err(FormFactorError::Accuracy {
+                value: self.accuracy,
+                min: lo,
+                max: hi,
+            });
+        }
+        Ok(())
     }
 }
 
@@ -258,6 +289,16 @@ pub enum FormFactorError {
         min: u32,
         /// Largest allowed.
         max: u32,
+    },
+    /// The adaptive method's accuracy is out of its range (or not a number).
+    #[error("accuracy {value} is outside [{min:e}, {max}]")]
+    Accuracy {
+        /// Its value.
+        value: f64,
+        /// Smallest allowed.
+        min: f64,
+        /// Largest allowed.
+        max: f64,
     },
 }
 

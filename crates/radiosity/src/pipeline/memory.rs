@@ -38,7 +38,7 @@ impl MemoryCheck {
                     ((p.resolution as u64).pow(2) * 3 * p.samples as u64).min(u32::MAX as u64)
                         as u32
                 }
-                M::Analytic => u32::MAX,
+                M::Analytic | M::Adaptive => u32::MAX,
             },
         }
     }

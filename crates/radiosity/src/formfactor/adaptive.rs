@@ -1,0 +1,1215 @@
+//! Adaptive view factors: each pair of patches to a requested accuracy, exact where the pair
+//! sees itself whole, with the shadows cut out exactly where something stands between.
+//!
+//! For two patches `a` and `b` the method computes the exchange area
+//! `A_a F_ab = A_b F_ba = (1/π) ∫_a ∫_b V cos θ_a cos θ_b / r² dA_b dA_a` (Szirmay-Kalos & Márton
+//! 1995, eq. 6, times `A_a`) once, and both entries follow from it, so reciprocity holds to the
+//! rounding of the stored `f32`. A pair is one of:
+//!
+//! - **Not facing**: each polygon is clipped to the other's front half-space; when either part
+//!   is empty the factor is 0 and nothing more is done.
+//! - **Unoccluded** (no occluder meets the convex hull of the two polygons, see
+//!   [`shaft`](super::shaft)): far apart, a Gauss–Legendre product rule of the point kernel
+//!   `cos θ_a cos θ_b / (π r²)` with m × m points on each patch, m = 1, 2, 3, 4, until two
+//!   successive orders agree within the relative accuracy (the difference bounds the error of
+//!   the lower order, so the higher one is kept with a margin); the rule converges
+//!   geometrically, the faster the farther apart the pair is. Close (gap below twice the larger
+//!   patch's radius), straddling the other's plane, or not converged by m = 4: the exact
+//!   contour integral of [`analytic`](super::analytic), which handles shared edges and
+//!   corners, to the same relative accuracy.
+//! - **Occluded** (some occluder meets the hull): the visible part is integrated by *exact
+//!   polygon clipping* at points of the smaller patch, the approach of View3D (Walton 2002,
+//!   "Calculation of Obstructed View Factors by Adaptive Integration", NISTIR 6925): from a
+//!   point `x`, each candidate occluder (clipped to the space between the two planes) casts a
+//!   pyramid from `x`; the receiver is cut by each pyramid's side planes into convex pieces
+//!   outside it (Sutherland–Hodgman), and the exact point-to-polygon factor of the visible
+//!   pieces (Lambert's contour formula, `F = (1/2π) Σ_edges γ_k n·ĝ_k`) is the inner integral,
+//!   with no sampling error. The outer integral over the smaller patch is adaptive: cells of
+//!   its parameter square (bilinear for a quad, collapsed for a triangle), each with a 2 × 2
+//!   Gauss rule and its centre point as the error estimate, the cell with the largest estimate
+//!   split in four until the estimates add up to the tolerance (or [`MAX_CELLS`] cells).
+//!   The visible factor is continuous in `x` and smooth between penumbra boundaries, so the
+//!   error falls as the cells along a boundary shrink. If no point sees any shadow on the
+//!   receiver, the pair is taken as unoccluded; if every point sees none of it, as hidden.
+//!
+//! Why clipping rather than sampling visibility with rays: a ray sample's error on a partly
+//! shadowed pair falls as n^(−1/2) (stratified, in four dimensions, n^(−5/8)), so a factor
+//! to 10⁻⁵ of its value takes 10⁸ rays; clipping makes the inner integral exact, and the outer
+//! one is a continuous, piecewise-smooth function of two variables whose error an embedded
+//! rule estimates and subdivision drives down. Subdividing the pair into sub-pairs with
+//! visibility fractions from rays keeps the sampling error at the shadow boundaries. The
+//! price is that a shadow is cut per point and per occluder, so coplanar patches are merged
+//! into few convex occluders first ([`shaft`](super::shaft)).
+//!
+//! Accuracy `E` ([`Params::accuracy`](super::Params::accuracy)): an unoccluded pair to a
+//! relative `E` (so a row of many small entries sums to within `E` of its exact sum as well);
+//! an occluded one to an absolute `E` on both of its entries (`E` times the smaller area on the
+//! exchange area): their errors change sign from pair to pair with where the shadows fall, and
+//! the row sums' errors measured on closed scenes are given in docs/heat-transfer.md.
+//! The cost is a constant per facing pair plus the shadow work of the occluded ones:
+//! near-linear in the number of pairs that see each other. Rows are computed in parallel, each
+//! pair by a deterministic rule, so the matrix does not depend on the thread count.
+
+use super::analytic;
+use super::shaft::{patch_polygon, Occluders, Shaft};
+use super::{Estimator, Matrix, Storage};
+use crate::accel::Bvh;
+use crate::geom::Ray;
+use crate::mesh::Mesh;
+use crate::observe::{Event, Observer, Stage};
+use crate::system::{Entry, SparseMatrix};
+use glam::DVec3;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+/// Most cells of the outer integral of one occluded pair (each four visibility evaluations).
+pub const MAX_CELLS: usize = 256;
+
+/// Most occluders shadowing one occluded pair for exact clipping: the exact shadow of each is
+/// cut from every visible piece of the receiver at every point, so that work grows as their
+/// number times the pieces; beyond it the pair is sampled ([`Prepared::sampled`]).
+pub const MAX_ACTIVE: usize = 16;
+
+/// Gauss orders of the unoccluded product rule.
+const ORDERS: usize = 4;
+/// Offsets of order m's points in a patch's rule table (1 + 4 + 9 + 16 = 30 points).
+const RULE_START: [usize; ORDERS + 1] = [0, 1, 5, 14, 30];
+
+/// A pair whose gap is below this many times the larger patch's radius goes to the contour
+/// integral (the product rule would need high orders there).
+const NEAR: f64 = 2.0;
+
+/// Largest number of occluders for which the candidates of every pair of occluders are found
+/// once, before the rows, and each pair of patches only filters its groups' list.
+const GROUP_TABLE_MAX: usize = 2048;
+
+/// What the method did, for benchmarks and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Pairs (each unordered pair counted once) that face each other.
+    pub facing: u64,
+    /// Of those, pairs with no occluder in their hull done by the product rule.
+    pub product_rule: u64,
+    /// Pairs done by the exact contour integral (near, straddling, or not converged).
+    pub contour: u64,
+    /// Pairs with an occluder in their hull.
+    pub occluded: u64,
+    /// Occluded pairs on which no evaluated point saw a shadow (then done as unoccluded).
+    pub occluded_clear: u64,
+    /// Occluded pairs hidden at every evaluated point.
+    pub occluded_hidden: u64,
+    /// Visibility evaluations (points of the outer integral of occluded pairs).
+    pub points: u64,
+    /// Occluded pairs that stopped at [`MAX_CELLS`] before the tolerance.
+    pub capped: u64,
+    /// Occluded pairs shadowed by more than [`MAX_ACTIVE`] occluders, done by sampling.
+    pub sampled: u64,
+    /// Visibility rays cast for them.
+    pub rays: u64,
+}
+
+#[derive(Debug, Default)]
+struct Counters {
+    facing: AtomicU64,
+    product_rule: AtomicU64,
+    contour: AtomicU64,
+    occluded: AtomicU64,
+    occluded_clear: AtomicU64,
+    occluded_hidden: AtomicU64,
+    points: AtomicU64,
+    capped: AtomicU64,
+    sampled: AtomicU64,
+    rays: AtomicU64,
+}
+
+/// One patch in f64.
+#[derive(Clone, Copy, Debug)]
+struct Patch {
+    v: [DVec3; 4],
+    nv: usize,
+    normal: DVec3,
+    centre: DVec3,
+    radius: f64,
+    /// Area as the mesh holds it (the entries are divided by it, as the summaries multiply).
+    area: f64,
+}
+
+impl Patch {
+    fn corners(&self) -> &[DVec3] {
+        &self.v[..self.nv]
+    }
+}
+
+/// The candidate occluders of each pair of occluders (groups), found once.
+#[derive(Debug)]
+struct GroupTable {
+    groups: usize,
+    /// `(start, len)` into `candidates` for `(g, h)`, `g ≤ h`, at `g · groups + h`;
+    /// `len == NOT_FACING` when no part of one faces the other.
+    ranges: Vec<(u32, u32)>,
+    candidates: Vec<u32>,
+}
+
+const NOT_FACING: u32 = u32::MAX;
+
+/// What the method prepares once per mesh: the patches in f64, their Gauss points, the
+/// occluders and their tree, and the candidates per pair of occluders.
+#[derive(Debug)]
+pub struct Prepared {
+    patches: Vec<Patch>,
+    rule: Vec<(DVec3, f64)>,
+    occluders: Occluders,
+    table: Option<GroupTable>,
+    accuracy: f64,
+    counters: Counters,
+}
+
+/// Per-thread buffers: nothing is allocated per pair once they are warm.
+#[derive(Debug, Default)]
+pub struct Scratch {
+    pa: Vec<DVec3>,
+    pb: Vec<DVec3>,
+    tmp: Vec<DVec3>,
+    shaft: Shaft,
+    stack: Vec<u32>,
+    found: Vec<u32>,
+    /// Occluders of the pair clipped to the space between the planes: corners and ranges.
+    occ: Vec<DVec3>,
+    occ_range: Vec<(u32, u32)>,
+    occ_centre: Vec<DVec3>,
+    occ_normal: Vec<DVec3>,
+    /// Visible pieces of the receiver: corners and ranges, current and next.
+    pieces: Vec<DVec3>,
+    ranges: Vec<(u32, u32)>,
+    next: Vec<DVec3>,
+    next_ranges: Vec<(u32, u32)>,
+    inside: Vec<DVec3>,
+    outside: Vec<DVec3>,
+    cone: Vec<DVec3>,
+    cells: Vec<Cell>,
+    /// Occluders that shadow the receiver from part of the outer patch, the separating
+    /// planes bounding each one's region, their corners (Ω's points) and Ω.
+    active: Vec<u32>,
+    planes: Vec<(DVec3, f64)>,
+    plane_range: Vec<(u32, u32)>,
+    omega: Vec<DVec3>,
+    flat: Vec<(f64, f64, u32)>,
+    hull: Vec<DVec3>,
+    analytic: analytic::Scratch,
+    stats: Stats,
+}
+
+/// A cell of the outer integral: region (triangle or quad of the fan), its square
+/// `[u0, u0 + h] × [v0, v0 + h]` in the region's parameters, its 2 × 2 Gauss values and their
+/// errors.
+#[derive(Clone, Copy, Debug)]
+struct Cell {
+    region: u8,
+    u0: f64,
+    v0: f64,
+    h: f64,
+    /// The factor lost to shadows, and the factor still seen, over the cell.
+    value: [f64; 2],
+    /// Their error estimates.
+    err: [f64; 2],
+}
+
+impl Prepared {
+    /// Prepare `mesh` for accuracy `accuracy`.
+    pub fn new(mesh: &Mesh, accuracy: f64) -> Prepared {
+        let n = mesh.len();
+        let polys: Vec<Vec<DVec3>> = (0..n).map(|k| patch_polygon(mesh, k)).collect();
+        let patches: Vec<Patch> = polys
+            .iter()
+            .zip(&mesh.patches)
+            .map(|(p, mp)| {
+                let mut v = [DVec3::ZERO; 4];
+                v[..p.len()].copy_from_slice(p);
+                let mut s = DVec3::ZERO;
+                for k in 1..p.len() - 1 {
+                    s += (p[k] - p[0]).cross(p[k + 1] - p[0]);
+                }
+                let normal = s.normalize_or_zero();
+                let centre = p.iter().copied().sum::<DVec3>() / p.len() as f64;
+                let radius = p.iter().map(|q| (*q - centre).length()).fold(0.0, f64::max);
+                Patch {
+                    v,
+                    nv: p.len(),
+                    normal,
+                    centre,
+                    radius,
+                    area: mp.area as f64,
+                }
+            })
+            .collect();
+        let rule = patches.iter().flat_map(gauss_points).collect();
+        let scale = mesh
+            .vertices
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs().max_element() as f64))
+            .max(f64::MIN_POSITIVE);
+        let normals: Vec<DVec3> = patches.iter().map(|p| p.normal).collect();
+        let occluders = Occluders::build(&polys, &normals, scale);
+        let table = (occluders.len() <= GROUP_TABLE_MAX && occluders.len() * 4 <= n.max(4))
+            .then(|| group_table(&occluders));
+        Prepared {
+            patches,
+            rule,
+            occluders,
+            table,
+            accuracy,
+            counters: Counters::default(),
+        }
+    }
+
+    /// Number of merged occluders.
+    pub fn occluders(&self) -> usize {
+        self.occluders.len()
+    }
+
+    /// The counts so far.
+    pub fn stats(&self) -> Stats {
+        let c = &self.counters;
+        Stats {
+            facing: c.facing.load(Relaxed),
+            product_rule: c.product_rule.load(Relaxed),
+            contour: c.contour.load(Relaxed),
+            occluded: c.occluded.load(Relaxed),
+            occluded_clear: c.occluded_clear.load(Relaxed),
+            occluded_hidden: c.occluded_hidden.load(Relaxed),
+            points: c.points.load(Relaxed),
+            capped: c.capped.load(Relaxed),
+            sampled: c.sampled.load(Relaxed),
+            rays: c.rays.load(Relaxed),
+        }
+    }
+
+    fn flush(&self, s: &mut Stats) {
+        let c = &self.counters;
+        c.facing.fetch_add(s.facing, Relaxed);
+        c.product_rule.fetch_add(s.product_rule, Relaxed);
+        c.contour.fetch_add(s.contour, Relaxed);
+        c.occluded.fetch_add(s.occluded, Relaxed);
+        c.occluded_clear.fetch_add(s.occluded_clear, Relaxed);
+        c.occluded_hidden.fetch_add(s.occluded_hidden, Relaxed);
+        c.points.fetch_add(s.points, Relaxed);
+        c.capped.fetch_add(s.capped, Relaxed);
+        c.sampled.fetch_add(s.sampled, Relaxed);
+        c.rays.fetch_add(s.rays, Relaxed);
+        *s = Stats::default();
+    }
+
+    /// The exchange area `A_i F_ij = A_j F_ji` of patches `i` and `j`: the same value whichever
+    /// is named first.
+    pub fn exchange(&self, i: usize, j: usize, bvh: &Bvh, s: &mut Scratch) -> f64 {
+        let (i, j) = (i.min(j), i.max(j));
+        let (pi, pj) = (&self.patches[i], &self.patches[j]);
+        // The outer integral over the smaller patch (the lower index on a tie).
+        let (ia, ib) = if pj.area < pi.area { (j, i) } else { (i, j) };
+        let (a, b) = (&self.patches[ia], &self.patches[ib]);
+        let size = (a.centre - b.centre).length() + a.radius + b.radius;
+        let eps = 1e-9 * size;
+        let side = |p: &Patch, q: &Patch| {
+            q.corners()
+                .iter()
+                .map(|v| p.normal.dot(*v - p.v[0]))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+                    (lo.min(d), hi.max(d))
+                })
+        };
+        let (amin, amax) = side(b, a);
+        let (bmin, bmax) = side(a, b);
+        if amax <= eps || bmax <= eps {
+            return 0.0;
+        }
+        let straddle = amin < -eps || bmin < -eps;
+        clip(a.corners(), b.v[0], b.normal, 0.0, &mut s.pa);
+        clip(b.corners(), a.v[0], a.normal, 0.0, &mut s.pb);
+        if s.pa.len() < 3 || s.pb.len() < 3 {
+            return 0.0;
+        }
+        s.stats.facing += 1;
+        // Candidate occluders: the groups' list filtered by this pair's hull, or the tree.
+        let (ga, gb) = (self.occluders.group[ia], self.occluders.group[ib]);
+        s.found.clear();
+        match &self.table {
+            Some(t) => {
+                let (g, h) = (ga.min(gb) as usize, ga.max(gb) as usize);
+                let (start, len) = t.ranges[g * t.groups + h];
+                if len != NOT_FACING && len > 0 {
+                    s.shaft.set(&s.pa, a.normal, &s.pb, b.normal);
+                    for &k in &t.candidates[start as usize..(start + len) as usize] {
+                        if !s.shaft.excludes_polygon(self.occluders.polygon(k)) {
+                            s.found.push(k);
+                        }
+                    }
+                }
+            }
+            None => {
+                s.shaft.set(&s.pa, a.normal, &s.pb, b.normal);
+                self.occluders
+                    .query(&s.shaft, [ga, gb], &mut s.stack, &mut s.found);
+            }
+        }
+        // Each candidate clipped to the space in front of both planes.
+        s.occ.clear();
+        s.occ_range.clear();
+        s.occ_centre.clear();
+        s.occ_normal.clear();
+        for idx in 0..s.found.len() {
+            let k = s.found[idx];
+            let poly = self.occluders.polygon(k);
+            let flat = |n: DVec3, o: DVec3| poly.iter().all(|p| n.dot(*p - o).abs() <= eps);
+            if flat(a.normal, a.v[0]) || flat(b.normal, b.v[0]) {
+                // In the plane of either patch: no segment between them crosses it.
+                continue;
+            }
+            clip(poly, a.v[0], a.normal, 0.0, &mut s.tmp);
+            clip(&s.tmp, b.v[0], b.normal, 0.0, &mut s.inside);
+            if s.inside.len() < 3 || polygon_area(&s.inside) <= 1e-14 * size * size {
+                continue;
+            }
+            let start = s.occ.len() as u32;
+            s.occ.extend_from_slice(&s.inside);
+            s.occ_range.push((start, s.inside.len() as u32));
+            s.occ_centre
+                .push(s.inside.iter().copied().sum::<DVec3>() / s.inside.len() as f64);
+            s.occ_normal.push(self.occluders.normal(k));
+        }
+        if s.occ_range.is_empty() {
+            return self.unoccluded(ia, ib, straddle, s);
+        }
+        s.stats.occluded += 1;
+        self.occluded(ia, ib, straddle, size, bvh, s)
+    }
+
+    /// The exchange area of an unoccluded pair to the relative accuracy.
+    fn unoccluded(&self, ia: usize, ib: usize, straddle: bool, s: &mut Scratch) -> f64 {
+        let (a, b) = (&self.patches[ia], &self.patches[ib]);
+        let gap = (a.centre - b.centre).length() - a.radius - b.radius;
+        if !straddle && gap > NEAR * a.radius.max(b.radius) {
+            let mut prev = self.product(ia, ib, 1);
+            for m in 2..=ORDERS {
+                let cur = self.product(ia, ib, m);
+                if (cur - prev).abs() <= self.accuracy * cur.abs() {
+                    s.stats.product_rule += 1;
+                    return cur.max(0.0);
+                }
+                prev = cur;
+            }
+        }
+        s.stats.contour += 1;
+        analytic::polygon_factor_tol(
+            a.corners(),
+            a.normal,
+            1.0,
+            b.corners(),
+            b.normal,
+            0.01 * self.accuracy,
+            &mut s.analytic,
+        )
+    }
+
+    /// The m × m by m × m Gauss–Legendre product rule of the exchange area.
+    fn product(&self, ia: usize, ib: usize, m: usize) -> f64 {
+        let (na, nb) = (self.patches[ia].normal, self.patches[ib].normal);
+        let ra = &self.rule[ia * RULE_START[ORDERS] + RULE_START[m - 1]..][..m * m];
+        let rb = &self.rule[ib * RULE_START[ORDERS] + RULE_START[m - 1]..][..m * m];
+        let mut sum = 0.0;
+        for &(x, wx) in ra {
+            let mut inner = 0.0;
+            for &(y, wy) in rb {
+                let r = y - x;
+                let r2 = r.length_squared();
+                inner += wy * na.dot(r) * -nb.dot(r) / (r2 * r2);
+            }
+            sum += wx * inner;
+        }
+        sum / PI
+    }
+
+    /// The exchange area of a pair with candidate occluders in `s.occ`: the unoccluded
+    /// exchange area less the integral, over the part Ω of the outer patch `s.pa` from which
+    /// some occluder shadows the receiver `s.pb`, of the factor each point loses to the
+    /// shadows. Ω and the umbra are exact (see [`Prepared::shadow_region`]), so a pair that no
+    /// occluder shadows from anywhere is exactly unoccluded.
+    fn occluded(
+        &self,
+        ia: usize,
+        ib: usize,
+        straddle: bool,
+        size: f64,
+        bvh: &Bvh,
+        s: &mut Scratch,
+    ) -> f64 {
+        // The outer integral over the patch farther from the occluders: a shadow's edge on the
+        // receiver then moves slowly with the outer point (the parallax is the ratio of the
+        // occluder's distances to the two planes), and the sharp features near an occluder
+        // that stands on or beside a patch fall in the exact inner integral.
+        let (na, nb) = (self.patches[ia].normal, self.patches[ib].normal);
+        let (oa, ob) = (self.patches[ia].v[0], self.patches[ib].v[0]);
+        let (mut to_a, mut to_b) = (0.0, 0.0);
+        for &c in &s.occ_centre {
+            to_a += na.dot(c - oa);
+            to_b += nb.dot(c - ob);
+        }
+        let (ia, ib) = if to_a < to_b {
+            std::mem::swap(&mut s.pa, &mut s.pb);
+            (ib, ia)
+        } else {
+            (ia, ib)
+        };
+        let (a, b) = (&self.patches[ia], &self.patches[ib]);
+        let eps = 1e-9 * size;
+        // Which occluders shadow the receiver from somewhere on the outer patch, and where.
+        s.omega.clear();
+        s.active.clear();
+        s.planes.clear();
+        s.plane_range.clear();
+        for o in 0..s.occ_range.len() {
+            if umbra(o, eps, s) {
+                s.stats.occluded_hidden += 1;
+                return 0.0;
+            }
+        }
+        for o in 0..s.occ_range.len() {
+            if self.shadow_region(o, eps, s) {
+                s.active.push(o as u32);
+            }
+        }
+        if s.active.is_empty() {
+            s.stats.occluded_clear += 1;
+            return self.unoccluded(ia, ib, straddle, s);
+        }
+        if s.active.len() > MAX_ACTIVE {
+            s.stats.sampled += 1;
+            return self.sampled(ia, ib, straddle, bvh, s);
+        }
+        // Ω: the convex hull of the regions, in the outer patch's plane.
+        convex_hull_in_plane(&s.omega, a.normal, &mut s.flat, &mut s.hull);
+        if s.hull.len() < 3 {
+            return self.unoccluded(ia, ib, straddle, s);
+        }
+        let tol = self.accuracy * a.area.min(b.area);
+        let omega = std::mem::take(&mut s.hull);
+        // When Ω is the whole outer patch the visible part may be integrated instead of the
+        // lost one (and is, when it is the smaller: a pair hidden by several occluders
+        // together is then exactly 0, not a difference of two nearly equal integrals).
+        let whole_patch = polygon_area(&omega) >= (1.0 - 1e-9) * polygon_area(&s.pa);
+        let regions = if omega.len() == 4 { 1 } else { omega.len() - 2 };
+        let mut cells = std::mem::take(&mut s.cells);
+        cells.clear();
+        // Each region once whole and once in four: the first estimates come from comparing
+        // them (20 points a region), so a pair seen through a gap narrower than the region is
+        // rarely missed by every point.
+        for r in 0..regions {
+            let whole = Cell {
+                region: r as u8,
+                u0: 0.0,
+                v0: 0.0,
+                h: 1.0,
+                value: self.gauss(&omega, a.normal, size, r as u8, 0.0, 0.0, 1.0, s),
+                err: [0.0; 2],
+            };
+            self.split_cell(&omega, a.normal, size, &whole, &mut cells, s);
+        }
+        let total = |cells: &[Cell], k: usize| cells.iter().map(|c| c.value[k]).sum::<f64>();
+        // 0: the lost part (G = unoccluded − lost), 1: the visible part (G = visible).
+        let k = usize::from(whole_patch && total(&cells, 1) < total(&cells, 0));
+        loop {
+            let err: f64 = cells.iter().map(|c| c.err[k]).sum();
+            if err <= tol {
+                break;
+            }
+            if cells.len() + 3 > MAX_CELLS {
+                s.stats.capped += 1;
+                break;
+            }
+            let worst = cells
+                .iter()
+                .enumerate()
+                .max_by(|x, y| x.1.err[k].total_cmp(&y.1.err[k]).then(y.0.cmp(&x.0)))
+                .map(|(k, _)| k)
+                .expect("cells");
+            let parent = cells.swap_remove(worst);
+            self.split_cell(&omega, a.normal, size, &parent, &mut cells, s);
+        }
+        let result = if k == 1 {
+            total(&cells, 1)
+        } else {
+            self.unoccluded(ia, ib, straddle, s) - total(&cells, 0)
+        };
+        s.hull = omega;
+        s.cells = cells;
+        result.max(0.0)
+    }
+
+    /// A pair that more than [`MAX_ACTIVE`] occluders shadow (a large polygon seen past many
+    /// others, where cutting every shadow out at every point costs their number times the
+    /// pieces left): the exact unoccluded exchange area times the visible fraction, weighted by
+    /// the point kernel, over the 4 × 4 by 4 × 4 Gauss–Legendre points of the two patches, each
+    /// pair of points tested by a ray. Exact when the pair is wholly visible or wholly hidden;
+    /// otherwise its error is that of the visible fraction on 256 point pairs.
+    fn sampled(&self, ia: usize, ib: usize, straddle: bool, bvh: &Bvh, s: &mut Scratch) -> f64 {
+        let (a, b) = (&self.patches[ia], &self.patches[ib]);
+        let m = ORDERS;
+        let ra = &self.rule[ia * RULE_START[ORDERS] + RULE_START[m - 1]..][..m * m];
+        let rb = &self.rule[ib * RULE_START[ORDERS] + RULE_START[m - 1]..][..m * m];
+        let off = bvh.ray_offset() as f64;
+        let (mut all, mut seen) = (0.0, 0.0);
+        for &(x, wx) in ra {
+            for &(y, wy) in rb {
+                let r = y - x;
+                let (cx, cy) = (a.normal.dot(r), -b.normal.dot(r));
+                if cx <= 0.0 || cy <= 0.0 {
+                    continue;
+                }
+                let r2 = r.length_squared();
+                let k = wx * wy * cx * cy / (r2 * r2);
+                all += k;
+                let from = x + a.normal * off;
+                let to = y + b.normal * off;
+                let d = to - from;
+                let len = d.length();
+                let ray = Ray::new(from.as_vec3(), (d / len).as_vec3());
+                if !bvh.occluded(&ray, len as f32) {
+                    seen += k;
+                }
+            }
+        }
+        s.stats.rays += (m * m * m * m) as u64;
+        if seen == 0.0 {
+            return 0.0;
+        }
+        self.unoccluded(ia, ib, straddle, s) * (seen / all)
+    }
+
+    /// Where occluder `o` of `s.occ` shadows the receiver `s.pb` from the outer patch `s.pa`
+    /// (normal `na`). The points from which a convex occluder S hides part of a convex
+    /// receiver B are those on S's side of every plane that separates S from B; the extreme
+    /// ones touch both, through an edge of one and a corner of the other, or are S's own plane
+    /// (the penumbra's boundary, Nishita & Nakamae 1985; Teller 1992); those found here are a
+    /// subset, so the region they bound holds the true one. The region (the outer patch
+    /// clipped by the separating planes) goes into `s.omega` and the planes into `s.planes`.
+    fn shadow_region(&self, o: usize, eps: f64, s: &mut Scratch) -> bool {
+        let (start, len) = s.occ_range[o];
+        let occ = &s.occ[start as usize..(start + len) as usize];
+        let rec = &s.pb;
+        let first_plane = s.planes.len();
+        // Is the plane (m, h) (unnormalised, `slack` matching) separating? The occluder (S)
+        // and the receiver (B) lie each wholly on one side, on opposite sides: then the plane,
+        // normalised and facing S, bounds the region. Stops at the first corner that shows it
+        // is not.
+        let consider = |m: DVec3, h: f64, slack: f64, planes: &mut Vec<(DVec3, f64)>| {
+            // Side of S: +1 above, -1 below, 0 within the slack so far.
+            let side_of = |p: &[DVec3]| {
+                let (mut above, mut below) = (false, false);
+                for x in p {
+                    let d = m.dot(*x) - h;
+                    above |= d > slack;
+                    below |= d < -slack;
+                    if above && below {
+                        return None;
+                    }
+                }
+                Some((above, below))
+            };
+            let Some((so_above, so_below)) = side_of(occ) else {
+                return;
+            };
+            let Some((sr_above, sr_below)) = side_of(rec) else {
+                return;
+            };
+            let inv = 1.0 / m.length();
+            if !so_above && !sr_below {
+                // Occluder below (or on), receiver above (or on): the shadowing side is below.
+                planes.push((-m * inv, -h * inv));
+            } else if !so_below && !sr_above {
+                planes.push((m * inv, h * inv));
+            }
+        };
+        let tiny = 1e-24 * (eps * 1e9).powi(4);
+        for (edges, corners) in [(occ, rec.as_slice()), (rec.as_slice(), occ)] {
+            let en = edges.len();
+            for k in 0..en {
+                let (p, q) = (edges[k], edges[(k + 1) % en]);
+                for &v in corners.iter() {
+                    let m = (q - p).cross(v - p);
+                    let l2 = m.length_squared();
+                    if l2 > tiny {
+                        consider(m, m.dot(p), eps * l2.sqrt(), &mut s.planes);
+                    }
+                }
+            }
+        }
+        // The occluder's own plane, when the receiver lies wholly on one side of it: the
+        // points must be on the other side.
+        let no = s.occ_normal[o];
+        let ho = no.dot(occ[0]);
+        let (sr, hr) = rec
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                let d = no.dot(*x) - ho;
+                (lo.min(d), hi.max(d))
+            });
+        let beyond = if sr >= -eps {
+            Some((-no, -ho))
+        } else if hr <= eps {
+            Some((no, ho))
+        } else {
+            None
+        };
+        if let Some(p) = beyond {
+            s.planes.push(p);
+        }
+        // The penumbra's region on the outer patch.
+        s.inside.clear();
+        s.inside.extend_from_slice(&s.pa);
+        for k in first_plane..s.planes.len() {
+            let (m, h) = s.planes[k];
+            clip(&s.inside, m * h, m, eps, &mut s.tmp);
+            std::mem::swap(&mut s.inside, &mut s.tmp);
+            if s.inside.len() < 3 {
+                s.planes.truncate(first_plane);
+                return false;
+            }
+        }
+        if polygon_area(&s.inside) <= eps * eps {
+            s.planes.truncate(first_plane);
+            return false;
+        }
+        s.omega.extend_from_slice(&s.inside);
+        s.plane_range
+            .push((first_plane as u32, (s.planes.len() - first_plane) as u32));
+        true
+    }
+
+    /// Split `parent` into its four quarters, each with its 2 × 2 Gauss value of the factor lost
+    /// to shadows, and each an equal share of the error estimate `|parent − Σ quarters| / 8`
+    /// (the composite rule's error falls 16-fold a halving where the integrand is smooth and
+    /// 8-fold along a penumbra's kink, so the difference over 8 bounds it in either case).
+    fn split_cell(
+        &self,
+        omega: &[DVec3],
+        normal: DVec3,
+        size: f64,
+        parent: &Cell,
+        cells: &mut Vec<Cell>,
+        s: &mut Scratch,
+    ) {
+        let h = 0.5 * parent.h;
+        let first = cells.len();
+        let mut sum = [0.0; 2];
+        for (du, dv) in [(0.0, 0.0), (h, 0.0), (0.0, h), (h, h)] {
+            let (u0, v0) = (parent.u0 + du, parent.v0 + dv);
+            let value = self.gauss(omega, normal, size, parent.region, u0, v0, h, s);
+            sum[0] += value[0];
+            sum[1] += value[1];
+            cells.push(Cell {
+                region: parent.region,
+                u0,
+                v0,
+                h,
+                value,
+                err: [0.0; 2],
+            });
+        }
+        let err = [0, 1].map(|k| (parent.value[k] - sum[k]).abs() / 4.0);
+        for c in &mut cells[first..] {
+            c.err = err;
+        }
+    }
+
+    /// The 2 × 2 Gauss–Legendre values over the cell `[u0, u0 + h] × [v0, v0 + h]` of region
+    /// `region` of Ω of the factor lost to shadows and of the factor still seen.
+    #[allow(clippy::too_many_arguments)]
+    fn gauss(
+        &self,
+        omega: &[DVec3],
+        normal: DVec3,
+        size: f64,
+        region: u8,
+        u0: f64,
+        v0: f64,
+        h: f64,
+        s: &mut Scratch,
+    ) -> [f64; 2] {
+        const G: f64 = 0.211_324_865_405_187_1; // (1 − 1/√3) / 2
+        let mut sum = [0.0; 2];
+        for (pu, pv) in [(G, G), (1.0 - G, G), (G, 1.0 - G), (1.0 - G, 1.0 - G)] {
+            let (x, jac) = map(omega, region, u0 + h * pu, v0 + h * pv);
+            let (lost, seen) = self.blocked(x, normal, size, s);
+            sum[0] += 0.25 * jac * lost;
+            sum[1] += 0.25 * jac * seen;
+        }
+        s.stats.points += 4;
+        [sum[0] * h * h, sum[1] * h * h]
+    }
+
+    /// The factor from the point `x` (normal `n`) to the part of the receiver `s.pb` that the
+    /// active occluders hide: each occluder's pyramid from `x` cuts the visible pieces
+    /// (Sutherland–Hodgman against its side planes), and what falls inside is measured by
+    /// Lambert's formula; and the factor to the pieces left visible.
+    fn blocked(&self, x: DVec3, n: DVec3, size: f64, s: &mut Scratch) -> (f64, f64) {
+        let eps = 1e-11 * size;
+        s.pieces.clear();
+        s.ranges.clear();
+        s.pieces.extend_from_slice(&s.pb);
+        s.ranges.push((0, s.pb.len() as u32));
+        let mut lost = 0.0;
+        for idx in 0..s.active.len() {
+            let o = s.active[idx] as usize;
+            // Only from its penumbra region does an occluder shadow the receiver.
+            let (ps, pl) = s.plane_range[idx];
+            if s.planes[ps as usize..(ps + pl) as usize]
+                .iter()
+                .any(|&(m, h)| m.dot(x) - h < -eps)
+            {
+                continue;
+            }
+            let (start, len) = s.occ_range[o];
+            let w = s.occ_centre[o] - x;
+            // x in the occluder's plane: its pyramid is flat and hides nothing.
+            if s.occ_normal[o].dot(w).abs() <= 1e-12 * w.length() {
+                continue;
+            }
+            // The pyramid's side planes through x, normals pointing inwards.
+            s.cone.clear();
+            let occ = &s.occ[start as usize..(start + len) as usize];
+            let mut orient = 0.0;
+            for k in 0..occ.len() {
+                let m = (occ[k] - x).cross(occ[(k + 1) % occ.len()] - x);
+                let l = m.length();
+                let m = if l > 0.0 { m / l } else { DVec3::ZERO };
+                orient += m.dot(w);
+                s.cone.push(m);
+            }
+            if orient < 0.0 {
+                for m in &mut s.cone {
+                    *m = -*m;
+                }
+            }
+            let outside = |poly: &[DVec3], cone: &[DVec3]| {
+                cone.iter()
+                    .any(|m| poly.iter().all(|p| m.dot(*p - x) <= eps))
+            };
+            // Subtract the pyramid from every piece; what lies inside it is lost.
+            s.next.clear();
+            s.next_ranges.clear();
+            for r in 0..s.ranges.len() {
+                let (ps, pl) = s.ranges[r];
+                let piece = &s.pieces[ps as usize..(ps + pl) as usize];
+                if outside(piece, &s.cone) {
+                    let at = s.next.len() as u32;
+                    s.next.extend_from_slice(piece);
+                    s.next_ranges.push((at, pl));
+                    continue;
+                }
+                s.inside.clear();
+                s.inside.extend_from_slice(piece);
+                for k in 0..s.cone.len() {
+                    let m = s.cone[k];
+                    split(&s.inside, m, x, eps, &mut s.tmp, &mut s.outside);
+                    if s.outside.len() >= 3 {
+                        let at = s.next.len() as u32;
+                        s.next.extend_from_slice(&s.outside);
+                        s.next_ranges.push((at, s.outside.len() as u32));
+                    }
+                    std::mem::swap(&mut s.inside, &mut s.tmp);
+                    if s.inside.len() < 3 {
+                        break;
+                    }
+                }
+                if s.inside.len() >= 3 {
+                    lost += point_polygon(x, n, &s.inside);
+                }
+            }
+            std::mem::swap(&mut s.pieces, &mut s.next);
+            std::mem::swap(&mut s.ranges, &mut s.next_ranges);
+            if s.ranges.is_empty() {
+                break;
+            }
+        }
+        let mut seen = 0.0;
+        for &(ps, pl) in &s.ranges {
+            seen += point_polygon(x, n, &s.pieces[ps as usize..(ps + pl) as usize]);
+        }
+        (lost, seen)
+    }
+}
+
+/// Whether the convex occluder `occ` hides every corner of the convex receiver `rec` from the
+/// point `x`: each corner strictly inside the pyramid from `x` over `occ` (the occluder being
+/// between `x` and the receiver, as the occluders of a pair are clipped to be).
+fn hides(x: DVec3, occ: &[DVec3], rec: &[DVec3], eps: f64) -> bool {
+    let c = occ.iter().copied().sum::<DVec3>() / occ.len() as f64;
+    let n = occ.len();
+    (0..n).all(|k| {
+        let m = (occ[k] - x).cross(occ[(k + 1) % n] - x);
+        let l = m.length();
+        if l <= 0.0 {
+            return false;
+        }
+        let m = if m.dot(c - x) < 0.0 { -m / l } else { m / l };
+        rec.iter().all(|p| m.dot(*p - x) > eps)
+    })
+}
+
+/// Whether occluder `o` of `s.occ` hides all of the receiver `s.pb` from all of the outer
+/// patch `s.pa`. The umbra, the points from which a convex occluder hides all of a convex
+/// receiver, is convex (the intersection over the receiver's points of the convex regions
+/// behind the occluder seen from each), so it holds the outer patch when it holds its corners;
+/// it holds a corner beyond the occluder's plane when the receiver's corners all lie inside
+/// the pyramid over the occluder from it.
+fn umbra(o: usize, eps: f64, s: &Scratch) -> bool {
+    let (start, len) = s.occ_range[o];
+    let occ = &s.occ[start as usize..(start + len) as usize];
+    let (no, ho) = (s.occ_normal[o], s.occ_normal[o].dot(occ[0]));
+    // The receiver wholly on one side of the occluder's plane, every outer corner strictly on
+    // the other (from a point in the plane the pyramid is flat).
+    let side = |p: &DVec3| no.dot(*p) - ho;
+    let receiver_above = s.pb.iter().all(|p| side(p) >= -eps);
+    let receiver_below = s.pb.iter().all(|p| side(p) <= eps);
+    let beyond = if receiver_above {
+        s.pa.iter().all(|p| side(p) < -eps)
+    } else if receiver_below {
+        s.pa.iter().all(|p| side(p) > eps)
+    } else {
+        false
+    };
+    beyond && s.pa.iter().all(|&x| hides(x, occ, &s.pb, eps))
+}
+
+/// The convex hull of `points` (lying in a plane with unit normal `n`), counter-clockwise
+/// about `n`, into `out` (Andrew's monotone chain in the plane's coordinates; `flat` is its
+/// buffer).
+fn convex_hull_in_plane(
+    points: &[DVec3],
+    n: DVec3,
+    flat: &mut Vec<(f64, f64, u32)>,
+    out: &mut Vec<DVec3>,
+) {
+    out.clear();
+    flat.clear();
+    if points.len() < 3 {
+        return;
+    }
+    let e1 = n.any_orthonormal_vector();
+    let e2 = n.cross(e1);
+    flat.extend(
+        points
+            .iter()
+            .enumerate()
+            .map(|(k, x)| (x.dot(e1), x.dot(e2), k as u32)),
+    );
+    flat.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let m = flat.len();
+    // The chain is built in place after the sorted points: lower hull, then upper.
+    let cross = |o: (f64, f64, u32), a: (f64, f64, u32), b: (f64, f64, u32)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    for pass in 0..2 {
+        let base = flat.len();
+        for k in 0..m {
+            let q = if pass == 0 { flat[k] } else { flat[m - 1 - k] };
+            while flat.len() >= base + 2
+                && cross(flat[flat.len() - 2], flat[flat.len() - 1], q) <= 0.0
+            {
+                flat.pop();
+            }
+            flat.push(q);
+        }
+        flat.pop();
+    }
+    out.extend(flat[m..].iter().map(|q| points[q.2 as usize]));
+    // With e2 = n × e1 the chain runs counter-clockwise about n.
+}
+
+/// The 1, 2 × 2, 3 × 3 and 4 × 4 Gauss–Legendre points of a patch, weights summing to its
+/// area: through the bilinear map of a quad, the collapsed map of a triangle.
+fn gauss_points(p: &Patch) -> Vec<(DVec3, f64)> {
+    let mut out = Vec::with_capacity(RULE_START[ORDERS]);
+    let poly = p.corners();
+    for m in 1..=ORDERS {
+        let (x, w) = super::quadrature::gauss_legendre(m);
+        let mut pts = Vec::with_capacity(m * m);
+        for (u, wu) in x.iter().zip(&w) {
+            for (v, wv) in x.iter().zip(&w) {
+                let (q, jac) = map(poly, 0, *u, *v);
+                pts.push((q, wu * wv * jac));
+            }
+        }
+        // Weights sum to the area exactly (the maps are exact for planar polygons).
+        let total: f64 = pts.iter().map(|q| q.1).sum();
+        let area = polygon_area(poly);
+        out.extend(pts.into_iter().map(|(q, w)| (q, w * area / total)));
+    }
+    out
+}
+
+/// Point `(u, v)` of region `region` of a convex polygon and the map's Jacobian: a quad through
+/// its bilinear map; otherwise triangle `region` of the fan from corner 0, through the
+/// collapsed map `p0 + u (p1 − p0) + u v (p2 − p1)`.
+fn map(poly: &[DVec3], region: u8, u: f64, v: f64) -> (DVec3, f64) {
+    if poly.len() == 4 {
+        let [p0, p1, p2, p3] = [poly[0], poly[1], poly[2], poly[3]];
+        let x = p0 * ((1.0 - u) * (1.0 - v))
+            + p1 * (u * (1.0 - v))
+            + p2 * (u * v)
+            + p3 * ((1.0 - u) * v);
+        let du = (p1 - p0) * (1.0 - v) + (p2 - p3) * v;
+        let dv = (p3 - p0) * (1.0 - u) + (p2 - p1) * u;
+        (x, du.cross(dv).length())
+    } else {
+        let r = region as usize;
+        let (p0, p1, p2) = (poly[0], poly[r + 1], poly[r + 2]);
+        let x = p0 + (p1 - p0) * u + (p2 - p1) * (u * v);
+        (x, u * (p1 - p0).cross(p2 - p1).length())
+    }
+}
+
+/// Area of a planar polygon (Newell).
+fn polygon_area(p: &[DVec3]) -> f64 {
+    let mut s = DVec3::ZERO;
+    for k in 1..p.len().saturating_sub(1) {
+        s += (p[k] - p[0]).cross(p[k + 1] - p[0]);
+    }
+    0.5 * s.length()
+}
+
+/// Keep the part of `poly` where `(p − origin) · normal ≥ -slack`.
+fn clip(poly: &[DVec3], origin: DVec3, normal: DVec3, slack: f64, out: &mut Vec<DVec3>) {
+    out.clear();
+    let n = poly.len();
+    for k in 0..n {
+        let (a, b) = (poly[k], poly[(k + 1) % n]);
+        let (da, db) = (
+            (a - origin).dot(normal) + slack,
+            (b - origin).dot(normal) + slack,
+        );
+        if da >= 0.0 {
+            out.push(a);
+        }
+        if (da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0) {
+            out.push(a + (b - a) * (da / (da - db)));
+        }
+    }
+}
+
+/// Split the convex `poly` by the plane through `x` with unit normal `m`: the part with
+/// `m · (p − x) ≥ 0` into `inside`, the rest into `outside` (points within `eps` of the plane
+/// go to both).
+fn split(
+    poly: &[DVec3],
+    m: DVec3,
+    x: DVec3,
+    eps: f64,
+    inside: &mut Vec<DVec3>,
+    outside: &mut Vec<DVec3>,
+) {
+    inside.clear();
+    outside.clear();
+    let n = poly.len();
+    let side = |p: DVec3| {
+        let d = m.dot(p - x);
+        if d.abs() <= eps {
+            0.0
+        } else {
+            d
+        }
+    };
+    let mut d0 = side(poly[0]);
+    for k in 0..n {
+        let a = poly[k];
+        let b = poly[(k + 1) % n];
+        let da = d0;
+        let db = side(b);
+        if da >= 0.0 {
+            inside.push(a);
+        }
+        if da <= 0.0 {
+            outside.push(a);
+        }
+        if (da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0) {
+            let p = a + (b - a) * (da / (da - db));
+            inside.push(p);
+            outside.push(p);
+        }
+        d0 = db;
+    }
+    if inside.len() < 3 {
+        inside.clear();
+    }
+    if outside.len() < 3 {
+        outside.clear();
+    }
+}
+
+/// The exact factor from a point `x` with unit normal `n` to the convex polygon `p`
+/// (counter-clockwise about its own normal, facing `x`, wholly in front of `x`): Lambert's
+/// contour formula `F = (1/2π) Σ_k γ_k n · (r_k × r_{k+1}) / |r_k × r_{k+1}|`, `r_k = p_k − x`,
+/// `γ_k` the angle between `r_k` and `r_{k+1}` (Howell's catalogue, B-0; Sillion & Puech 1994,
+/// eq. 4.24). The receiver faces the point, so its corners run clockwise as seen from it and
+/// the sum is negated.
+pub fn point_polygon(x: DVec3, n: DVec3, p: &[DVec3]) -> f64 {
+    let mut sum = 0.0;
+    let m = p.len();
+    for k in 0..m {
+        let r1 = p[k] - x;
+        let r2 = p[(k + 1) % m] - x;
+        let g = r1.cross(r2);
+        let gl = g.length();
+        if gl <= 0.0 {
+            continue;
+        }
+        let angle = gl.atan2(r1.dot(r2));
+        sum += angle * n.dot(g) / gl;
+    }
+    -sum / (2.0 * PI)
+}
+
+/// The candidates of every pair of occluders that face each other.
+fn group_table(occ: &Occluders) -> GroupTable {
+    let g = occ.len();
+    let per: Vec<(Vec<(u32, u32)>, Vec<u32>)> = (0..g)
+        .into_par_iter()
+        .map_init(
+            || {
+                (
+                    Vec::new(),
+                    Vec::new(),
+                    Vec::new(),
+                    Vec::new(),
+                    Shaft::default(),
+                )
+            },
+            |(pa, pb, stack, found, shaft), p| {
+                let mut ranges = Vec::with_capacity(g - p);
+                let mut cands = Vec::new();
+                let (np, ppoly) = (occ.normal(p as u32), occ.polygon(p as u32));
+                for q in p..g {
+                    let (nq, qpoly) = (occ.normal(q as u32), occ.polygon(q as u32));
+                    clip(ppoly, qpoly[0], nq, 0.0, pa);
+                    clip(qpoly, ppoly[0], np, 0.0, pb);
+                    let facing = q != p
+                        && pa.len() >= 3
+                        && pb.len() >= 3
+                        && polygon_area(pa) > 0.0
+                        && polygon_area(pb) > 0.0;
+                    if !facing {
+                        ranges.push((0, NOT_FACING));
+                        continue;
+                    }
+                    shaft.set(pa, np, pb, nq);
+                    occ.query(shaft, [p as u32, q as u32], stack, found);
+                    ranges.push((cands.len() as u32, found.len() as u32));
+                    cands.extend_from_slice(found);
+                }
+                (ranges, cands)
+            },
+        )
+        .collect();
+    let mut ranges = vec![(0u32, NOT_FACING); g * g];
+    let mut candidates = Vec::new();
+    for (p, (r, c)) in per.into_iter().enumerate() {
+        let base = candidates.len() as u32;
+        for (k, &(start, len)) in r.iter().enumerate() {
+            ranges[p * g + p + k] = if len == NOT_FACING {
+                (0, NOT_FACING)
+            } else {
+                (base + start, len)
+            };
+        }
+        candidates.extend(c);
+    }
+    GroupTable {
+        groups: g,
+        ranges,
+        candidates,
+    }
+}
+
+/// Row `i` of F: every pair's exchange area over `A_i`.
+pub(super) fn row(est: &Estimator, i: usize, scratch: &mut super::Scratch) {
+    let prep = est
+        .adaptive
+        .as_ref()
+        .expect("prepared for the adaptive method");
+    let ai = prep.patches[i].area;
+    for j in 0..prep.patches.len() {
+        if j == i {
+            continue;
+        }
+        // Rounded as the whole matrix rounds it, so the two give the same bits.
+        let g = prep.exchange(i, j, est.bvh, &mut scratch.adaptive) as f32;
+        if g > 0.0 {
+            scratch.add(j as u32, g as f64 / ai);
+        }
+    }
+    prep.flush(&mut scratch.adaptive.stats);
+}
+
+/// Every row: each pair's exchange area once (rows in parallel, row `i` computing the pairs
+/// `j > i`), both entries from it.
+pub(super) fn matrix(est: &Estimator, storage: Storage, observer: &dyn Observer) -> Matrix {
+    let prep = est
+        .adaptive
+        .as_ref()
+        .expect("prepared for the adaptive method");
+    let n = prep.patches.len();
+    observer.event(Event::Stage(Stage::FormFactors));
+    let done = AtomicU64::new(0);
+    // Exchange areas in f32 (the entries are stored in f32 anyway): 8 bytes a pair.
+    let upper: Vec<Vec<(u32, f32)>> = (0..n)
+        .into_par_iter()
+        .map_init(Scratch::default, |s, i| {
+            let mut row = Vec::new();
+            for j in i + 1..n {
+                let g = prep.exchange(i, j, est.bvh, s);
+                if g > 0.0 {
+                    row.push((j as u32, g as f32));
+                }
+            }
+            prep.flush(&mut s.stats);
+            observer.event(Event::Progress {
+                stage: Stage::FormFactors,
+                done: done.fetch_add(1, Relaxed) + 1,
+                total: n as u64,
+            });
+            row
+        })
+        .collect();
+    let mut counts = vec![0usize; n];
+    for (i, r) in upper.iter().enumerate() {
+        counts[i] += r.len();
+        for &(j, _) in r {
+            counts[j as usize] += 1;
+        }
+    }
+    let mut rows: Vec<Vec<Entry>> = counts.iter().map(|&c| Vec::with_capacity(c)).collect();
+    for (i, r) in upper.into_iter().enumerate() {
+        let ai = prep.patches[i].area;
+        for (j, g) in r {
+            let (g, aj) = (g as f64, prep.patches[j as usize].area);
+            rows[j as usize].push((i as u32, (g / aj) as f32));
+            rows[i].push((j, (g / ai) as f32));
+        }
+    }
+    let dense = match storage {
+        Storage::Dense => true,
+        Storage::Sparse => false,
+        Storage::Auto => n <= super::DENSE_MAX,
+    };
+    if dense {
+        let mut values = vec![0.0f32; n * n];
+        for (i, r) in rows.iter().enumerate() {
+            for &(j, f) in r {
+                values[i * n + j as usize] = f;
+            }
+        }
+        Matrix::Dense { n, values }
+    } else {
+        Matrix::Sparse(SparseMatrix::from_rows(rows))
+    }
+}
