@@ -15,7 +15,7 @@
 //!   the lower order, so the higher one is kept with a margin); the rule converges
 //!   geometrically, the faster the farther apart the pair is. Close (gap below twice the larger
 //!   patch's radius), straddling the other's plane, or not converged by m = 4: the exact
-//!   contour integral of [`analytic`](super::analytic), which handles shared edges and
+//!   contour integral of [`analytic`], which handles shared edges and
 //!   corners, to the same relative accuracy.
 //! - **Occluded** (some occluder meets the hull): the visible part is integrated by *exact
 //!   polygon clipping* at points of the smaller patch, the approach of View3D (Walton 2002,
@@ -68,7 +68,7 @@ pub const MAX_CELLS: usize = 256;
 
 /// Most occluders shadowing one occluded pair for exact clipping: the exact shadow of each is
 /// cut from every visible piece of the receiver at every point, so that work grows as their
-/// number times the pieces; beyond it the pair is sampled ([`Prepared::sampled`]).
+/// number times the pieces; beyond it the pair is sampled (`Prepared::sampled`).
 pub const MAX_ACTIVE: usize = 16;
 
 /// Gauss orders of the unoccluded product rule.
@@ -1069,10 +1069,13 @@ pub fn point_polygon(x: DVec3, n: DVec3, p: &[DVec3]) -> f64 {
     -sum / (2.0 * PI)
 }
 
+/// One occluder's candidate pairs and their members, as `group_table` gathers them.
+type GroupRows = (Vec<(u32, u32)>, Vec<u32>);
+
 /// The candidates of every pair of occluders that face each other.
 fn group_table(occ: &Occluders) -> GroupTable {
     let g = occ.len();
-    let per: Vec<(Vec<(u32, u32)>, Vec<u32>)> = (0..g)
+    let per: Vec<GroupRows> = (0..g)
         .into_par_iter()
         .map_init(
             || {
