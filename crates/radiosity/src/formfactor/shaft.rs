@@ -2,7 +2,7 @@
 //! the segments between two patches.
 //!
 //! **Occluders.** Every patch blocks from both sides. Coplanar patches that share a whole edge
-//! are merged, while their union stays convex (and has at most [`MAX_OCCLUDER_VERTICES`]
+//! are merged, while their union stays convex (and has at most `MAX_OCCLUDER_VERTICES`
 //! corners), into one convex *occluder*: a wall cut into a grid of facets (as a View3D file of
 //! equal facets lists it) becomes a few rectangles, so a shaft meets a few occluders instead of
 //! dozens of facets, and a shadow is cut out of a receiver in a few clips. The merge covers
