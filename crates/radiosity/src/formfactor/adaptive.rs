@@ -692,7 +692,13 @@ impl Prepared {
                 return false;
             }
         }
-        if polygon_area(&s.inside) <= eps * eps {
+        // A sliver a few slacks wide (an occluder that only touches the pair's hull, kept by
+        // the clipping's slack) loses nothing measurable, but would stretch Ω over the whole
+        // patch and thin the points where the real shadows are.
+        let perimeter: f64 = (0..s.pa.len())
+            .map(|k| (s.pa[(k + 1) % s.pa.len()] - s.pa[k]).length())
+            .sum();
+        if polygon_area(&s.inside) <= 16.0 * eps * perimeter {
             s.planes.truncate(first_plane);
             return false;
         }
