@@ -8,47 +8,64 @@
 //!
 //! - **Not facing**: each polygon is clipped to the other's front half-space; when either part
 //!   is empty the factor is 0 and nothing more is done.
-//! - **Unoccluded** (no occluder meets the convex hull of the two polygons, see
+//! - **Seen whole** (no occluder meets the convex hull of the two polygons, found through
 //!   [`shaft`](super::shaft)): far apart, a Gauss–Legendre product rule of the point kernel
 //!   `cos θ_a cos θ_b / (π r²)` with m × m points on each patch, m = 1, 2, 3, 4, until two
 //!   successive orders agree within the relative accuracy (the difference bounds the error of
-//!   the lower order, so the higher one is kept with a margin); the rule converges
-//!   geometrically, the faster the farther apart the pair is. Close (gap below twice the larger
-//!   patch's radius), straddling the other's plane, or not converged by m = 4: the exact
-//!   contour integral of [`analytic`], which handles shared edges and
-//!   corners, to the same relative accuracy.
-//! - **Occluded** (some occluder meets the hull): the visible part is integrated by *exact
-//!   polygon clipping* at points of the smaller patch, the approach of View3D (Walton 2002,
-//!   "Calculation of Obstructed View Factors by Adaptive Integration", NISTIR 6925): from a
-//!   point `x`, each candidate occluder (clipped to the space between the two planes) casts a
-//!   pyramid from `x`; the receiver is cut by each pyramid's side planes into convex pieces
-//!   outside it (Sutherland–Hodgman), and the exact point-to-polygon factor of the visible
-//!   pieces (Lambert's contour formula, `F = (1/2π) Σ_edges γ_k n·ĝ_k`) is the inner integral,
-//!   with no sampling error. The outer integral over the smaller patch is adaptive: cells of
-//!   its parameter square (bilinear for a quad, collapsed for a triangle), each with a 2 × 2
-//!   Gauss rule and its centre point as the error estimate, the cell with the largest estimate
-//!   split in four until the estimates add up to the tolerance (or [`MAX_CELLS`] cells).
-//!   The visible factor is continuous in `x` and smooth between penumbra boundaries, so the
-//!   error falls as the cells along a boundary shrink. If no point sees any shadow on the
-//!   receiver, the pair is taken as unoccluded; if every point sees none of it, as hidden.
+//!   the lower order, and the higher one is kept); the rule converges geometrically, the faster
+//!   the farther apart the pair is. Close (gap below twice the larger patch's radius),
+//!   straddling the other's plane, or not converged by m = 4: Stokes' contour integral of
+//!   [`analytic`](super::analytic::polygon_factor_tol), exact also for shared edges and corners.
+//! - **Occluded** (candidate occluders meet the hull; each is clipped to the space between the
+//!   two planes). The outer integral runs over the patch farther from the occluders (a shadow
+//!   then moves slowly with the outer point, and the sharp features near an occluder standing
+//!   on a patch fall in the exact inner integral). For each candidate S two exact questions come
+//!   first. Does S hide all of the receiver from all of the outer patch? The umbra is convex,
+//!   so its corners decide: then the pair is 0. From where does S shadow the receiver at all?
+//!   From the points on S's side of every plane that separates S from the receiver; those
+//!   through an edge of one and a corner of the other, and S's own plane, bound that region
+//!   (Nishita & Nakamae 1985; Teller 1992), and clipping the outer patch by them gives it. If
+//!   no candidate shadows from anywhere, the pair is seen whole. Otherwise the integral runs
+//!   over Ω, the hull of those regions: at each point each shadowing occluder's pyramid is cut
+//!   out of the receiver (Sutherland–Hodgman against its side planes), and Lambert's contour
+//!   formula (`F = (1/2π) Σ_edges γ_k n · ĝ_k`, [`point_polygon`]) gives the factor lost and the
+//!   factor still seen, exactly, with no sampling. The exchange area is the unoccluded one less
+//!   the integral of what is lost, or (when Ω is the whole outer patch and what is seen
+//!   integrates to less) the integral of what is seen, so a pair hidden by several occluders
+//!   together is exactly 0. The outer rule: cells of the parameter square (bilinear for a quad,
+//!   collapsed for a triangle of Ω's fan) with 2 × 2 Gauss points; each region first whole and
+//!   in four (20 points), then the cell whose quarters differ most from it split, until the
+//!   differences add up to the tolerance (or [`MAX_CELLS`] cells). What is seen is continuous
+//!   in the outer point and smooth between penumbra boundaries, so the error falls as the
+//!   cells along a boundary shrink; the difference is the estimate because along such a kink
+//!   it falls only fourfold a halving, and a comparison with the cell's centre misses
+//!   integrands whose curvatures cancel.
+//! - **Shadowed by more than [`MAX_ACTIVE`] occluders** (a large polygon seen past many
+//!   others): cutting each shadow out at each point would cost their number times the pieces
+//!   left, so the pair is sampled: the exact unoccluded exchange area times the visible
+//!   fraction, weighted by the point kernel, of the 4 × 4 by 4 × 4 Gauss points, each point
+//!   pair tested by a ray of the [`Bvh`].
 //!
 //! Why clipping rather than sampling visibility with rays: a ray sample's error on a partly
 //! shadowed pair falls as n^(−1/2) (stratified, in four dimensions, n^(−5/8)), so a factor
-//! to 10⁻⁵ of its value takes 10⁸ rays; clipping makes the inner integral exact, and the outer
-//! one is a continuous, piecewise-smooth function of two variables whose error an embedded
-//! rule estimates and subdivision drives down. Subdividing the pair into sub-pairs with
-//! visibility fractions from rays keeps the sampling error at the shadow boundaries. The
-//! price is that a shadow is cut per point and per occluder, so coplanar patches are merged
-//! into few convex occluders first ([`shaft`](super::shaft)).
+//! to 10⁻⁵ of its value takes 10⁸ rays; subdividing the pair into sub-pairs with exact factors
+//! times visibility fractions from rays keeps that sampling error along every shadow boundary.
+//! Clipping makes the inner integral exact, and leaves a continuous, piecewise smooth function
+//! of two variables whose error an embedded rule estimates and subdivision drives down. It is
+//! View3D's approach (Walton 2002, "Calculation of Obstructed View Factors by Adaptive
+//! Integration", NISTIR 6925). Its price is the shadow work per point and occluder, so coplanar
+//! patches are first merged into few convex occluders ([`shaft`](super::shaft)).
 //!
-//! Accuracy `E` ([`Params::accuracy`](super::Params::accuracy)): an unoccluded pair to a
-//! relative `E` (so a row of many small entries sums to within `E` of its exact sum as well);
-//! an occluded one to an absolute `E` on both of its entries (`E` times the smaller area on the
-//! exchange area): their errors change sign from pair to pair with where the shadows fall, and
-//! the row sums' errors measured on closed scenes are given in docs/heat-transfer.md.
+//! Accuracy `E` ([`Params::accuracy`](super::Params::accuracy)): a pair seen whole to a relative
+//! `E` (its rules' errors share one sign, so a relative tolerance keeps a row of many small
+//! entries within `E` of its sum); an occluded one to an absolute `E` on both its entries (`E`
+//! times the smaller area on the exchange area), whose errors change sign with where the
+//! shadows fall. The estimate can be fooled by a pair seen only through a gap narrower than the
+//! first points' spacing; the row sums measured on closed scenes are in docs/heat-transfer.md.
 //! The cost is a constant per facing pair plus the shadow work of the occluded ones:
 //! near-linear in the number of pairs that see each other. Rows are computed in parallel, each
-//! pair by a deterministic rule, so the matrix does not depend on the thread count.
+//! pair by a rule that depends only on the pair, so the matrix does not depend on the thread
+//! count and a row computed alone equals the matrix's.
 
 use super::analytic;
 use super::shaft::{patch_polygon, Occluders, Shaft};
@@ -68,7 +85,7 @@ pub const MAX_CELLS: usize = 256;
 
 /// Most occluders shadowing one occluded pair for exact clipping: the exact shadow of each is
 /// cut from every visible piece of the receiver at every point, so that work grows as their
-/// number times the pieces; beyond it the pair is sampled (`Prepared::sampled`).
+/// number times the pieces; beyond it the pair is sampled with visibility rays.
 pub const MAX_ACTIVE: usize = 16;
 
 /// Gauss orders of the unoccluded product rule.
@@ -675,7 +692,13 @@ impl Prepared {
                 return false;
             }
         }
-        if polygon_area(&s.inside) <= eps * eps {
+        // A sliver a few slacks wide (an occluder that only touches the pair's hull, kept by
+        // the clipping's slack) loses nothing measurable, but would stretch Ω over the whole
+        // patch and thin the points where the real shadows are.
+        let perimeter: f64 = (0..s.pa.len())
+            .map(|k| (s.pa[(k + 1) % s.pa.len()] - s.pa[k]).length())
+            .sum();
+        if polygon_area(&s.inside) <= 16.0 * eps * perimeter {
             s.planes.truncate(first_plane);
             return false;
         }
