@@ -1,6 +1,7 @@
 //! Integration tests of the library: physics against closed forms and invariants.
 
 mod adaptive;
+mod coincident;
 mod distributed;
 mod formfactors;
 mod interchange;

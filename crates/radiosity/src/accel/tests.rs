@@ -523,13 +523,37 @@ fn shared_edges_leave_no_crack() {
 /// Two coincident copies of a surface: every ray meets both at the same distance, and
 /// the copy with the lower patch number wins from either side, whatever order the
 /// traversal meets them in; so a solver that asks from above which copy receives light
-/// and from below which copy is covered gets answers that agree.
+/// and from below which copy is covered gets answers that agree. (The mesher merges
+/// coincident polygons, [`crate::mesh::Coincidence`]; the copy's patches are added by hand,
+/// as a mesh made otherwise could hold them.)
 #[test]
 fn coincident_copies_resolve_the_same_way_from_both_sides() {
-    let mut scene = builtin::cornell();
-    scene.polygons.push(scene.polygons[0].clone());
-    let copy = scene.polygons.len() as u32 - 1;
-    let mesh = Mesh::build(&scene, MeshParams::Patches(3000)).unwrap();
+    let scene = builtin::cornell();
+    let copy = scene.polygons.len() as u32;
+    let mut mesh = Mesh::build(&scene, MeshParams::Patches(3000)).unwrap();
+    // The floor meshed alone, appended with its grid.
+    let mut alone = scene.clone();
+    alone.polygons.truncate(1);
+    let floor = Mesh::build(&alone, MeshParams::MaxEdge(mesh.max_edge)).unwrap();
+    let (pv, pp) = (mesh.vertices.len() as u32, mesh.patches.len() as u32);
+    mesh.vertices.extend_from_slice(&floor.vertices);
+    for mut p in floor.patches {
+        for v in p
+            .vertices
+            .iter_mut()
+            .filter(|v| **v != crate::mesh::Patch::NONE)
+        {
+            *v += pv;
+        }
+        p.surface = copy;
+        mesh.patches.push(p);
+    }
+    for mut g in floor.grids {
+        g.first_patch += pp;
+        g.first_vertex += pv;
+        mesh.grids.push(g);
+    }
+    mesh.groups.push(0);
     let bvh = Bvh::build(&mesh);
     let off = bvh.ray_offset();
     let first_copy = mesh.patches.iter().position(|p| p.surface == copy).unwrap() as u32;

@@ -34,6 +34,7 @@ pub fn leaf_mesh(h: &Hierarchy, roots: &Mesh, leaves: &[u32]) -> Mesh {
     let mut mesh = Mesh {
         max_edge: 0.0,
         groups: roots.groups.clone(),
+        coincident: roots.coincident.clone(),
         ..Default::default()
     };
     let mut index: HashMap<Key, u32> = HashMap::with_capacity(leaves.len() * 2);

@@ -12,8 +12,10 @@
 //! A patch is planar to within the planarity tolerance of its piece; its normal is that of its
 //! vector area, and its area the length of that vector.
 
+mod coincident;
 mod grid;
 
+pub use coincident::Coincidence;
 pub use grid::{quad_point, tri_point, Grid, GridShape, Locator};
 
 use crate::geom::Vec3;
@@ -126,6 +128,9 @@ pub struct Mesh {
     /// made otherwise (hierarchical radiosity's leaves); a grid may be dropped at no cost but
     /// speed.
     pub grids: Vec<Grid>,
+    /// Coincident polygons ([`Coincidence`]): the copies have no patches, and each stands for
+    /// its representative's surface.
+    pub coincident: Coincidence,
 }
 
 /// A piece of an input polygon: a triangle or a convex quad.
@@ -342,15 +347,24 @@ fn make_patch(mesh: &Mesh, vertices: [u32; 4], surface: u32, material: u32) -> P
 impl Mesh {
     /// Mesh `scene` (which should have passed [`Scene::validate`]).
     pub fn build(scene: &Scene, params: MeshParams) -> Result<Mesh, SceneError> {
-        let all: Vec<(usize, Vec<Piece>)> = (0..scene.polygons.len())
+        let coincident = Coincidence::find(scene);
+        // Every polygon is checked; the copies of a coincident group are then left out.
+        let mut all: Vec<(usize, Vec<Piece>)> = (0..scene.polygons.len())
             .map(|i| pieces(scene, i).map(|p| (i, p)))
             .collect::<Result<_, _>>()?;
+        if coincident.merged > 0 {
+            all.retain(|(i, _)| !coincident.is_copy(*i));
+        }
         let max_edge = match params {
             MeshParams::Faces => 0.0,
             MeshParams::MaxEdge(l) => l,
             MeshParams::Patches(target) => {
                 let target = target.max(1) as f64;
-                let mut l = (scene.total_area() / target).sqrt() as f32;
+                let area: f64 = all
+                    .iter()
+                    .map(|(i, _)| crate::scene::polygon_area(&scene.polygons[*i].vertices))
+                    .sum();
+                let mut l = (area / target).sqrt() as f32;
                 let mut best = (f64::INFINITY, l);
                 for _ in 0..8 {
                     let c = count(&all, l) as f64;
@@ -369,6 +383,7 @@ impl Mesh {
         let mut mesh = Mesh {
             max_edge,
             groups: scene.polygons.iter().map(|p| p.group).collect(),
+            coincident,
             ..Default::default()
         };
         let expected = count(&all, max_edge) as usize;
@@ -438,6 +453,37 @@ impl Mesh {
                 }
             }
         }
+    }
+
+    /// The area-weighted mean of `values` (one per patch) over each of the `surfaces` input
+    /// polygons; a coincident copy ([`Coincidence`]) reports its group's surface, and a
+    /// surface with no patch (none of zero area) black.
+    pub fn surface_means(
+        &self,
+        values: &[crate::color::Rgb],
+        surfaces: usize,
+    ) -> Vec<crate::color::Rgb> {
+        use crate::color::Rgb;
+        let mut sum = vec![Rgb::BLACK; surfaces];
+        let mut area = vec![0.0f64; surfaces];
+        for (p, v) in self.patches.iter().zip(values) {
+            if let Some(s) = sum.get_mut(p.surface as usize) {
+                *s += *v * p.area as f64;
+                area[p.surface as usize] += p.area as f64;
+            }
+        }
+        let mut out: Vec<Rgb> = sum
+            .iter()
+            .zip(&area)
+            .map(|(&s, &a)| if a > 0.0 { s * (1.0 / a) } else { Rgb::BLACK })
+            .collect();
+        for i in 0..surfaces {
+            let r = self.coincident.representative(i);
+            if r != i && r < surfaces {
+                out[i] = out[r];
+            }
+        }
+        out
     }
 
     /// Number of patches.

@@ -72,7 +72,15 @@ fn traced_means(
         emission: &system.emission,
     };
     let lights = crate::render::light::Lights::new(&mesh, &system.emission);
-    Ok(trace(&surfaces, &lights))
+    let mut means = trace(&surfaces, &lights);
+    // A coincident copy is its group's surface ([`crate::mesh::Coincidence`]).
+    for i in 0..means.len() {
+        let r = mesh.coincident.representative(i);
+        if r != i && r < means.len() {
+            means[i] = means[r];
+        }
+    }
+    Ok(means)
 }
 
 /// Path-trace `scene` ([`crate::render::path`]): no radiosity solution, one patch per planar

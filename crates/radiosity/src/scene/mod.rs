@@ -225,6 +225,15 @@ impl Scene {
         }
     }
 
+    /// `self` with a warning when it has coincident polygons ([`crate::mesh::Coincidence`]):
+    /// the mesher merges them, and the user is told how many.
+    pub fn with_coincidence_noted(mut self) -> Scene {
+        if let Some(w) = crate::mesh::Coincidence::find(&self).warning() {
+            self.warnings.push(format!("{}: {w}", self.place()));
+        }
+        self
+    }
+
     /// Bounds of all vertices.
     pub fn bounds(&self) -> Aabb {
         Aabb::from_points(self.polygons.iter().flat_map(|p| p.vertices.iter()))
@@ -387,11 +396,12 @@ pub fn load_with(name_or_path: &str, options: &LoadOptions) -> Result<Scene, Sce
         return Ok(s);
     }
     let path = Path::new(name_or_path);
+    let noted = |s: Result<Scene, SceneError>| s.map(Scene::with_coincidence_noted);
     match FileFormat::from_path(path) {
-        Some(FileFormat::Obj) => obj::load(path),
-        Some(FileFormat::Mgf) => mgf::load_with(path, options.one_sided),
-        Some(FileFormat::Gltf | FileFormat::Glb) => gltf::load_with(path, options.one_sided),
-        Some(FileFormat::Ply) => ply::load(path),
+        Some(FileFormat::Obj) => noted(obj::load(path)),
+        Some(FileFormat::Mgf) => noted(mgf::load_with(path, options.one_sided)),
+        Some(FileFormat::Gltf | FileFormat::Glb) => noted(gltf::load_with(path, options.one_sided)),
+        Some(FileFormat::Ply) => noted(ply::load(path)),
         Some(FileFormat::Vs3) => vs3::load(path).map(|v| v.scene),
         _ if !path.exists() => Err(SceneError::Unknown(name_or_path.to_string())),
         _ => Err(SceneError::Invalid {

@@ -553,6 +553,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Vs3, SceneError> {
         origins: Vec::new(),
         up: None,
     };
+    let scene = scene.with_coincidence_noted();
     Ok(Vs3 {
         scene,
         surfaces,
