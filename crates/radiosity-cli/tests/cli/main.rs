@@ -14,6 +14,7 @@ mod common;
 mod validator;
 
 mod adaptive;
+mod coincident;
 mod errors;
 mod experiment;
 mod form_factors;
