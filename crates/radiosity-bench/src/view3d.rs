@@ -445,15 +445,23 @@ pub fn run(a: &View3dArgs, threads: Option<usize>) -> Result<()> {
     if let Some(&s) = a.sizes.iter().find(|&&s| s == 0) {
         bail!("--sizes {s}: must be positive");
     }
+    let ours_exe = crate::radiosity_exe()?;
+    let needs_view3d = a.sizes.iter().any(|&s| s <= a.view3d_up_to);
+    if needs_view3d {
+        view3d_sources(&a.source)?;
+    }
+    let created = !a.out.exists();
     std::fs::create_dir_all(&a.out).with_context(|| format!("{}", a.out.display()))?;
     let out = a
         .out
         .canonicalize()
         .with_context(|| format!("{}", a.out.display()))?;
-    let ours_exe = crate::radiosity_exe()?;
-    let needs_view3d = a.sizes.iter().any(|&s| s <= a.view3d_up_to);
     let view3d = if needs_view3d {
-        let (exe, secs) = build_view3d(&a.source, &out)?;
+        let (exe, secs) = build_view3d(&a.source, &out).inspect_err(|_| {
+            if created {
+                let _ = std::fs::remove_dir(&out);
+            }
+        })?;
         println!(
             "built {} from {} with cc -O2 in {secs:.1} s",
             exe.display(),
