@@ -26,6 +26,7 @@ const EXAMPLES: &str = "Examples:
   radiosity-bench scale hosp.mgf --one-sided --sizes 25000,100000 --solver stochastic-jacobi
   radiosity-bench pictures cornell --out pictures
   radiosity-bench canyon --sizes 500,2000,8000 --closed
+  radiosity-bench view3d --source View3D --sizes 484,1936,7744,20449
   mpirun -np 2 radiosity-bench ranks hosp.mgf --one-sided --patches 100000";
 
 /// The measurements.
@@ -53,6 +54,11 @@ pub enum Mode {
     /// (3 × 3 box buildings on a ground plane, facets of about equal size): time, CPU time,
     /// row sums (exact closure with `--closed`), what the method did.
     Canyon(CanyonArgs),
+    /// Side by side with NIST View3D, built here from its source with `cc -O2`: open urban
+    /// canyons of 121 k² facets, `radiosity form-factors --method adaptive` and View3D each
+    /// timed as a child (CPU, wall, peak memory), and their agreement (mean and worst |ΔF|
+    /// and |Δ row sum|, sky view per facet).
+    View3d(View3dArgs),
     /// The distributed methods (Jacobi on stored rows, stochastic Jacobi) on SCENE over the
     /// ranks of this run (run it under `mpirun -np K`; alone it is one rank): time per stage,
     /// per iteration, bytes exchanged, load balance and parallel efficiency against one rank
@@ -100,6 +106,34 @@ pub struct CanyonArgs {
     /// Folder for the View3D files (created if missing).
     #[arg(long, value_name = "DIR", default_value = "canyon")]
     pub out: std::path::PathBuf,
+}
+
+/// `view3d`.
+#[derive(Debug, Args)]
+pub struct View3dArgs {
+    /// View3D's source folder (a checkout of jasondegraw/View3D, or its `src`): built with
+    /// `$CC` (default `cc`) at `-O2` from the files its CMakeLists.txt lists.
+    #[arg(long, value_name = "DIR")]
+    pub source: std::path::PathBuf,
+    /// About how many facets each canyon has (121 k² exactly: 484, 1936, 7744, 20449, …).
+    #[arg(long, value_name = "N,N,…", value_delimiter = ',', num_args = 1.., default_value = "484,1936,7744")]
+    pub sizes: Vec<usize>,
+    /// Canyons with more facets than this run ours alone (View3D's time grows as N^2.3 and
+    /// beyond).
+    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    pub view3d_up_to: usize,
+    /// Runs of each tool at each size (the medians are reported).
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    pub runs: usize,
+    /// The adaptive method's accuracy.
+    #[arg(long, value_name = "E", default_value_t = radiosity::formfactor::DEFAULT_ACCURACY)]
+    pub accuracy: f64,
+    /// Folder for View3D's build, the scenes, the logs and `skyview-N.csv` (created if missing).
+    #[arg(long, value_name = "DIR", default_value = "view3d-bench")]
+    pub out: std::path::PathBuf,
+    /// Keep both view-factor files (N² numbers each: 540 MB at 7,744 facets).
+    #[arg(long)]
+    pub keep: bool,
 }
 
 /// `cornell`.

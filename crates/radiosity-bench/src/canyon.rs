@@ -30,7 +30,7 @@ const W: f64 = 10.0;
 
 /// The canyon's rectangles: origin and two edges (the normal is `e1 × e2`, facing the open
 /// space).
-fn rectangles(closed: bool) -> Vec<([f64; 3], [f64; 3], [f64; 3])> {
+fn rectangles(closed: bool, heights: &[f64; 9]) -> Vec<([f64; 3], [f64; 3], [f64; 3])> {
     let size = 3.0 * B + 4.0 * W;
     let cuts = [
         0.0,
@@ -52,7 +52,7 @@ fn rectangles(closed: bool) -> Vec<([f64; 3], [f64; 3], [f64; 3])> {
             r.push(([x0, y0, 0.0], [x1 - x0, 0.0, 0.0], [0.0, y1 - y0, 0.0]));
         }
     }
-    for (k, h) in HEIGHTS.iter().copied().enumerate() {
+    for (k, h) in heights.iter().copied().enumerate() {
         let x0 = W + (k / 3) as f64 * (B + W);
         let y0 = W + (k % 3) as f64 * (B + W);
         let (x1, y1) = (x0 + B, y0 + B);
@@ -76,7 +76,12 @@ fn rectangles(closed: bool) -> Vec<([f64; 3], [f64; 3], [f64; 3])> {
 /// The canyon with about `facets` facets as View3D text (`F 3`: shared vertices, one surface a
 /// facet), and its facet count.
 pub fn canyon_vs3(facets: usize, closed: bool) -> (String, usize) {
-    let rects = rectangles(closed);
+    canyon_vs3_with(facets, closed, &HEIGHTS)
+}
+
+/// [`canyon_vs3`] with the nine buildings' heights (metres, row by row).
+pub fn canyon_vs3_with(facets: usize, closed: bool, heights: &[f64; 9]) -> (String, usize) {
+    let rects = rectangles(closed, heights);
     let len = |e: [f64; 3]| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
     let area: f64 = rects.iter().map(|(_, a, b)| len(*a) * len(*b)).sum();
     let s = (area / facets.max(1) as f64).sqrt();

@@ -12,6 +12,7 @@ mod pictures;
 mod ranks;
 mod rays;
 mod scale;
+mod view3d;
 
 use anyhow::Result;
 use args::{BenchCli, Mode};
@@ -67,6 +68,7 @@ fn run(mode: Mode, threads: Option<usize>) -> Result<()> {
         Mode::FormFactors(a) => cornell::form_factor_table(a.runs),
         Mode::City => cornell::city(),
         Mode::Canyon(a) => canyon::run(&a),
+        Mode::View3d(a) => view3d::run(&a, threads),
         Mode::Ranks(a) => ranks::run(&a),
         Mode::Scale(a) => scale::run(&a, threads),
         Mode::Pictures(a) => pictures::run(&a),

@@ -6,3 +6,4 @@ const BIN: &str = env!("CARGO_BIN_EXE_radiosity-bench");
 #[path = "../../../radiosity-cli/tests/cli/common.rs"]
 mod common;
 mod modes;
+mod view3d;
