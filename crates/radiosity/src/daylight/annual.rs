@@ -39,6 +39,7 @@ use super::solar::{solar_position, Site};
 use super::DaylightError;
 use rayon::prelude::*;
 use std::f64::consts::PI;
+use std::io::Write as _;
 
 /// Daylight coefficients: illuminance (lx) at each point per unit luminance (cd/m²) of each
 /// patch, points × patches, row-major; the patches are a [`SkyPatches`]' (the sky's, then the
@@ -202,6 +203,11 @@ pub trait SkySource: Sync {
     fn patches(&self) -> &SkyPatches;
     /// Hours.
     fn hours(&self) -> usize;
+    /// Hour `h`'s month, day and hour (1…24, the hour ending) for output; `[0, 0, h]` when
+    /// the source has no calendar.
+    fn stamp(&self, h: usize) -> [u32; 3] {
+        [0, 0, h as u32]
+    }
     /// Hour `h`'s patch luminances (cd/m², the ground last) into `out`, the sun added to its
     /// patch when `sun_in_patch`; its light otherwise.
     fn sky(&self, h: usize, sun_in_patch: bool, out: &mut [f64]) -> Result<HourLight, DaylightError>;
@@ -247,6 +253,11 @@ impl SkySource for EpwSkies<'_> {
 
     fn hours(&self) -> usize {
         self.epw.records.len()
+    }
+
+    fn stamp(&self, h: usize) -> [u32; 3] {
+        let r = &self.epw.records[h];
+        [r.month, r.day, r.hour]
     }
 
     fn sky(&self, h: usize, sun_in_patch: bool, out: &mut [f64]) -> Result<HourLight, DaylightError> {
@@ -448,6 +459,101 @@ pub fn annual(
         lit_hours,
         metrics: acc.finish(),
     })
+}
+
+/// Write the metrics as CSV: one row a point, `point` (0-based), its position when
+/// `positions` are given (`x,y,z`), `daylight_autonomy` (share of occupied hours ≥ the sDA
+/// illuminance), `sun_hours` (occupied hours of direct sun ≥ the ASE illuminance),
+/// `udi_fell_short`, `udi_supplementary`, `udi_autonomous`, `udi_exceeded` (shares of occupied
+/// hours), `in_sda` and `in_ase` (1 or 0).
+pub fn write_metrics_csv(
+    w: &mut dyn std::io::Write,
+    metrics: &Metrics,
+    positions: Option<&[[f64; 3]]>,
+) -> std::io::Result<()> {
+    write!(w, "point")?;
+    if positions.is_some() {
+        write!(w, ",x,y,z")?;
+    }
+    writeln!(
+        w,
+        ",daylight_autonomy,sun_hours,udi_fell_short,udi_supplementary,udi_autonomous,udi_exceeded,in_sda,in_ase"
+    )?;
+    for (i, m) in metrics.points.iter().enumerate() {
+        write!(w, "{i}")?;
+        if let Some(p) = positions.and_then(|p| p.get(i)) {
+            write!(w, ",{},{},{}", p[0], p[1], p[2])?;
+        }
+        writeln!(
+            w,
+            ",{:.4},{},{:.4},{:.4},{:.4},{:.4},{},{}",
+            m.daylight_autonomy,
+            m.sun_hours,
+            m.udi[0],
+            m.udi[1],
+            m.udi[2],
+            m.udi[3],
+            m.in_sda as u8,
+            m.in_ase as u8
+        )?;
+    }
+    Ok(())
+}
+
+/// Run [`annual`] writing every hour's illuminance to `path` as CSV, whole or not at all
+/// ([`crate::io::write_atomic`]): a header `month,day,hour,p0,p1,…` and one row an hour, the
+/// illuminance of each point in lx to 0.1 lx.
+pub fn annual_with_hourly_csv(
+    path: &std::path::Path,
+    skies: &dyn SkySource,
+    coefficients: &DaylightMatrix,
+    sun: Sun,
+    params: &AnnualParams,
+) -> Result<Annual, DaylightError> {
+    let mut outcome: Option<Result<Annual, DaylightError>> = None;
+    let written = crate::io::write_atomic::<DaylightError>(path, |w| {
+        write!(w, "month,day,hour")?;
+        for i in 0..coefficients.points() {
+            write!(w, ",p{i}")?;
+        }
+        writeln!(w)?;
+        let mut failed: Option<std::io::Error> = None;
+        let mut sink = |b: &HourBlock| -> Result<(), DaylightError> {
+            let result = (|| -> std::io::Result<()> {
+                for h in 0..b.hours {
+                    let [m, d, hr] = skies.stamp(b.first + h);
+                    write!(w, "{m},{d},{hr}")?;
+                    for i in 0..b.points {
+                        write!(w, ",{:.1}", b.total[i * b.hours + h])?;
+                    }
+                    writeln!(w)?;
+                }
+                Ok(())
+            })();
+            result.map_err(|e| {
+                failed = Some(e);
+                DaylightError::Parameter("the hourly output could not be written".into())
+            })
+        };
+        let result = annual(skies, coefficients, sun, params, Some(&mut sink));
+        if let Some(e) = failed {
+            return Err(e);
+        }
+        let ok = result.is_ok();
+        outcome = Some(result);
+        if ok {
+            Ok(())
+        } else {
+            Err(std::io::Error::other("the annual run failed"))
+        }
+    });
+    match (outcome, written) {
+        // The run failed: its error, the partial file removed.
+        (Some(Err(e)), _) => Err(e),
+        (_, Err(e)) => Err(e),
+        (Some(Ok(a)), Ok(())) => Ok(a),
+        (None, Ok(())) => unreachable!("the body always runs the year"),
+    }
 }
 
 #[cfg(test)]

@@ -269,3 +269,41 @@ fn missing_irradiance_and_mismatched_inputs_are_refused() {
     };
     assert!(annual(&skies, &d, Sun::InPatch, &bad, None).is_err());
 }
+
+#[test]
+fn csv_outputs() {
+    let patches = SkyPatches::tregenza();
+    let mut sky = vec![1000.0 / PI; patches.len()];
+    sky[patches.ground()] = 0.0;
+    let source = Constant {
+        patches: patches.clone(),
+        sky,
+        hours: 48,
+    };
+    let d = DaylightMatrix::unobstructed_horizontal(&patches, 2);
+    let dir = std::env::temp_dir().join(format!("radiosity-daylight-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("hourly.csv");
+    let a = annual_with_hourly_csv(&path, &source, &d, Sun::InPatch, &AnnualParams::default()).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 49);
+    assert_eq!(lines[0], "month,day,hour,p0,p1");
+    assert_eq!(lines[1], "0,0,0,1000.0,1000.0");
+    let mut out = Vec::new();
+    write_metrics_csv(&mut out, &a.metrics, Some(&[[1.0, 2.0, 0.8], [1.5, 2.0, 0.8]])).unwrap();
+    let text = String::from_utf8(out).unwrap();
+    assert_eq!(
+        text.lines().nth(1).unwrap(),
+        "0,1,2,0.8,1.0000,0,0.0000,0.0000,1.0000,0.0000,1,0"
+    );
+    // A failed run leaves no file.
+    let bad = dir.join("bad.csv");
+    let params = AnnualParams {
+        block_hours: 0,
+        ..Default::default()
+    };
+    assert!(annual_with_hourly_csv(&bad, &source, &d, Sun::InPatch, &params).is_err());
+    assert!(!bad.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
