@@ -53,7 +53,11 @@ pub struct DaylightMatrix {
 
 impl DaylightMatrix {
     /// The matrix from its values (row-major, `points × patches`, finite).
-    pub fn new(points: usize, patches: usize, values: Vec<f64>) -> Result<DaylightMatrix, DaylightError> {
+    pub fn new(
+        points: usize,
+        patches: usize,
+        values: Vec<f64>,
+    ) -> Result<DaylightMatrix, DaylightError> {
         if points.checked_mul(patches) != Some(values.len()) {
             return Err(DaylightError::Parameter(format!(
                 "{} daylight coefficients for {points} points × {patches} patches",
@@ -75,7 +79,11 @@ impl DaylightMatrix {
     }
 
     /// The matrix of `f(point, patch)`.
-    pub fn from_fn(points: usize, patches: usize, f: impl Fn(usize, usize) -> f64) -> DaylightMatrix {
+    pub fn from_fn(
+        points: usize,
+        patches: usize,
+        f: impl Fn(usize, usize) -> f64,
+    ) -> DaylightMatrix {
         let mut values = Vec::with_capacity(points * patches);
         for i in 0..points {
             for p in 0..patches {
@@ -210,7 +218,12 @@ pub trait SkySource: Sync {
     }
     /// Hour `h`'s patch luminances (cd/m², the ground last) into `out`, the sun added to its
     /// patch when `sun_in_patch`; its light otherwise.
-    fn sky(&self, h: usize, sun_in_patch: bool, out: &mut [f64]) -> Result<HourLight, DaylightError>;
+    fn sky(
+        &self,
+        h: usize,
+        sun_in_patch: bool,
+        out: &mut [f64],
+    ) -> Result<HourLight, DaylightError>;
 }
 
 /// The skies of an EPW file's hours (see the module documentation).
@@ -260,14 +273,29 @@ impl SkySource for EpwSkies<'_> {
         [r.month, r.day, r.hour]
     }
 
-    fn sky(&self, h: usize, sun_in_patch: bool, out: &mut [f64]) -> Result<HourLight, DaylightError> {
+    fn sky(
+        &self,
+        h: usize,
+        sun_in_patch: bool,
+        out: &mut [f64],
+    ) -> Result<HourLight, DaylightError> {
         let r = &self.epw.records[h];
-        let at = |what: &str| super::invalid(&self.epw.name, r.line, format!("{what} is missing (9999)"));
-        let direct = r.direct_normal.ok_or_else(|| at("the direct normal irradiance"))?;
-        let diffuse = r.diffuse_horizontal.ok_or_else(|| at("the diffuse horizontal irradiance"))?;
+        let at = |what: &str| {
+            super::invalid(&self.epw.name, r.line, format!("{what} is missing (9999)"))
+        };
+        let direct = r
+            .direct_normal
+            .ok_or_else(|| at("the direct normal irradiance"))?;
+        let diffuse = r
+            .diffuse_horizontal
+            .ok_or_else(|| at("the diffuse horizontal irradiance"))?;
         // Typical-year files mix years; a year outside the algorithm's range is taken as a
         // common year.
-        let year = if (1800..=2200).contains(&r.year) { r.year } else { 2019 };
+        let year = if (1800..=2200).contains(&r.year) {
+            r.year
+        } else {
+            2019
+        };
         let pos = solar_position(&self.site, year, r.month, r.day, r.mid_hour());
         let mut light = HourLight {
             occupied: self.params.occupancy.occupied(r.mid_hour()),
@@ -280,7 +308,13 @@ impl SkySource for EpwSkies<'_> {
             return Ok(light);
         }
         let doy = day_of_year(year, r.month, r.day);
-        let condition = Condition::new(direct, diffuse, pos.altitude, doy, r.dew_point.unwrap_or(DEFAULT_DEW_POINT));
+        let condition = Condition::new(
+            direct,
+            diffuse,
+            pos.altitude,
+            doy,
+            r.dew_point.unwrap_or(DEFAULT_DEW_POINT),
+        );
         let e_d = diffuse * condition.diffuse_efficacy();
         let e_n = if pos.altitude > 0.0 {
             direct * condition.direct_efficacy()
@@ -297,7 +331,8 @@ impl SkySource for EpwSkies<'_> {
             let k = e_d / horizontal;
             out[..patches.sky_count()].iter_mut().for_each(|v| *v *= k);
         }
-        out[patches.ground()] = self.params.ground_reflectance * (e_d + e_n * pos.altitude.sin().max(0.0)) / PI;
+        out[patches.ground()] =
+            self.params.ground_reflectance * (e_d + e_n * pos.altitude.sin().max(0.0)) / PI;
         light.lit = true;
         light.direct_normal = e_n;
         light.diffuse_horizontal = e_d;
@@ -321,6 +356,9 @@ pub struct HourBlock<'a> {
     /// `total[i * hours + h]`: point i's illuminance in hour `first + h`, lx.
     pub total: &'a [f64],
 }
+
+/// Where [`annual`] hands each block of hourly illuminance (an hourly CSV, a plot, a test).
+pub type HourlySink<'a> = &'a mut dyn FnMut(&HourBlock) -> Result<(), DaylightError>;
 
 /// The year's result.
 #[derive(Clone, Debug, PartialEq)]
@@ -362,7 +400,7 @@ pub fn annual(
     coefficients: &DaylightMatrix,
     sun: Sun,
     params: &AnnualParams,
-    mut hourly: Option<&mut dyn FnMut(&HourBlock) -> Result<(), DaylightError>>,
+    mut hourly: Option<HourlySink>,
 ) -> Result<Annual, DaylightError> {
     params.validate()?;
     let patches = skies.patches().len();
@@ -374,7 +412,9 @@ pub fn annual(
     }
     let points = coefficients.points();
     if points == 0 {
-        return Err(DaylightError::Parameter("no points to compute daylight at".into()));
+        return Err(DaylightError::Parameter(
+            "no points to compute daylight at".into(),
+        ));
     }
     let hours = skies.hours();
     let block = params.block_hours.min(hours.max(1));
@@ -443,7 +483,11 @@ pub fn annual(
             occupied[h] = light[h].occupied;
         }
         lit_hours += light[..nb].iter().filter(|l| l.lit).count();
-        acc.add_block(&occupied[..nb], &total[..points * nb], &direct[..nb * points]);
+        acc.add_block(
+            &occupied[..nb],
+            &total[..points * nb],
+            &direct[..nb * points],
+        );
         if let Some(sink) = hourly.as_mut() {
             sink(&HourBlock {
                 first,

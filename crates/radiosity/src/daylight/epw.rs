@@ -139,14 +139,22 @@ fn number(field: &str, what: &str) -> Result<f64, String> {
 fn whole(field: &str, what: &str, lo: i64, hi: i64) -> Result<i64, String> {
     let v = number(field, what)?;
     if v.fract() != 0.0 || v < lo as f64 || v > hi as f64 {
-        return Err(format!("{what} {v} is not a whole number from {lo} to {hi}"));
+        return Err(format!(
+            "{what} {v} is not a whole number from {lo} to {hi}"
+        ));
     }
     Ok(v as i64)
 }
 
 /// A measured value with a "missing" code: `None` at or above `missing`, else a number in
 /// `lo..=hi`.
-fn measured(field: &str, what: &str, lo: f64, hi: f64, missing: f64) -> Result<Option<f64>, String> {
+fn measured(
+    field: &str,
+    what: &str,
+    lo: f64,
+    hi: f64,
+    missing: f64,
+) -> Result<Option<f64>, String> {
     let v = number(field, what)?;
     if v >= missing {
         return Ok(None);
@@ -177,7 +185,13 @@ pub fn parse_epw(text: &str, name: &str) -> Result<Epw, DaylightError> {
     let mut lines = Lines::new(text);
     let location = match lines.next() {
         Some((line, content)) => parse_location(content).map_err(|m| invalid(name, line, m))?,
-        None => return Err(invalid(name, 1, "the file is empty: expected a LOCATION line")),
+        None => {
+            return Err(invalid(
+                name,
+                1,
+                "the file is empty: expected a LOCATION line",
+            ))
+        }
     };
     let mut february = 28;
     // The records the data periods announce (None until the DATA PERIODS line).
@@ -439,7 +453,10 @@ mod tests {
         );
         assert_eq!(epw.records.len(), 24);
         let r = epw.records[12];
-        assert_eq!((r.line, r.year, r.month, r.day, r.hour), (21, 1999, 6, 21, 13));
+        assert_eq!(
+            (r.line, r.year, r.month, r.day, r.hour),
+            (21, 1999, 6, 21, 13)
+        );
         assert_eq!(r.mid_hour(), 12.5);
         assert_eq!(r.dew_point, Some(6.2));
         assert_eq!(r.global_horizontal, Some(1010.0));
@@ -465,7 +482,10 @@ mod tests {
             .enumerate()
             .map(|(k, l)| {
                 if k + 1 == line {
-                    format!("{}\n", l.split(',').take(fields).collect::<Vec<_>>().join(","))
+                    format!(
+                        "{}\n",
+                        l.split(',').take(fields).collect::<Vec<_>>().join(",")
+                    )
                 } else {
                     format!("{l}\n")
                 }
@@ -482,17 +502,47 @@ mod tests {
         let good = june_day();
         let cases: Vec<(String, &str)> = vec![
             (String::new(), "w.epw:1: the file is empty"),
-            (good.replacen("LOCATION", "PLACE", 1), "w.epw:1: the first line"),
+            (
+                good.replacen("LOCATION", "PLACE", 1),
+                "w.epw:1: the first line",
+            ),
             (good.replacen("39.74", "95", 1), "w.epw:1: latitude 95"),
-            (good.replacen("39.74", "NaN", 1), "w.epw:1: latitude 'NaN' is not a finite"),
-            (good.replacen("DATA PERIODS,1,1", "DATA PERIODS,1,4", 1), "w.epw:8: 4 records per hour"),
-            (good.replacen(" 6/21, 6/21", " 6/21, 6/22", 1), "w.epw:32: 24 hourly records, but the data periods cover 48"),
-            (good.replacen("1999,6,21,13,", "1999,6,21,14,", 1), "w.epw:21: hour 14 follows hour 12"),
-            (good.replacen("1999,6,21,13,60,", "1999,6,31,13,60,", 1), "w.epw:21: 6/31 is not a date"),
-            (good.replacen(",905,", ",-905,", 1), "w.epw:21: direct normal irradiance -905 is outside"),
-            (good.replacen(",905,", ",x,", 1), "w.epw:21: direct normal irradiance 'x' is not a number"),
-            (good.replace("DATA PERIODS,1,1,Data,Sunday, 6/21, 6/21\n", ""), "w.epw:8: a data record before the DATA PERIODS line"),
-            (truncated(&good, 21, 8), "w.epw:21: 8 fields, expected at least 16"),
+            (
+                good.replacen("39.74", "NaN", 1),
+                "w.epw:1: latitude 'NaN' is not a finite",
+            ),
+            (
+                good.replacen("DATA PERIODS,1,1", "DATA PERIODS,1,4", 1),
+                "w.epw:8: 4 records per hour",
+            ),
+            (
+                good.replacen(" 6/21, 6/21", " 6/21, 6/22", 1),
+                "w.epw:32: 24 hourly records, but the data periods cover 48",
+            ),
+            (
+                good.replacen("1999,6,21,13,", "1999,6,21,14,", 1),
+                "w.epw:21: hour 14 follows hour 12",
+            ),
+            (
+                good.replacen("1999,6,21,13,60,", "1999,6,31,13,60,", 1),
+                "w.epw:21: 6/31 is not a date",
+            ),
+            (
+                good.replacen(",905,", ",-905,", 1),
+                "w.epw:21: direct normal irradiance -905 is outside",
+            ),
+            (
+                good.replacen(",905,", ",x,", 1),
+                "w.epw:21: direct normal irradiance 'x' is not a number",
+            ),
+            (
+                good.replace("DATA PERIODS,1,1,Data,Sunday, 6/21, 6/21\n", ""),
+                "w.epw:8: a data record before the DATA PERIODS line",
+            ),
+            (
+                truncated(&good, 21, 8),
+                "w.epw:21: 8 fields, expected at least 16",
+            ),
         ];
         for (text, want) in cases {
             let got = error(&text);
@@ -522,7 +572,9 @@ mod tests {
         for month in 1..=12 {
             for day in 1..=days_in(month, 28) {
                 for hour in 1..=24 {
-                    s.push_str(&format!("2001,{month},{day},{hour},0,x,1,2,3,4,5,6,7,8,9,10\n"));
+                    s.push_str(&format!(
+                        "2001,{month},{day},{hour},0,x,1,2,3,4,5,6,7,8,9,10\n"
+                    ));
                     n += 1;
                 }
             }
@@ -535,14 +587,23 @@ mod tests {
             t.push_str(&format!("2001,1,1,{hour},0,x,1,2,3,4,5,6,7,8,9,10\n"));
         }
         let e = error(&t);
-        assert!(e.contains("hourly records, but the data periods cover 8760"), "{e}");
+        assert!(
+            e.contains("hourly records, but the data periods cover 8760"),
+            "{e}"
+        );
         // Over a leap year's hours: refused at the line that goes over.
-        let mut u = s.replacen("DATA PERIODS,1,1,Data,Sunday, 1/ 1,12/31", "DATA PERIODS,2,1,A,Sunday, 1/ 1,12/31,B,Monday,1/1,12/31", 1);
+        let mut u = s.replacen(
+            "DATA PERIODS,1,1,Data,Sunday, 1/ 1,12/31",
+            "DATA PERIODS,2,1,A,Sunday, 1/ 1,12/31,B,Monday,1/1,12/31",
+            1,
+        );
         for _ in 0..2 {
             for month in 1..=12 {
                 for day in 1..=days_in(month, 28) {
                     for hour in 1..=24 {
-                        u.push_str(&format!("2001,{month},{day},{hour},0,x,1,2,3,4,5,6,7,8,9,10\n"));
+                        u.push_str(&format!(
+                            "2001,{month},{day},{hour},0,x,1,2,3,4,5,6,7,8,9,10\n"
+                        ));
                     }
                 }
             }

@@ -229,7 +229,8 @@ impl Accumulator {
             })
             .collect();
         let m = points.len().max(1) as f64;
-        let share = |f: &dyn Fn(&PointMetrics) -> bool| points.iter().filter(|q| f(q)).count() as f64 / m;
+        let share =
+            |f: &dyn Fn(&PointMetrics) -> bool| points.iter().filter(|q| f(q)).count() as f64 / m;
         let mut udi = [0.0; 4];
         for q in &points {
             for k in 0..4 {
@@ -287,7 +288,11 @@ mod tests {
         let p2 = vec![299.9; 10];
         let zero = vec![0.0; 10];
         for block in [1, 3, 10] {
-            let m = run(&[p0.clone(), p1.clone(), p2.clone()], &[zero.clone(), zero.clone(), zero.clone()], block);
+            let m = run(
+                &[p0.clone(), p1.clone(), p2.clone()],
+                &[zero.clone(), zero.clone(), zero.clone()],
+                block,
+            );
             assert_eq!(m.occupied_hours, 10);
             assert_eq!(m.points[0].daylight_autonomy, 0.5);
             assert!(m.points[0].in_sda && m.points[1].in_sda && !m.points[2].in_sda);
@@ -308,7 +313,9 @@ mod tests {
         // 400 hours; p0 has 250 hours of 1000 lx direct sun (not more than 250: out), p1 has
         // 251 (in), p2 has 400 hours of 5000 lx total but only 999 lx of it direct (out).
         let hours = 400;
-        let mk = |n: usize, v: f64| -> Vec<f64> { (0..hours).map(|h| if h < n { v } else { 0.0 }).collect() };
+        let mk = |n: usize, v: f64| -> Vec<f64> {
+            (0..hours).map(|h| if h < n { v } else { 0.0 }).collect()
+        };
         let total = vec![mk(250, 1000.0), mk(251, 1200.0), mk(400, 5000.0)];
         let sun = vec![mk(250, 1000.0), mk(251, 1000.0), mk(400, 999.0)];
         let m = run(&total, &sun, 64);
@@ -324,7 +331,12 @@ mod tests {
         let n = (1..=24).filter(|&h| o.occupied(h as f64 - 0.5)).count();
         assert_eq!(n, 10);
         assert!(o.validate().is_ok());
-        assert!(Occupancy { start: 18.0, end: 8.0 }.validate().is_err());
+        assert!(Occupancy {
+            start: 18.0,
+            end: 8.0
+        }
+        .validate()
+        .is_err());
         assert!(MetricParams::default().validate().is_ok());
         let bad = MetricParams {
             udi_high: 50.0,

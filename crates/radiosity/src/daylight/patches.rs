@@ -172,7 +172,10 @@ impl SkyPatches {
             return self.ground();
         }
         let (alt, az) = super::altitude_azimuth(d);
-        let k = self.bands.partition_point(|b| b.hi <= alt).min(self.bands.len() - 1);
+        let k = self
+            .bands
+            .partition_point(|b| b.hi <= alt)
+            .min(self.bands.len() - 1);
         let b = &self.bands[k];
         if b.count == 1 {
             return b.first;
@@ -189,7 +192,11 @@ impl SkyPatches {
         assert!(out.len() >= self.sky_count() && sub >= 1);
         for b in &self.bands {
             let (s0, s1) = (b.lo.sin(), b.hi.sin());
-            let (na, nz) = if b.count == 1 { (4 * sub, sub) } else { (sub, sub) };
+            let (na, nz) = if b.count == 1 {
+                (4 * sub, sub)
+            } else {
+                (sub, sub)
+            };
             let w = TAU / b.count as f64;
             for j in 0..b.count {
                 let a0 = (j as f64 - 0.5) * w;
@@ -285,7 +292,10 @@ mod tests {
             let last = TREGENZA_BANDS[0] * n - 1;
             assert_eq!(p.find(crate::daylight::direction(0.01, TAU - 0.001)), 0);
             let w = TAU / (TREGENZA_BANDS[0] * n) as f64;
-            assert_eq!(p.find(crate::daylight::direction(0.01, TAU - 0.6 * w)), last);
+            assert_eq!(
+                p.find(crate::daylight::direction(0.01, TAU - 0.6 * w)),
+                last
+            );
         }
     }
 
@@ -300,7 +310,9 @@ mod tests {
         assert!((total - PI).abs() < 1e-12, "{total}");
         // A uniform sky of luminance L gives πL on a horizontal surface.
         p.sky_means(&|_| 2.0, 2, &mut out);
-        let e: f64 = (0..p.sky_count()).map(|i| out[i] * p.cosine_solid_angle(i)).sum();
+        let e: f64 = (0..p.sky_count())
+            .map(|i| out[i] * p.cosine_solid_angle(i))
+            .sum();
         assert!((e - 2.0 * PI).abs() < 1e-12);
     }
 

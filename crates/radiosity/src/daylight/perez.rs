@@ -47,8 +47,8 @@ const SKY: [[f64; 20]; 8] = [
         1.2375, 1.0000, 1.8734, 0.6297, 0.9738, 0.2809, 0.0356, -0.1246, -0.5718, 0.9938,
     ],
     [
-        -1.2219, -0.7730, 1.4148, 1.1016, -0.2054, 0.0367, -3.9128, 0.9156, 6.9750, 0.1774,
-        6.4477, -0.1239, -1.5798, -0.5081, -1.7812, 0.1080, 0.2624, 0.0672, -0.2190, -0.4285,
+        -1.2219, -0.7730, 1.4148, 1.1016, -0.2054, 0.0367, -3.9128, 0.9156, 6.9750, 0.1774, 6.4477,
+        -0.1239, -1.5798, -0.5081, -1.7812, 0.1080, 0.2624, 0.0672, -0.2190, -0.4285,
     ],
     [
         -1.1000, -0.2515, 0.8952, 0.0156, 0.2782, -0.1812, -4.5000, 1.1766, 24.7219, -13.0812,
@@ -125,7 +125,10 @@ pub fn air_mass(zenith: f64) -> f64 {
 /// (1971).
 pub fn eccentricity(day_of_year: u32) -> f64 {
     let g = 2.0 * PI * (day_of_year as f64 - 1.0) / 365.0;
-    1.00011 + 0.034221 * g.cos() + 0.00128 * g.sin() + 0.000719 * (2.0 * g).cos()
+    1.00011
+        + 0.034221 * g.cos()
+        + 0.00128 * g.sin()
+        + 0.000719 * (2.0 * g).cos()
         + 0.000077 * (2.0 * g).sin()
 }
 
@@ -156,7 +159,8 @@ impl Condition {
     ) -> Condition {
         let zenith = (PI / 2.0 - sun_altitude).clamp(0.0, PI / 2.0);
         let z3 = 1.041 * zenith.powi(3);
-        let clearness = ((diffuse_horizontal + direct_normal) / diffuse_horizontal + z3) / (1.0 + z3);
+        let clearness =
+            ((diffuse_horizontal + direct_normal) / diffuse_horizontal + z3) / (1.0 + z3);
         let brightness =
             diffuse_horizontal * air_mass(zenith) / (SOLAR_CONSTANT * eccentricity(day_of_year));
         Condition {
@@ -177,7 +181,9 @@ impl Condition {
     /// Direct normal luminous efficacy, lm/W (eq. 8), never negative.
     pub fn direct_efficacy(&self) -> f64 {
         let [a, b, c, d] = DIRECT_EFFICACY[self.bin];
-        (a + b * self.precipitable_water + c * (5.73 * self.zenith - 5.0).exp() + d * self.brightness)
+        (a + b * self.precipitable_water
+            + c * (5.73 * self.zenith - 5.0).exp()
+            + d * self.brightness)
             .max(0.0)
     }
 
@@ -217,7 +223,11 @@ impl PerezSky {
     pub fn new(condition: &Condition, sun_azimuth: f64, diffuse_illuminance: f64) -> PerezSky {
         let mut sky = PerezSky::relative(condition, sun_azimuth);
         let e = horizontal_integral(&|d| sky.luminance(d), sky.sun);
-        sky.scale = if e > 0.0 { diffuse_illuminance / e } else { 0.0 };
+        sky.scale = if e > 0.0 {
+            diffuse_illuminance / e
+        } else {
+            0.0
+        };
         sky
     }
 
@@ -237,9 +247,11 @@ impl PerezSky {
         }
         let [a, b, c, dd, e] = self.parameters;
         let cos_zeta = d[2].max(0.01);
-        let cos_gamma = (d[0] * self.sun[0] + d[1] * self.sun[1] + d[2] * self.sun[2]).clamp(-1.0, 1.0);
+        let cos_gamma =
+            (d[0] * self.sun[0] + d[1] * self.sun[1] + d[2] * self.sun[2]).clamp(-1.0, 1.0);
         let gamma = cos_gamma.acos();
-        let l = (1.0 + a * (b / cos_zeta).exp()) * (1.0 + c * (dd * gamma).exp() + e * cos_gamma * cos_gamma);
+        let l = (1.0 + a * (b / cos_zeta).exp())
+            * (1.0 + c * (dd * gamma).exp() + e * cos_gamma * cos_gamma);
         self.scale * l.max(0.0)
     }
 }
@@ -248,10 +260,10 @@ impl PerezSky {
 const GAUSS8: [(f64, f64); 8] = [
     (-0.960_289_856_497_536_2, 0.101_228_536_290_376_26),
     (-0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
-    (-0.525_532_409_916_329_0, 0.313_706_645_877_887_3),
-    (-0.183_434_642_495_649_8, 0.362_683_783_378_362_0),
-    (0.183_434_642_495_649_8, 0.362_683_783_378_362_0),
-    (0.525_532_409_916_329_0, 0.313_706_645_877_887_3),
+    (-0.525_532_409_916_329, 0.313_706_645_877_887_3),
+    (-0.183_434_642_495_649_8, 0.362_683_783_378_362),
+    (0.183_434_642_495_649_8, 0.362_683_783_378_362),
+    (0.525_532_409_916_329, 0.313_706_645_877_887_3),
     (0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
     (0.960_289_856_497_536_2, 0.101_228_536_290_376_26),
 ];
@@ -368,8 +380,16 @@ mod tests {
         assert!((c.direct_efficacy() - direct).abs() < 1e-9);
         // Daylight's efficacies: a clear sky's bluer diffuse light 120–160 lm/W, the sun's
         // 80–110 (Perez et al. 1990, fig. 4 and 5).
-        assert!((120.0..160.0).contains(&c.diffuse_efficacy()), "{}", c.diffuse_efficacy());
-        assert!((80.0..110.0).contains(&c.direct_efficacy()), "{}", c.direct_efficacy());
+        assert!(
+            (120.0..160.0).contains(&c.diffuse_efficacy()),
+            "{}",
+            c.diffuse_efficacy()
+        );
+        assert!(
+            (80.0..110.0).contains(&c.direct_efficacy()),
+            "{}",
+            c.direct_efficacy()
+        );
     }
 
     #[test]
@@ -426,11 +446,19 @@ mod tests {
                 let e = horizontal_integral(&|d| sky.luminance(d), sky.sun);
                 assert!((e / 20_000.0 - 1.0).abs() < 1e-12);
                 let fine = graded_integral(&|d| sky.luminance(d), sky.sun, 22);
-                assert!((fine / 20_000.0 - 1.0).abs() < 1e-10, "bin {} alt {alt}: {fine}", c.bin);
+                assert!(
+                    (fine / 20_000.0 - 1.0).abs() < 1e-10,
+                    "bin {} alt {alt}: {fine}",
+                    c.bin
+                );
                 if j == k % 3 {
                     let (m1, m2) = (midpoint(&sky, 1000), midpoint(&sky, 2000));
                     let r = (4.0 * m2 - m1) / 3.0;
-                    assert!((r / 20_000.0 - 1.0).abs() < 1e-6, "bin {} alt {alt}: {m1} {m2} {r}", c.bin);
+                    assert!(
+                        (r / 20_000.0 - 1.0).abs() < 1e-6,
+                        "bin {} alt {alt}: {m1} {m2} {r}",
+                        c.bin
+                    );
                 }
             }
         }
@@ -453,10 +481,16 @@ mod tests {
         for az in [0.0f64, 90.0, 180.0, 270.0] {
             let mut last = 0.0;
             for alt in [5.0f64, 15.0, 30.0, 45.0, 60.0, 75.0, 89.0] {
-                let l = sky.luminance(crate::daylight::direction(alt.to_radians(), az.to_radians())) / zenith;
+                let l = sky.luminance(crate::daylight::direction(
+                    alt.to_radians(),
+                    az.to_radians(),
+                )) / zenith;
                 // Flatter than CIE's overcast: brighter than it towards the horizon.
                 let cie = (1.0 + 2.0 * alt.to_radians().sin()) / 3.0;
-                assert!(l > last && (alt > 60.0 || l > cie), "alt {alt} az {az}: {l} {cie}");
+                assert!(
+                    l > last && (alt > 60.0 || l > cie),
+                    "alt {alt} az {az}: {l} {cie}"
+                );
                 last = l;
             }
         }

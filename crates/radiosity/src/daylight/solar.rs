@@ -147,7 +147,11 @@ mod tests {
         // Meeus example 25.a (1992 October 13.0 TD): δ = −7.78507°; example 28.b: the
         // equation of time that day is 13 min 42.6 s (Smart's series).
         let (d, e) = declination_and_equation_of_time(2448908.5);
-        assert!((d.to_degrees() + 7.78507).abs() < 2e-4, "{}", d.to_degrees());
+        assert!(
+            (d.to_degrees() + 7.78507).abs() < 2e-4,
+            "{}",
+            d.to_degrees()
+        );
         assert!((e - (13.0 + 42.6 / 60.0)).abs() < 0.02, "{e}");
     }
 
@@ -166,7 +170,11 @@ mod tests {
         let p = solar_position(&site, 2003, 10, 17, 12.0 + 30.5 / 60.0);
         let zenith = 90.0 - p.apparent_altitude().to_degrees();
         assert!((zenith - 50.11162).abs() < 0.01, "{zenith}");
-        assert!((p.azimuth.to_degrees() - 194.34024).abs() < 0.01, "{}", p.azimuth.to_degrees());
+        assert!(
+            (p.azimuth.to_degrees() - 194.34024).abs() < 0.01,
+            "{}",
+            p.azimuth.to_degrees()
+        );
     }
 
     #[test]
@@ -175,7 +183,11 @@ mod tests {
         // the June solstice's declination is the obliquity, 23.44° (2021-06-21 03:32 UT).
         let jd = julian_day(2021, 6, 21, 3.53);
         let (d, eot) = declination_and_equation_of_time(jd);
-        assert!((d.to_degrees() - 23.437).abs() < 0.005, "{}", d.to_degrees());
+        assert!(
+            (d.to_degrees() - 23.437).abs() < 0.005,
+            "{}",
+            d.to_degrees()
+        );
         let site = Site {
             latitude: 51.48,
             longitude: 0.0,
@@ -184,7 +196,11 @@ mod tests {
         // Greenwich: true noon is 12:00 − E.
         let noon = 12.0 - eot / 60.0;
         let p = solar_position(&site, 2021, 6, 21, noon);
-        assert!((p.azimuth.to_degrees() - 180.0).abs() < 0.05, "{}", p.azimuth.to_degrees());
+        assert!(
+            (p.azimuth.to_degrees() - 180.0).abs() < 0.05,
+            "{}",
+            p.azimuth.to_degrees()
+        );
         let want = 90.0 - 51.48 + d.to_degrees();
         assert!((p.altitude.to_degrees() - want).abs() < 0.01);
         // Sunrise is in the north-east, sunset in the north-west.
@@ -198,7 +214,13 @@ mod tests {
             longitude: 151.21,
             time_zone: 10.0,
         };
-        let p = solar_position(&sydney, 2021, 6, 21, 12.0 - eot / 60.0 + (150.0 - 151.21) / 15.0);
+        let p = solar_position(
+            &sydney,
+            2021,
+            6,
+            21,
+            12.0 - eot / 60.0 + (150.0 - 151.21) / 15.0,
+        );
         assert!(p.azimuth.to_degrees() < 0.05 || p.azimuth.to_degrees() > 359.95);
     }
 

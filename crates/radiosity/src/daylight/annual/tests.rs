@@ -28,7 +28,9 @@ impl SkySource for Constant {
 
 /// A deterministic pseudo-random number in [0, 1) (a 64-bit LCG's high bits).
 fn hash(i: u64) -> f64 {
-    let x = i.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let x = i
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     let x = (x ^ (x >> 29)).wrapping_mul(0xbf58476d1ce4e5b9);
     (x >> 11) as f64 / (1u64 << 53) as f64
 }
@@ -141,13 +143,22 @@ fn blocks_and_threads_do_not_change_the_result() {
             let mut sky = vec![0.0; n];
             let l = source.sky(h, false, &mut sky).unwrap();
             (0..points)
-                .map(|i| if l.lit { (0..n).map(|p| d.row(i)[p] * sky[p]).sum() } else { 0.0 })
+                .map(|i| {
+                    if l.lit {
+                        (0..n).map(|p| d.row(i)[p] * sky[p]).sum()
+                    } else {
+                        0.0
+                    }
+                })
                 .collect()
         })
         .collect();
     let mut results = Vec::new();
     for (threads, block) in [(1, 1), (1, 168), (2, 7), (2, 500), (3, 64)] {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         let params = AnnualParams {
             block_hours: block,
             ..Default::default()
@@ -156,7 +167,10 @@ fn blocks_and_threads_do_not_change_the_result() {
         for (h, e) in hours.iter().enumerate() {
             for i in 0..points {
                 let r = reference[h][i];
-                assert!((e[i] - r).abs() <= 1e-12 * r.abs().max(1.0), "hour {h} point {i}");
+                assert!(
+                    (e[i] - r).abs() <= 1e-12 * r.abs().max(1.0),
+                    "hour {h} point {i}"
+                );
             }
         }
         results.push((a, hours));
@@ -220,7 +234,13 @@ fn an_unobstructed_point_gets_the_weather_files_illuminance() {
         let (dni, dhi) = (r.direct_normal.unwrap(), r.diffuse_horizontal.unwrap());
         let want = if dhi > 0.0 {
             lit += 1;
-            let c = Condition::new(dni, dhi, pos.altitude, day_of_year(2005, r.month, r.day), 8.0);
+            let c = Condition::new(
+                dni,
+                dhi,
+                pos.altitude,
+                day_of_year(2005, r.month, r.day),
+                8.0,
+            );
             let e_n = dni * c.direct_efficacy() * pos.altitude.sin().max(0.0);
             if e_n >= 1000.0 && Occupancy::default().occupied(r.mid_hour()) {
                 sunny_occupied += 1;
@@ -230,7 +250,10 @@ fn an_unobstructed_point_gets_the_weather_files_illuminance() {
             0.0
         };
         for e in [hours_a[h][0], hours_a[h][1], hours_b[h][0]] {
-            assert!((e - want).abs() <= 1e-9 * want.max(1.0), "hour {h}: {e} vs {want}");
+            assert!(
+                (e - want).abs() <= 1e-9 * want.max(1.0),
+                "hour {h}: {e} vs {want}"
+            );
         }
     }
     assert_eq!(in_patch.lit_hours, lit);
@@ -255,10 +278,15 @@ fn missing_irradiance_and_mismatched_inputs_are_refused() {
     let params = AnnualParams::default();
     let skies = EpwSkies::new(&epw, &patches, &params);
     let d = DaylightMatrix::unobstructed_horizontal(&patches, 1);
-    let e = annual(&skies, &d, Sun::InPatch, &params, None).unwrap_err().to_string();
+    let e = annual(&skies, &d, Sun::InPatch, &params, None)
+        .unwrap_err()
+        .to_string();
     // 8 header lines, then Jan (744) + Feb (672) + 1 March day (24) + 12 hours.
     let line = 8 + 744 + 672 + 24 + 12;
-    assert_eq!(e, format!("gap.epw:{line}: the direct normal irradiance is missing (9999)"));
+    assert_eq!(
+        e,
+        format!("gap.epw:{line}: the direct normal irradiance is missing (9999)")
+    );
     let wrong = DaylightMatrix::unobstructed_horizontal(&SkyPatches::reinhart(2).unwrap(), 1);
     assert!(annual(&skies, &wrong, Sun::InPatch, &params, None).is_err());
     assert!(DaylightMatrix::new(2, 3, vec![0.0; 5]).is_err());
@@ -284,14 +312,20 @@ fn csv_outputs() {
     let dir = std::env::temp_dir().join(format!("radiosity-daylight-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("hourly.csv");
-    let a = annual_with_hourly_csv(&path, &source, &d, Sun::InPatch, &AnnualParams::default()).unwrap();
+    let a =
+        annual_with_hourly_csv(&path, &source, &d, Sun::InPatch, &AnnualParams::default()).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 49);
     assert_eq!(lines[0], "month,day,hour,p0,p1");
     assert_eq!(lines[1], "0,0,0,1000.0,1000.0");
     let mut out = Vec::new();
-    write_metrics_csv(&mut out, &a.metrics, Some(&[[1.0, 2.0, 0.8], [1.5, 2.0, 0.8]])).unwrap();
+    write_metrics_csv(
+        &mut out,
+        &a.metrics,
+        Some(&[[1.0, 2.0, 0.8], [1.5, 2.0, 0.8]]),
+    )
+    .unwrap();
     let text = String::from_utf8(out).unwrap();
     assert_eq!(
         text.lines().nth(1).unwrap(),
