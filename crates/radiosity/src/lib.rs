@@ -37,6 +37,7 @@
 pub mod accel;
 pub mod color;
 pub mod comm;
+pub mod daylight;
 pub mod distributed;
 pub mod export;
 pub mod formfactor;

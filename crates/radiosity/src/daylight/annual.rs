@@ -1,0 +1,604 @@
+//! A year of daylight by daylight coefficients (Tregenza & Waters 1983, "Daylight
+//! coefficients", *Lighting Research and Technology* 15(2):65–71).
+//!
+//! Light is linear in its sources: if D_ip is the illuminance at point i from patch p of the
+//! sky shining alone with unit luminance (1 cd/m², all else dark), then the illuminance under
+//! a sky of patch luminances L_p is E_i = Σ_p D_ip L_p. For a year, with the hourly sky
+//! vectors as the columns of S (patches × hours), E = D S: one matrix product. A radiosity
+//! solve per patch gives D with every interreflection; here D is an input
+//! ([`DaylightMatrix`]), so anything can supply it.
+//!
+//! Each hour's sky vector ([`EpwSkies`]): the sun's position ([`super::solar`]) at the middle
+//! of the hour, the Perez condition and efficacies ([`super::perez`]) from the record's
+//! direct-normal and diffuse-horizontal irradiance and dew point, the mean relative
+//! luminance of the Perez sky over each patch ([`SkyPatches::sky_means`]), scaled so that
+//! an unobstructed horizontal surface receives exactly the diffuse illuminance E_d from the
+//! patches (Σ_p L_p ∫_p sin θ dω = E_d: the normalisation is over the patches, as
+//! `gendaymtx` does, so the discretisation does not change the sky's horizontal
+//! illuminance), and the ground, a uniform luminance ρ_g (E_d + E_n sin α)/π.
+//!
+//! The sun ([`Sun`]) is either in its patch (the 2-phase method: its luminance over the
+//! patch containing it, [`SkyPatches::add_sun`]) or at its true position through
+//! [`SunCoefficients`], the illuminance at every point from a sun of unit direct normal
+//! illuminance (the 5-phase method's and DAYSIM's direct-sun coefficients). Annual sunlight
+//! exposure needs the direct sun apart: with the sun in its patch, it is that patch's term
+//! D_ip L_sun (which includes the sunlight interreflected, so it over-counts ASE's direct-only
+//! definition); with [`Sun::Exact`] it is the callback's value times E_n.
+//!
+//! The product streams: hours go in blocks of [`AnnualParams::block_hours`], the sky vectors
+//! of a block (hours × patches) are built in parallel, then each thread takes points in
+//! chunks and forms their dot products with every lit hour of the block, so memory stays
+//! points × block and each entry is summed by one thread in a fixed order (the result does
+//! not depend on the thread count). Dark hours (no diffuse light) give 0 without a product.
+
+use super::epw::Epw;
+use super::metrics::{Accumulator, MetricParams, Metrics, Occupancy};
+use super::patches::SkyPatches;
+use super::perez::{Condition, PerezSky, DEFAULT_DEW_POINT};
+use super::solar::{solar_position, Site};
+use super::DaylightError;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+use std::io::Write as _;
+
+/// Daylight coefficients: illuminance (lx) at each point per unit luminance (cd/m²) of each
+/// patch, points × patches, row-major; the patches are a [`SkyPatches`]' (the sky's, then the
+/// ground).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DaylightMatrix {
+    points: usize,
+    patches: usize,
+    values: Vec<f64>,
+}
+
+impl DaylightMatrix {
+    /// The matrix from its values (row-major, `points × patches`, finite).
+    pub fn new(
+        points: usize,
+        patches: usize,
+        values: Vec<f64>,
+    ) -> Result<DaylightMatrix, DaylightError> {
+        if points.checked_mul(patches) != Some(values.len()) {
+            return Err(DaylightError::Parameter(format!(
+                "{} daylight coefficients for {points} points × {patches} patches",
+                values.len()
+            )));
+        }
+        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+            return Err(DaylightError::Parameter(format!(
+                "daylight coefficient of point {} and patch {} is not finite",
+                k / patches.max(1),
+                k % patches.max(1)
+            )));
+        }
+        Ok(DaylightMatrix {
+            points,
+            patches,
+            values,
+        })
+    }
+
+    /// The matrix of `f(point, patch)`.
+    pub fn from_fn(
+        points: usize,
+        patches: usize,
+        f: impl Fn(usize, usize) -> f64,
+    ) -> DaylightMatrix {
+        let mut values = Vec::with_capacity(points * patches);
+        for i in 0..points {
+            for p in 0..patches {
+                values.push(f(i, p));
+            }
+        }
+        DaylightMatrix {
+            points,
+            patches,
+            values,
+        }
+    }
+
+    /// The coefficients of an unobstructed point facing straight up: ∫_p sin θ dω for each
+    /// sky patch, 0 for the ground (the closed form the tests and examples use).
+    pub fn unobstructed_horizontal(patches: &SkyPatches, points: usize) -> DaylightMatrix {
+        DaylightMatrix::from_fn(points, patches.len(), |_, p| patches.cosine_solid_angle(p))
+    }
+
+    /// Points.
+    pub fn points(&self) -> usize {
+        self.points
+    }
+
+    /// Patches.
+    pub fn patches(&self) -> usize {
+        self.patches
+    }
+
+    /// Point `i`'s coefficients.
+    pub fn row(&self, i: usize) -> &[f64] {
+        &self.values[i * self.patches..(i + 1) * self.patches]
+    }
+}
+
+/// Illuminance at every point from a sun of unit direct normal illuminance (1 lx).
+pub trait SunCoefficients: Sync {
+    /// Write into `out` (one value a point) the illuminance from a sun in unit direction
+    /// `to_sun` (x east, y north, z up) of 1 lx direct normal illuminance.
+    fn sun(&self, to_sun: [f64; 3], out: &mut [f64]);
+}
+
+impl<F: Fn([f64; 3], &mut [f64]) + Sync> SunCoefficients for F {
+    fn sun(&self, to_sun: [f64; 3], out: &mut [f64]) {
+        self(to_sun, out)
+    }
+}
+
+/// Where the sun goes (see the module documentation).
+#[derive(Clone, Copy)]
+pub enum Sun<'a> {
+    /// Into the sky patch that contains it (2-phase).
+    InPatch,
+    /// At its true position, by direct-sun coefficients.
+    Exact(&'a dyn SunCoefficients),
+}
+
+/// The annual run's settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnnualParams {
+    /// Reflectance of the ground outside (0…1; 0.2).
+    pub ground_reflectance: f64,
+    /// Which hours the metrics count.
+    pub occupancy: Occupancy,
+    /// The metrics' thresholds.
+    pub metrics: MetricParams,
+    /// Hours per block of the product (168: a week).
+    pub block_hours: usize,
+    /// Cells per patch side for the patches' mean luminance (4: 16 cells a patch).
+    pub patch_samples: usize,
+}
+
+impl Default for AnnualParams {
+    fn default() -> Self {
+        AnnualParams {
+            ground_reflectance: 0.2,
+            occupancy: Occupancy::default(),
+            metrics: MetricParams::default(),
+            block_hours: 168,
+            patch_samples: 4,
+        }
+    }
+}
+
+impl AnnualParams {
+    /// Check every setting is in range.
+    pub fn validate(&self) -> Result<(), DaylightError> {
+        if !(0.0..=1.0).contains(&self.ground_reflectance) {
+            return Err(DaylightError::Parameter(format!(
+                "the ground reflectance {} is outside 0…1",
+                self.ground_reflectance
+            )));
+        }
+        if !(1..=8784).contains(&self.block_hours) || !(1..=64).contains(&self.patch_samples) {
+            return Err(DaylightError::Parameter(format!(
+                "{} hours a block (1…8784) and {} samples a patch side (1…64)",
+                self.block_hours, self.patch_samples
+            )));
+        }
+        self.occupancy.validate()?;
+        self.metrics.validate()
+    }
+}
+
+/// One hour's light, besides its sky vector.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HourLight {
+    /// Whether the metrics count this hour.
+    pub occupied: bool,
+    /// Whether there is any light (a sky vector not all zero).
+    pub lit: bool,
+    /// Unit direction towards the sun.
+    pub sun: [f64; 3],
+    /// Direct normal illuminance, lx (0 when the sun is below the horizon).
+    pub direct_normal: f64,
+    /// Diffuse horizontal illuminance, lx.
+    pub diffuse_horizontal: f64,
+    /// With the sun in its patch: the patch and the luminance added to it.
+    pub sun_patch: Option<(usize, f64)>,
+}
+
+/// A sequence of hourly skies over a patch subdivision.
+pub trait SkySource: Sync {
+    /// The patches the sky vectors are over.
+    fn patches(&self) -> &SkyPatches;
+    /// Hours.
+    fn hours(&self) -> usize;
+    /// Hour `h`'s month, day and hour (1…24, the hour ending) for output; `[0, 0, h]` when
+    /// the source has no calendar.
+    fn stamp(&self, h: usize) -> [u32; 3] {
+        [0, 0, h as u32]
+    }
+    /// Hour `h`'s patch luminances (cd/m², the ground last) into `out`, the sun added to its
+    /// patch when `sun_in_patch`; its light otherwise.
+    fn sky(
+        &self,
+        h: usize,
+        sun_in_patch: bool,
+        out: &mut [f64],
+    ) -> Result<HourLight, DaylightError>;
+}
+
+/// The skies of an EPW file's hours (see the module documentation).
+pub struct EpwSkies<'a> {
+    epw: &'a Epw,
+    patches: &'a SkyPatches,
+    params: AnnualParams,
+    site: Site,
+}
+
+impl<'a> EpwSkies<'a> {
+    /// The skies of `epw` over `patches`.
+    pub fn new(epw: &'a Epw, patches: &'a SkyPatches, params: &AnnualParams) -> EpwSkies<'a> {
+        let l = &epw.location;
+        EpwSkies {
+            epw,
+            patches,
+            params: *params,
+            site: Site {
+                latitude: l.latitude,
+                longitude: l.longitude,
+                time_zone: l.time_zone,
+            },
+        }
+    }
+}
+
+/// Day of the year (1…366) of a record's date, in its own year.
+fn day_of_year(year: i32, month: u32, day: u32) -> u32 {
+    let leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+    let feb = if leap { 29 } else { 28 };
+    let days = [31, feb, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31];
+    days[..(month as usize - 1)].iter().sum::<u32>() + day
+}
+
+impl SkySource for EpwSkies<'_> {
+    fn patches(&self) -> &SkyPatches {
+        self.patches
+    }
+
+    fn hours(&self) -> usize {
+        self.epw.records.len()
+    }
+
+    fn stamp(&self, h: usize) -> [u32; 3] {
+        let r = &self.epw.records[h];
+        [r.month, r.day, r.hour]
+    }
+
+    fn sky(
+        &self,
+        h: usize,
+        sun_in_patch: bool,
+        out: &mut [f64],
+    ) -> Result<HourLight, DaylightError> {
+        let r = &self.epw.records[h];
+        let at = |what: &str| {
+            super::invalid(&self.epw.name, r.line, format!("{what} is missing (9999)"))
+        };
+        let direct = r
+            .direct_normal
+            .ok_or_else(|| at("the direct normal irradiance"))?;
+        let diffuse = r
+            .diffuse_horizontal
+            .ok_or_else(|| at("the diffuse horizontal irradiance"))?;
+        // Typical-year files mix years; a year outside the algorithm's range is taken as a
+        // common year.
+        let year = if (1800..=2200).contains(&r.year) {
+            r.year
+        } else {
+            2019
+        };
+        let pos = solar_position(&self.site, year, r.month, r.day, r.mid_hour());
+        let mut light = HourLight {
+            occupied: self.params.occupancy.occupied(r.mid_hour()),
+            sun: pos.direction(),
+            ..Default::default()
+        };
+        out.iter_mut().for_each(|v| *v = 0.0);
+        if diffuse <= 0.0 {
+            // No diffuse light: a dark hour (gendaymtx does the same).
+            return Ok(light);
+        }
+        let doy = day_of_year(year, r.month, r.day);
+        let condition = Condition::new(
+            direct,
+            diffuse,
+            pos.altitude,
+            doy,
+            r.dew_point.unwrap_or(DEFAULT_DEW_POINT),
+        );
+        let e_d = diffuse * condition.diffuse_efficacy();
+        let e_n = if pos.altitude > 0.0 {
+            direct * condition.direct_efficacy()
+        } else {
+            0.0
+        };
+        let sky = PerezSky::relative(&condition, pos.azimuth);
+        let patches = self.patches;
+        patches.sky_means(&|d| sky.luminance(d), self.params.patch_samples, out);
+        let horizontal: f64 = (0..patches.sky_count())
+            .map(|p| out[p] * patches.cosine_solid_angle(p))
+            .sum();
+        if horizontal > 0.0 {
+            let k = e_d / horizontal;
+            out[..patches.sky_count()].iter_mut().for_each(|v| *v *= k);
+        }
+        out[patches.ground()] =
+            self.params.ground_reflectance * (e_d + e_n * pos.altitude.sin().max(0.0)) / PI;
+        light.lit = true;
+        light.direct_normal = e_n;
+        light.diffuse_horizontal = e_d;
+        if sun_in_patch {
+            if let Some(p) = patches.add_sun(light.sun, e_n, out) {
+                light.sun_patch = Some((p, e_n * light.sun[2] / patches.cosine_solid_angle(p)));
+            }
+        }
+        Ok(light)
+    }
+}
+
+/// A block of hours' illuminance, handed to the hourly sink.
+pub struct HourBlock<'a> {
+    /// Index of the block's first hour.
+    pub first: usize,
+    /// Hours in the block.
+    pub hours: usize,
+    /// Points.
+    pub points: usize,
+    /// `total[i * hours + h]`: point i's illuminance in hour `first + h`, lx.
+    pub total: &'a [f64],
+}
+
+/// Where [`annual`] hands each block of hourly illuminance (an hourly CSV, a plot, a test).
+pub type HourlySink<'a> = &'a mut dyn FnMut(&HourBlock) -> Result<(), DaylightError>;
+
+/// The year's result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Annual {
+    /// Hours run.
+    pub hours: usize,
+    /// Hours with light.
+    pub lit_hours: usize,
+    /// The metrics over the occupied hours.
+    pub metrics: Metrics,
+}
+
+/// Dot product, four partial sums (the order is fixed: the result does not depend on
+/// threads).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut s = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for k in 0..4 {
+            s[k] += x[k] * y[k];
+        }
+    }
+    let mut t = (s[0] + s[1]) + (s[2] + s[3]);
+    for (x, y) in ra.iter().zip(rb) {
+        t += x * y;
+    }
+    t
+}
+
+/// Points a thread takes at a time in the product.
+const POINT_CHUNK: usize = 32;
+
+/// Run the year: every hour of `skies` through `coefficients`, the sun as `sun` says, the
+/// metrics accumulated and each block of hourly illuminance handed to `hourly` (when given)
+/// in order.
+pub fn annual(
+    skies: &dyn SkySource,
+    coefficients: &DaylightMatrix,
+    sun: Sun,
+    params: &AnnualParams,
+    mut hourly: Option<HourlySink>,
+) -> Result<Annual, DaylightError> {
+    params.validate()?;
+    let patches = skies.patches().len();
+    if coefficients.patches() != patches {
+        return Err(DaylightError::Parameter(format!(
+            "the daylight coefficients have {} patches, the sky {patches}",
+            coefficients.patches()
+        )));
+    }
+    let points = coefficients.points();
+    if points == 0 {
+        return Err(DaylightError::Parameter(
+            "no points to compute daylight at".into(),
+        ));
+    }
+    let hours = skies.hours();
+    let block = params.block_hours.min(hours.max(1));
+    let in_patch = matches!(sun, Sun::InPatch);
+    // The block's buffers, allocated once.
+    let mut s = vec![0.0; block * patches];
+    let mut light = vec![HourLight::default(); block];
+    let mut total = vec![0.0; points * block];
+    let mut direct = vec![0.0; block * points];
+    let mut occupied = vec![false; block];
+    let mut acc = Accumulator::new(points, params.metrics);
+    let mut lit_hours = 0;
+    let mut first = 0;
+    while first < hours {
+        let nb = block.min(hours - first);
+        // The sky vectors (and the exact sun's coefficients), an hour a task.
+        s[..nb * patches]
+            .par_chunks_mut(patches)
+            .zip(light[..nb].par_iter_mut())
+            .zip(direct[..nb * points].par_chunks_mut(points))
+            .enumerate()
+            .try_for_each(|(h, ((sky, l), d))| -> Result<(), DaylightError> {
+                *l = skies.sky(first + h, in_patch, sky)?;
+                d.iter_mut().for_each(|v| *v = 0.0);
+                if let Sun::Exact(c) = sun {
+                    if l.lit && l.direct_normal > 0.0 {
+                        c.sun(l.sun, d);
+                        d.iter_mut().for_each(|v| *v *= l.direct_normal);
+                    }
+                }
+                Ok(())
+            })?;
+        // E = D S for the block's lit hours, points in chunks.
+        let (s_ref, l_ref, d_ref) = (&s, &light[..nb], &direct);
+        total[..points * nb]
+            .par_chunks_mut(POINT_CHUNK * nb)
+            .enumerate()
+            .for_each(|(c, out)| {
+                for (k, row_out) in out.chunks_mut(nb).enumerate() {
+                    let i = c * POINT_CHUNK + k;
+                    let row = coefficients.row(i);
+                    for h in 0..nb {
+                        row_out[h] = if l_ref[h].lit {
+                            dot(row, &s_ref[h * patches..(h + 1) * patches])
+                                + if in_patch { 0.0 } else { d_ref[h * points + i] }
+                        } else {
+                            0.0
+                        };
+                    }
+                }
+            });
+        if in_patch {
+            // ASE's direct sun: the sun patch's term alone.
+            direct[..nb * points]
+                .par_chunks_mut(points)
+                .zip(light[..nb].par_iter())
+                .for_each(|(d, l)| match l.sun_patch {
+                    Some((p, lum)) => d
+                        .iter_mut()
+                        .enumerate()
+                        .for_each(|(i, v)| *v = coefficients.row(i)[p] * lum),
+                    None => d.iter_mut().for_each(|v| *v = 0.0),
+                });
+        }
+        for h in 0..nb {
+            occupied[h] = light[h].occupied;
+        }
+        lit_hours += light[..nb].iter().filter(|l| l.lit).count();
+        acc.add_block(
+            &occupied[..nb],
+            &total[..points * nb],
+            &direct[..nb * points],
+        );
+        if let Some(sink) = hourly.as_mut() {
+            sink(&HourBlock {
+                first,
+                hours: nb,
+                points,
+                total: &total[..points * nb],
+            })?;
+        }
+        first += nb;
+    }
+    Ok(Annual {
+        hours,
+        lit_hours,
+        metrics: acc.finish(),
+    })
+}
+
+/// Write the metrics as CSV: one row a point, `point` (0-based), its position when
+/// `positions` are given (`x,y,z`), `daylight_autonomy` (share of occupied hours ≥ the sDA
+/// illuminance), `sun_hours` (occupied hours of direct sun ≥ the ASE illuminance),
+/// `udi_fell_short`, `udi_supplementary`, `udi_autonomous`, `udi_exceeded` (shares of occupied
+/// hours), `in_sda` and `in_ase` (1 or 0).
+pub fn write_metrics_csv(
+    w: &mut dyn std::io::Write,
+    metrics: &Metrics,
+    positions: Option<&[[f64; 3]]>,
+) -> std::io::Result<()> {
+    write!(w, "point")?;
+    if positions.is_some() {
+        write!(w, ",x,y,z")?;
+    }
+    writeln!(
+        w,
+        ",daylight_autonomy,sun_hours,udi_fell_short,udi_supplementary,udi_autonomous,udi_exceeded,in_sda,in_ase"
+    )?;
+    for (i, m) in metrics.points.iter().enumerate() {
+        write!(w, "{i}")?;
+        if let Some(p) = positions.and_then(|p| p.get(i)) {
+            write!(w, ",{},{},{}", p[0], p[1], p[2])?;
+        }
+        writeln!(
+            w,
+            ",{:.4},{},{:.4},{:.4},{:.4},{:.4},{},{}",
+            m.daylight_autonomy,
+            m.sun_hours,
+            m.udi[0],
+            m.udi[1],
+            m.udi[2],
+            m.udi[3],
+            m.in_sda as u8,
+            m.in_ase as u8
+        )?;
+    }
+    Ok(())
+}
+
+/// Run [`annual`] writing every hour's illuminance to `path` as CSV, whole or not at all
+/// ([`crate::io::write_atomic`]): a header `month,day,hour,p0,p1,…` and one row an hour, the
+/// illuminance of each point in lx to 0.1 lx.
+pub fn annual_with_hourly_csv(
+    path: &std::path::Path,
+    skies: &dyn SkySource,
+    coefficients: &DaylightMatrix,
+    sun: Sun,
+    params: &AnnualParams,
+) -> Result<Annual, DaylightError> {
+    let mut outcome: Option<Result<Annual, DaylightError>> = None;
+    let written = crate::io::write_atomic::<DaylightError>(path, |w| {
+        write!(w, "month,day,hour")?;
+        for i in 0..coefficients.points() {
+            write!(w, ",p{i}")?;
+        }
+        writeln!(w)?;
+        let mut failed: Option<std::io::Error> = None;
+        let mut sink = |b: &HourBlock| -> Result<(), DaylightError> {
+            let result = (|| -> std::io::Result<()> {
+                for h in 0..b.hours {
+                    let [m, d, hr] = skies.stamp(b.first + h);
+                    write!(w, "{m},{d},{hr}")?;
+                    for i in 0..b.points {
+                        write!(w, ",{:.1}", b.total[i * b.hours + h])?;
+                    }
+                    writeln!(w)?;
+                }
+                Ok(())
+            })();
+            result.map_err(|e| {
+                failed = Some(e);
+                DaylightError::Parameter("the hourly output could not be written".into())
+            })
+        };
+        let result = annual(skies, coefficients, sun, params, Some(&mut sink));
+        if let Some(e) = failed {
+            return Err(e);
+        }
+        let ok = result.is_ok();
+        outcome = Some(result);
+        if ok {
+            Ok(())
+        } else {
+            Err(std::io::Error::other("the annual run failed"))
+        }
+    });
+    match (outcome, written) {
+        // The run failed: its error, the partial file removed.
+        (Some(Err(e)), _) => Err(e),
+        (_, Err(e)) => Err(e),
+        (Some(Ok(a)), Ok(())) => Ok(a),
+        (None, Ok(())) => unreachable!("the body always runs the year"),
+    }
+}
+
+#[cfg(test)]
+mod tests;
