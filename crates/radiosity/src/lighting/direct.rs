@@ -154,9 +154,7 @@ pub(crate) fn illuminance(
         )
     };
     let inside = |(u, v): (f64, f64)| !o.round || u * u + v * v <= 0.25;
-    let count = (0..n * n)
-        .filter(|&k| inside(centre(k / n, k % n)))
-        .count();
+    let count = (0..n * n).filter(|&k| inside(centre(k / n, k % n))).count();
     let share = 1.0 / count.max(1) as f64;
     let mut e = 0.0;
     for k in 0..n * n {

@@ -27,7 +27,12 @@ fn corner_cosine_integral(a: f64, b: f64, h: f64) -> f64 {
 
 /// `f` over the rectangle [x0, x1] × [y0, y1] seen from above (px, py): the signed sum of
 /// its four corner terms.
-fn over_rectangle(f: impl Fn(f64, f64) -> f64, [x0, x1, y0, y1]: [f64; 4], px: f64, py: f64) -> f64 {
+fn over_rectangle(
+    f: impl Fn(f64, f64) -> f64,
+    [x0, x1, y0, y1]: [f64; 4],
+    px: f64,
+    py: f64,
+) -> f64 {
     f(x1 - px, y1 - py) - f(x0 - px, y1 - py) - f(x1 - px, y0 - py) + f(x0 - px, y0 - py)
 }
 
@@ -66,18 +71,29 @@ fn an_isotropic_source_sends_a_rectangle_its_solid_angle() {
     let (_, mesh) = rectangle(rect, 10.0);
     assert_eq!(mesh.len(), 1);
     let i0 = 1000.0;
-    for x in [[1.0, 0.75, 0.8], [0.0, 0.0, 1.5], [3.0, -0.5, 0.4], [1.0, 0.75, 25.0]] {
+    for x in [
+        [1.0, 0.75, 0.8],
+        [0.0, 0.0, 1.5],
+        [3.0, -0.5, 0.4],
+        [1.0, 0.75, 25.0],
+    ] {
         let l = at(isotropic(i0), x);
         let e = patch_illuminance(&mesh, std::slice::from_ref(&l), None, 1.0).unwrap();
         let omega = over_rectangle(|a, b| corner_solid_angle(a, b, x[2]), rect, x[0], x[1]);
         let want = i0 * omega;
         let got = flux_on(&mesh, &e, 0);
-        assert!((got - want).abs() < 1e-9 * want, "{x:?}: {got} lm, I Ω = {want} lm");
+        assert!(
+            (got - want).abs() < 1e-9 * want,
+            "{x:?}: {got} lm, I Ω = {want} lm"
+        );
     }
     // The midpoint rule under the middle: I A / h² = 4,688 lm against I Ω = 2,254 lm.
     let l = at(isotropic(i0), [1.0, 0.75, 0.8]);
     let centre = crate::lighting::SensorPoint::new([1.0, 0.75, 0.0], [0.0, 0.0, 1.0]).unwrap();
-    let midpoint = 3.0 * direct_illuminance(&[centre], &[l], None, 1.0).unwrap().total[0];
+    let midpoint = 3.0
+        * direct_illuminance(&[centre], &[l], None, 1.0)
+            .unwrap()
+            .total[0];
     let omega = over_rectangle(|a, b| corner_solid_angle(a, b, 0.8), rect, 1.0, 0.75);
     assert!((midpoint - 4687.5).abs() < 1e-9 && (i0 * omega - 2254.0).abs() < 1.0);
 }
@@ -103,12 +119,18 @@ fn a_cosine_source_sends_a_rectangle_its_form_factor_integral() {
     let (_, mesh) = rectangle(rect, 10.0);
     for x in [[1.0, 0.75, 0.8], [0.0, 0.0, 1.3], [2.5, 2.0, 0.6]] {
         let l = at(cosine.clone(), x);
-        let want =
-            i0 * over_rectangle(|a, b| corner_cosine_integral(a, b, x[2]), rect, x[0], x[1]);
+        let want = i0 * over_rectangle(|a, b| corner_cosine_integral(a, b, x[2]), rect, x[0], x[1]);
         let lums = std::slice::from_ref(&l);
-        let got = flux_on(&mesh, &patch_illuminance(&mesh, lums, None, 1.0).unwrap(), 0);
+        let got = flux_on(
+            &mesh,
+            &patch_illuminance(&mesh, lums, None, 1.0).unwrap(),
+            0,
+        );
         let err = (got - want).abs() / want;
-        assert!(err < 1.25e-3, "{x:?}: {got} lm, closed form {want} lm ({err:e})");
+        assert!(
+            err < 1.25e-3,
+            "{x:?}: {got} lm, closed form {want} lm ({err:e})"
+        );
         let fine = patch_illuminance_with(&mesh, lums, None, 1.0, 0.05, 6).unwrap();
         let fine_err = (flux_on(&mesh, &fine, 0) - want).abs() / want;
         assert!(fine_err < 0.5 * err + 2e-5, "{x:?}: {err:e} → {fine_err:e}");
@@ -121,8 +143,18 @@ fn a_cosine_source_sends_a_rectangle_its_form_factor_integral() {
 fn a_shadow_along_patch_edges_is_exact() {
     let (h, i0) = (1.0, 1000.0);
     let v = |x: f64, y: f64, z: f64| Vec3::new(x as f32, y as f32, z as f32);
-    let floor = vec![v(-1., -1., 0.), v(1., -1., 0.), v(1., 1., 0.), v(-1., 1., 0.)];
-    let board = vec![v(-3., -3., h / 2.), v(-3., 3., h / 2.), v(0., 3., h / 2.), v(0., -3., h / 2.)];
+    let floor = vec![
+        v(-1., -1., 0.),
+        v(1., -1., 0.),
+        v(1., 1., 0.),
+        v(-1., 1., 0.),
+    ];
+    let board = vec![
+        v(-3., -3., h / 2.),
+        v(-3., 3., h / 2.),
+        v(0., 3., h / 2.),
+        v(0., -3., h / 2.),
+    ];
     let polygon = |vertices| Polygon {
         vertices,
         material: 0,
@@ -141,5 +173,8 @@ fn a_shadow_along_patch_edges_is_exact() {
     let e = patch_illuminance(&mesh, std::slice::from_ref(&l), Some(&bvh), 1.0).unwrap();
     let want = 0.5 * i0 * 4.0 * corner_solid_angle(1.0, 1.0, h);
     let got = flux_on(&mesh, &e, 0);
-    assert!((got - want).abs() < 1e-6 * want, "{got} lm, I Ω / 2 = {want} lm");
+    assert!(
+        (got - want).abs() < 1e-6 * want,
+        "{got} lm, I Ω / 2 = {want} lm"
+    );
 }

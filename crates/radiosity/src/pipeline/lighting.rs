@@ -112,7 +112,7 @@ impl Default for LightingSettings {
             },
             gather: GatherParams {
                 direct: 16,
-                indirect: 256,
+                indirect: 1024,
                 cache_samples: 0,
                 ..GatherParams::default()
             },
