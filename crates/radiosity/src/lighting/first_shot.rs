@@ -94,7 +94,7 @@ pub fn patch_illuminance_with(
             "the scene unit must be a finite length > 0 metres, not {unit_metres}"
         )));
     }
-    if !(ratio > 0.0) || max_depth > MAX_DEPTH {
+    if ratio.is_nan() || ratio <= 0.0 || max_depth > MAX_DEPTH {
         return Err(LightingError::Parameter(format!(
             "the first shot's cells need a size ratio > 0 and at most {MAX_DEPTH} halvings, \
              not {ratio} and {max_depth}"
