@@ -31,7 +31,7 @@
 //!    centroid's distance − e), at most [`MAX_DEPTH`] times (cells down to 1/64 of a side,
 //!    only around the luminaire's foot); each leaf is sampled at its centroid with its own
 //!    shadow ray (a luminaire in the near field of a point keeps its opening cells,
-//!    [`MAX_CELLS`]/2^depth along a side, so a cell costs at most a few rays);
+//!    32/2^depth along a side, so a cell costs at most a few rays);
 //! 3. for a point luminaire (no opening, or the patch five openings away) each cell's
 //!    geometric factor is exact: its area times E at the sample is scaled by the cell's solid
 //!    angle Ω_k over A_k cos θ_k / d_k², so Φ_P = Σ_k Ω_k I_k V_k, with Ω_k by Van Oosterom
