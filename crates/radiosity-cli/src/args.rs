@@ -395,7 +395,7 @@ pub struct LightingArgs {
     #[arg(long, value_name = "F", default_value_t = 1e-3, help_heading = SOLVER)]
     pub tolerance: f64,
     /// Gather: pairs of samples per point for the light arriving from the surfaces.
-    #[arg(long, value_name = "N", default_value_t = 256, help_heading = SOLVER)]
+    #[arg(long, value_name = "N", default_value_t = 1024, help_heading = SOLVER)]
     pub indirect_samples: u32,
     /// Seed of every random stream.
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = RUN)]

@@ -6,6 +6,7 @@ use crate::args::{IntegratorArg, RenderArgs, ReportFormat, UpArg};
 use crate::{capped, default_output, load_scene, report, settings, solve_scene};
 use anyhow::{bail, Context, Result};
 use radiosity::export::{write_image, ImageFormat};
+use radiosity::io::FileFormat;
 use radiosity::lighting::{read_schedule, Up};
 use radiosity::pipeline::{self, lighting_solution, LightingSettings, Method};
 use radiosity::render::gather::GatherParams;
@@ -287,12 +288,31 @@ fn luminaires(
         bail!("--luminaires: the interreflection is solved on uniform patches; the hierarchical solver does not take luminaires");
     };
     let schedule = a.luminaires.as_deref().context("--luminaires")?;
-    let up = match a.vertical.unwrap_or(UpArg::Z) {
-        UpArg::Z => Up::Z,
-        UpArg::Y => Up::Y,
+    // A glTF scene is y-up, and its own lights (KHR_lights_punctual, EXT_lights_ies) light
+    // it beside the schedule's, as in `lighting`.
+    let is_gltf = matches!(
+        FileFormat::from_path(Path::new(&a.solve.scene)),
+        Some(FileFormat::Gltf | FileFormat::Glb)
+    );
+    let up = match (a.vertical, is_gltf) {
+        (Some(UpArg::Z), true) => {
+            bail!(
+                "--vertical z: {} is glTF, whose scenes are always y-up",
+                a.solve.scene
+            )
+        }
+        (Some(UpArg::Y), _) | (None, true) => Up::Y,
+        (Some(UpArg::Z), false) | (None, false) => Up::Z,
     };
     let unit = a.unit.unwrap_or(crate::args::UnitArg::M).metres();
-    let lums = read_schedule(schedule, up)?;
+    let mut lums = read_schedule(schedule, up)?;
+    if is_gltf {
+        let (own, warnings) = radiosity::lighting::gltf_luminaires(Path::new(&a.solve.scene))?;
+        for w in warnings {
+            eprintln!("radiosity: warning: {w}");
+        }
+        lums.extend(own);
+    }
     crate::lighting::warn_photometry(&lums);
     let scene = load_scene(&a.solve.scene, a.solve.one_sided)?;
     let lighting = LightingSettings {

@@ -89,3 +89,93 @@ fn a_gltf_scene_is_lit_by_its_own_lights() {
         &["floor.bin", "floor.pts", "floor.gltf", "grid.csv"],
     );
 }
+
+/// `render --luminaires` on a glTF scene adds the file's own lights to the schedule's: the
+/// floor made grey (ρ = 0.5), its 300 cd point light 2 m above the centre and a scheduled
+/// 1,000 cd isotropic luminaire at (1, 2, 0) (y-up without `--vertical`); the one pixel, at
+/// the image's centre, sees the floor's centre, whose luminance is ρ E / π with
+/// E = 300/2² + 1000 · 2/5^{3/2} lx (the inverse-square cosine law; a lone floor
+/// interreflects nothing), to `f32` rounding; the schedule's alone would be 30 % of it.
+#[test]
+fn render_takes_a_gltf_scenes_own_lights() {
+    let dir = scratch("render-gltf-lights");
+    floor_scene(&dir);
+    let gltf = std::fs::read_to_string(dir.join("floor.gltf")).unwrap();
+    write(
+        &dir,
+        "floor.gltf",
+        &gltf.replace("[0,0,0,1]", "[0.5,0.5,0.5,1]"),
+    );
+    let gammas: Vec<String> = (0..=36).map(|k| (5 * k).to_string()).collect();
+    write(
+        &dir,
+        "iso.ies",
+        &format!(
+            "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 37 1 1 2 0 0 0\n1 1 0\n{}\n0\n{}\n",
+            gammas.join(" "),
+            vec!["1000"; 37].join(" ")
+        ),
+    );
+    write(
+        &dir,
+        "schedule.csv",
+        "name,file,x,y,z,aim_x,aim_y,aim_z,c0_x,c0_y,c0_z,multiplier,group\n\
+         lamp,iso.ies,1,2,0,,,,,,,1,\n",
+    );
+    run_ok(
+        &[
+            "render",
+            "floor.gltf",
+            "--luminaires",
+            "schedule.csv",
+            "--luminance",
+            "-o",
+            "floor.pfm",
+            "--eye",
+            "0,6,0",
+            "--target",
+            "0,0,0",
+            "--up",
+            "0,0,-1",
+            "--width",
+            "1",
+            "--height",
+            "1",
+            "--spp",
+            "1",
+            "--patches",
+            "64",
+        ],
+        &dir,
+    );
+    let pixels = read_pfm_pixels(&dir.join("floor.pfm"));
+    let e = 300.0 / 4.0 + 1000.0 * 2.0 / 5f64.powf(1.5);
+    let want = 0.5 * e / std::f64::consts::PI;
+    for c in pixels[0] {
+        assert!(
+            (c as f64 - want).abs() < 1e-4 * want,
+            "{:?} cd/m², law {want}",
+            pixels[0]
+        );
+    }
+    // `--vertical z` contradicts glTF's y-up.
+    let out = run(
+        &[
+            "render",
+            "floor.gltf",
+            "--luminaires",
+            "schedule.csv",
+            "--vertical",
+            "z",
+            "-o",
+            "x.pfm",
+        ],
+        &dir,
+    );
+    let err = stderr(&out);
+    assert!(
+        !out.status.success() && out.status.code() != Some(101),
+        "{err}"
+    );
+    assert!(err.contains("y-up"), "{err}");
+}

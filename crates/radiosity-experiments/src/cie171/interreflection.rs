@@ -69,7 +69,7 @@ const POINTS: [(&str, V3, V3); 5] = [
     ("E", [0.5, 0.5, SIDE], [0.0, 0.0, -1.0]),
 ];
 
-/// Gather sample pairs per point (the default is 256). The light arriving from the walls is
+/// Gather sample pairs per point (the `lighting` default is 1,024). The light arriving from the walls is
 /// estimated by Monte Carlo, and 256 pairs leave it about a per cent off at some points (the
 /// measurement is in docs/validation.md); the error falls as 1/√n, so 16,384 pairs bring it
 /// eight times lower, for 80 points.
@@ -367,7 +367,7 @@ pub(super) fn cube() -> Result<CaseResult, radiosity::Error> {
         case: Case::Interreflection,
         rows: rows(values, "lx"),
         settings: vec![format!(
-            "{GATHER_PAIRS} gather sample pairs per point (default 256): the light from the \
+            "{GATHER_PAIRS} gather sample pairs per point (default 1,024): the light from the \
              walls is a Monte Carlo estimate, about 1 % off at some points with 256 pairs"
         )],
         seconds,

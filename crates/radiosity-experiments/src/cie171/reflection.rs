@@ -46,7 +46,7 @@ const PANELS: usize = 32;
 /// Gauss–Legendre nodes along each side of a panel.
 const NODES: usize = 8;
 
-/// Gather sample pairs per point (the default is 256). A point sees S₂ through about a third
+/// Gather sample pairs per point (the `lighting` default is 1,024). A point sees S₂ through about a third
 /// of its hemisphere, so a cosine ray finds it with probability ~0.3, and 256 pairs leave the
 /// estimate a per cent or two off (docs/validation.md); the error falls as 1/√n, so 16,384
 /// pairs bring it eight times lower, for a dozen points.
@@ -70,7 +70,7 @@ fn settings() -> (LightingSettings, Vec<String>) {
     let mut s = LightingSettings::default();
     s.gather.indirect = GATHER_PAIRS;
     let why = format!(
-        "{GATHER_PAIRS} gather sample pairs per point (default 256): the reflecting surface fills \
+        "{GATHER_PAIRS} gather sample pairs per point (default 1,024): the reflecting surface fills \
          about a third of each point's hemisphere, and 256 pairs leave the estimate 1-2 % off"
     );
     (s, vec![why])

@@ -83,17 +83,7 @@ pub fn direct_illuminance(
             "the scene unit must be a finite length > 0 metres, not {unit_metres}"
         )));
     }
-    let mut groups: Vec<String> = Vec::new();
-    let group_of: Vec<usize> = luminaires
-        .iter()
-        .map(|l| match groups.iter().position(|g| *g == l.group) {
-            Some(k) => k,
-            None => {
-                groups.push(l.group.clone());
-                groups.len() - 1
-            }
-        })
-        .collect();
+    let (groups, group_of) = groups_of(luminaires);
     let ng = groups.len();
     let offset = bvh.map_or(0.0, |b| b.ray_offset());
     let mut by_group = vec![0.0; points.len() * ng];
@@ -103,7 +93,7 @@ pub fn direct_illuminance(
             .zip(points.par_iter())
             .for_each(|(row, p)| {
                 for (l, &g) in luminaires.iter().zip(&group_of) {
-                    row[g] += illuminance(p, l, bvh, offset, unit_metres);
+                    row[g] += illuminance(p, l, bvh, offset, unit_metres, MAX_CELLS);
                 }
             });
     }
@@ -119,42 +109,67 @@ pub fn direct_illuminance(
     })
 }
 
+/// The luminaires' groups in the order they first appear, and each luminaire's group index.
+pub(crate) fn groups_of(luminaires: &[Luminaire]) -> (Vec<String>, Vec<usize>) {
+    let mut groups: Vec<String> = Vec::new();
+    let group_of = luminaires
+        .iter()
+        .map(|l| match groups.iter().position(|g| *g == l.group) {
+            Some(k) => k,
+            None => {
+                groups.push(l.group.clone());
+                groups.len() - 1
+            }
+        })
+        .collect();
+    (groups, group_of)
+}
+
 /// Most cells along a side of a luminous opening in the near field.
-const MAX_CELLS: usize = 32;
+pub(crate) const MAX_CELLS: usize = 32;
 
 /// E at `p` from `l`, lux: the point-source law, or the opening integrated cell by cell in the
-/// near field.
-fn illuminance(p: &SensorPoint, l: &Luminaire, bvh: Option<&Bvh>, offset: f32, unit: f64) -> f64 {
+/// near field, at most `max_cells` cells along a side. Allocates nothing.
+pub(crate) fn illuminance(
+    p: &SensorPoint,
+    l: &Luminaire,
+    bvh: Option<&Bvh>,
+    offset: f32,
+    unit: f64,
+    max_cells: usize,
+) -> f64 {
     let o = &l.photometry.opening;
     let size = o.width_m.max(o.length_m);
     let d_m = norm(sub(l.position, p.position)) * unit;
     if !(size > 0.0 && d_m.is_finite() && d_m < 5.0 * size) {
         return from_point(p, l, l.position, 1.0, bvh, offset, unit);
     }
-    let n = ((10.0 * size / d_m.max(1e-9)).ceil() as usize).clamp(1, MAX_CELLS);
+    let n = ((10.0 * size / d_m.max(1e-9)).ceil() as usize).clamp(1, max_cells.max(1));
     let (len, wid) = (o.length_m / unit, o.width_m / unit);
-    let mut cells = Vec::with_capacity(n * n);
-    for i in 0..n {
-        for j in 0..n {
-            let (u, v) = (
-                (i as f64 + 0.5) / n as f64 - 0.5,
-                (j as f64 + 0.5) / n as f64 - 0.5,
-            );
-            if o.round && u * u + v * v > 0.25 {
-                continue;
-            }
-            cells.push([
-                l.position[0] + u * len * l.c0[0] + v * wid * l.c90[0],
-                l.position[1] + u * len * l.c0[1] + v * wid * l.c90[1],
-                l.position[2] + u * len * l.c0[2] + v * wid * l.c90[2],
-            ]);
+    // The cells' centres in the opening's (u, v), |u|, |v| ≤ 1/2; a disc keeps those inside.
+    let centre = |i: usize, j: usize| {
+        (
+            (i as f64 + 0.5) / n as f64 - 0.5,
+            (j as f64 + 0.5) / n as f64 - 0.5,
+        )
+    };
+    let inside = |(u, v): (f64, f64)| !o.round || u * u + v * v <= 0.25;
+    let count = (0..n * n).filter(|&k| inside(centre(k / n, k % n))).count();
+    let share = 1.0 / count.max(1) as f64;
+    let mut e = 0.0;
+    for k in 0..n * n {
+        let (u, v) = centre(k / n, k % n);
+        if !inside((u, v)) {
+            continue;
         }
+        let c = [
+            l.position[0] + u * len * l.c0[0] + v * wid * l.c90[0],
+            l.position[1] + u * len * l.c0[1] + v * wid * l.c90[1],
+            l.position[2] + u * len * l.c0[2] + v * wid * l.c90[2],
+        ];
+        e += from_point(p, l, c, share, bvh, offset, unit);
     }
-    let share = 1.0 / cells.len().max(1) as f64;
-    cells
-        .iter()
-        .map(|&c| from_point(p, l, c, share, bvh, offset, unit))
-        .sum()
+    e
 }
 
 /// E at `p` from a point source of `l`'s distribution at `at`, scaled by `share`, lux.

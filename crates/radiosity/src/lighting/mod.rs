@@ -11,6 +11,9 @@
 //! - [`workplane`](mod@workplane): a calculation grid over a material's surfaces, spaced as EN 12464-1 asks.
 //! - [`direct`]: the exact direct illuminance at points from point luminaires, by the
 //!   inverse-square cosine law E = I(ω) cos θ / d², with one shadow ray each.
+//! - [`first_shot`]: the luminaires' first shot into the patches, each patch's flux
+//!   integrated over its solid angle with visibility (an adaptive rule, exact for an
+//!   unshadowed isotropic source).
 //!
 //! - [`gltf`](mod@gltf): luminaires from a glTF scene's own `KHR_lights_punctual` and
 //!   `EXT_lights_ies` lights.
@@ -20,6 +23,7 @@
 //! [`crate::pipeline::lighting`].
 
 pub mod direct;
+pub mod first_shot;
 pub mod gltf;
 pub mod luminaire;
 pub mod points;
@@ -29,6 +33,7 @@ mod tests;
 pub mod workplane;
 
 pub use direct::{direct_illuminance, DirectResult};
+pub use first_shot::patch_illuminance;
 pub use gltf::gltf_luminaires;
 pub use luminaire::{FrameError, Luminaire};
 pub use points::{read_points, write_points, SensorPoint};

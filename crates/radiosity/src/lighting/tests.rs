@@ -17,7 +17,7 @@ use std::sync::Arc;
 
 /// A type C IES file (absolute photometry, lumens −1, metres) of `f(C, γ)` candela on the
 /// given angles. One horizontal angle (0) is rotational symmetry; 0..=360 the full circle.
-fn ies(horizontal: &[f64], vertical: &[f64], f: impl Fn(f64, f64) -> f64) -> String {
+pub(super) fn ies(horizontal: &[f64], vertical: &[f64], f: impl Fn(f64, f64) -> f64) -> String {
     let mut s = String::from("IESNA:LM-63-2002\n[TEST] lighting unit test\nTILT=NONE\n");
     writeln!(
         s,
@@ -39,12 +39,12 @@ fn ies(horizontal: &[f64], vertical: &[f64], f: impl Fn(f64, f64) -> f64) -> Str
     s
 }
 
-fn steps(from: f64, to: f64, step: f64) -> Vec<f64> {
+pub(super) fn steps(from: f64, to: f64, step: f64) -> Vec<f64> {
     let n = ((to - from) / step).round() as usize;
     (0..=n).map(|k| from + k as f64 * step).collect()
 }
 
-fn parse(text: &str, name: &str) -> Arc<Photometry> {
+pub(super) fn parse(text: &str, name: &str) -> Arc<Photometry> {
     Arc::new(crate::photometry::parse_bytes(text.as_bytes(), name).unwrap())
 }
 
@@ -61,7 +61,7 @@ fn lambertian(i0: f64) -> Arc<Photometry> {
 }
 
 /// The same intensity `i` in every direction.
-fn isotropic(i: f64) -> Arc<Photometry> {
+pub(super) fn isotropic(i: f64) -> Arc<Photometry> {
     parse(&ies(&[0.0], &[0.0, 90.0, 180.0], |_, _| i), "isotropic.ies")
 }
 
@@ -81,7 +81,7 @@ fn sensor(position: [f64; 3], normal: [f64; 3]) -> SensorPoint {
     SensorPoint::new(position, normal).unwrap()
 }
 
-fn down(name: &str, photometry: Arc<Photometry>, position: [f64; 3]) -> Luminaire {
+pub(super) fn down(name: &str, photometry: Arc<Photometry>, position: [f64; 3]) -> Luminaire {
     Luminaire::new(name, photometry, position, [0.0, 0.0, -1.0], None, 1.0, "").unwrap()
 }
 

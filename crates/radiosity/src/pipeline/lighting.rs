@@ -3,9 +3,10 @@
 //! of the lit scene in luminance needs.
 //!
 //! Per light group (light scene) the pipeline
-//! 1. computes each patch's direct illuminance from the group's luminaires exactly, by the
-//!    inverse-square cosine law at the patch's centre with a shadow ray
-//!    ([`crate::lighting::direct_illuminance`]): the luminaires' first shot into the patches;
+//! 1. computes each patch's mean direct illuminance from the group's luminaires: the flux of
+//!    their distributions over the patch's solid angle with visibility, by an adaptive rule
+//!    exact for an unshadowed isotropic source ([`crate::lighting::patch_illuminance`]): the
+//!    luminaires' first shot into the patches;
 //! 2. solves the interreflection with the engine's solver, the first reflection ρ E_direct as
 //!    each patch's initial exitance (B = ρ E_direct + E_scene + ρ F B, in lm/m²);
 //! 3. at each sensor point adds, to its exact direct illuminance, the light arriving from the
@@ -57,7 +58,7 @@ use crate::accel::Bvh;
 use crate::color::Rgb;
 use crate::formfactor::{Effort, Estimator, OnDemandRows, Scratch};
 use crate::geom::Vec3;
-use crate::lighting::{direct_illuminance, Luminaire, SensorPoint};
+use crate::lighting::{direct_illuminance, patch_illuminance, Luminaire, SensorPoint};
 use crate::mesh::{Mesh, MeshParams};
 use crate::observe::{Event, Observer, Stage};
 use crate::render::gather::{Gather, GatherParams};
@@ -111,7 +112,7 @@ impl Default for LightingSettings {
             },
             gather: GatherParams {
                 direct: 16,
-                indirect: 256,
+                indirect: 1024,
                 cache_samples: 0,
                 ..GatherParams::default()
             },
@@ -345,15 +346,7 @@ fn compute(
     let unit2 = settings.unit_metres * settings.unit_metres;
 
     // The luminaires' direct light: at the patches (their first shot) and at the points.
-    let centres: Vec<SensorPoint> = mesh
-        .patches
-        .iter()
-        .map(|p| SensorPoint {
-            position: p.centre.as_dvec3().to_array(),
-            normal: p.normal.as_dvec3().to_array(),
-        })
-        .collect();
-    let at_patches = direct_illuminance(&centres, luminaires, Some(&bvh), settings.unit_metres)?;
+    let at_patches = patch_illuminance(&mesh, luminaires, Some(&bvh), settings.unit_metres)?;
     let at_points = direct_illuminance(points, luminaires, Some(&bvh), settings.unit_metres)?;
     let mut groups = at_points.groups.clone();
     let lum_groups = groups.len();

@@ -2,12 +2,13 @@
 //! in lumens.
 //!
 //! For a group of luminaires (flux Φ integrated from their distributions, after multipliers),
-//! with E_p the direct illuminance at patch p's centre (the first shot), A_p its area and ρ_p
+//! with E_p the mean direct illuminance over patch p (the first shot, its flux over its solid
+//! angle: [`crate::lighting::first_shot`]), A_p its area and ρ_p
 //! its reflectance (photometric Y: the luminaires are white, so Y((1 − ρ) E) = (1 − Y(ρ)) E):
 //!
 //! ```text
 //! emitted             Φ
-//! direct_to_surfaces  Φ_d = Σ_p A_p E_p                       (the midpoint rule over each patch)
+//! direct_to_surfaces  Φ_d = Σ_p A_p E_p                       (integrated over each patch)
 //! absorbed            Σ_p A_p (1 − ρ_p) E_p + Φ_a,inter       (first shot + interreflection)
 //! unshot              Φ_u = Σ_i ΔB_i A_i                      (the solver's residual)
 //! escaped             Φ − absorbed − Φ_u
@@ -21,8 +22,8 @@
 //! casting the luminaire's distribution against the scene on a grid of equal solid angle
 //! ([`ESCAPE_BANDS`] × [`ESCAPE_SECTORS`] cells, one ray at each cell's centre, weighted by
 //! the intensity there): [`EnergyBooks::balance_error`], (escaped − escaped_counted)/Φ, is then
-//! Φ_reach − Φ_d over Φ, how well the patches' centres sample the first shot (plus the
-//! grid's own error, the cells a shadow edge crosses). In a closed room both escapes are 0 and
+//! Φ_reach − Φ_d over Φ, how well the patches' cells sample the first shot's visibility (plus
+//! the grid's own error, the cells a shadow edge crosses). In a closed room both escapes are 0 and
 //! absorbed + unshot = emitted to that error.
 //!
 //! For the scene's own emitting surfaces (exitance M_i), Φ = Σ_i Y(M_i) A_i, the first shot
