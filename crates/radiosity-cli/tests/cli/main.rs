@@ -17,6 +17,7 @@ mod adaptive;
 mod errors;
 mod experiment;
 mod form_factors;
+mod form_factors_truncate;
 mod gltf_lights;
 mod lighting;
 mod lighting_pictures;

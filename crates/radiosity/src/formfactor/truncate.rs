@@ -316,6 +316,22 @@ pub fn truncate(
             e.1 = x[i] * e.1 * x[e.0 as usize] / area[i];
         }
     });
+    // Rows that saw nothing (t_i ≤ 0, x_i = 0) leave zeros where their partners saw them.
+    if f.entries.iter().any(|e| e.1 == 0.0) {
+        let mut kept = 0;
+        for i in 0..n {
+            let (lo, hi) = (f.start[i], f.start[i + 1]);
+            f.start[i] = kept;
+            for k in lo..hi {
+                if f.entries[k].1 != 0.0 {
+                    f.entries[kept] = f.entries[k];
+                    kept += 1;
+                }
+            }
+        }
+        f.start[n] = kept;
+        f.entries.truncate(kept);
+    }
     info.worst_row_error = (0..n)
         .map(|i| (f.row_sum(i) - target[i] / area[i]).abs())
         .fold(0.0, f64::max);
