@@ -49,7 +49,10 @@
 //! ## When it cannot be done
 //!
 //! A row that saw something (t_i > 0) but keeps no entry cannot be restored: that is an error
-//! naming the row and its largest factor. A pattern left bipartite by the truncation (the only
+//! naming the row, its sum and its largest factor (the threshold is too coarse for the mesh:
+//! a patch among many sees each of them below T), unless its whole sum is itself below T (a
+//! patch that sees next to nothing, such as one Monte Carlo hit): such a row keeps its
+//! largest pair ([`TruncateInfo::rows_kept_whole`]). A pattern left bipartite by the truncation (the only
 //! kept exchanges run between two sets) balances only if both sets' targets sum equally; if
 //! they do not, the rows come out as near as the scaling gets, and
 //! [`TruncateInfo::worst_row_error`] says how near. Rows that saw nothing (t_i ≤ 0) stay empty.
@@ -63,23 +66,25 @@ use rayon::prelude::*;
 /// Why a truncation was refused.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum TruncateError {
-    /// The threshold is not a finite number ≥ 0.
-    #[error("threshold {0}: must be a finite number ≥ 0")]
+    /// The threshold is not a number in [0, 1] (a view factor is no larger than 1).
+    #[error("threshold {0}: must be a number in [0, 1], as a view factor is")]
     Threshold(f64),
     /// Areas and matrix disagree in size, or an area is not positive and finite.
     #[error("{0}")]
     Areas(String),
     /// Rows that saw something would keep no entry (1-based row numbers).
-    #[error("row {row} would keep no entry: its largest factor is {largest:.6e}, below the threshold{}; a threshold at or below the smallest such largest factor, {limit:.6e}, keeps every row", match rows { 1 => String::new(), n => format!(" (and {} more rows)", n - 1) })]
+    #[error("row {row} would keep no entry: it sums to {sum:.6e} but its largest factor, {largest:.6e}, is below the threshold{}; the mesh is too fine for this threshold (use one at or below {limit:.6e}, or fewer patches)", match rows { 1 => String::new(), n => format!(" (and {} more rows)", n - 1) })]
     EmptyRow {
         /// The first such row, 1-based.
         row: usize,
         /// Its largest factor (the largest of F_ij and F_ji over its pairs).
         largest: f64,
+        /// Its sum before the truncation.
+        sum: f64,
         /// How many rows would be empty.
         rows: usize,
-        /// The largest threshold that keeps every such row: the smallest of their largest
-        /// factors.
+        /// The smallest of such rows' largest factors: a threshold at or below it keeps
+        /// each of them.
         limit: f64,
     },
 }
@@ -93,8 +98,11 @@ pub struct TruncateInfo {
     pub entries_before: usize,
     /// Entries dropped (both entries of a dropped pair count).
     pub dropped: usize,
-    /// Entries below T kept as the reciprocal partners of kept entries ≥ T.
+    /// Entries below T kept as the reciprocal partners of kept entries ≥ T, or as the
+    /// largest pair of a row whose whole sum is below T.
     pub kept_below: usize,
+    /// Rows whose whole sum is below T, which keep their largest pair.
+    pub rows_kept_whole: usize,
     /// Share of the total exchange area Σ A_i F_ij (positive entries) in dropped entries.
     pub dropped_share: f64,
     /// The largest dropped entry F_ij, and its 0-based (i, j); 0 and (0, 0) when none.
@@ -109,6 +117,8 @@ pub struct TruncateInfo {
     pub newton_steps: usize,
     /// Products with S taken (conjugate-gradient iterations and residuals).
     pub products: usize,
+    /// Wall-clock seconds, when the caller times it (the library leaves 0).
+    pub seconds: f64,
 }
 
 /// A sparse matrix of f64 factors by rows (compressed sparse rows), as the truncation leaves
@@ -164,7 +174,7 @@ pub fn truncate(
     area: &[f64],
     threshold: f64,
 ) -> Result<(FactorRows, TruncateInfo), TruncateError> {
-    if !(threshold.is_finite() && threshold >= 0.0) {
+    if !(0.0..=1.0).contains(&threshold) {
         return Err(TruncateError::Threshold(threshold));
     }
     let n = m.n();
@@ -188,9 +198,45 @@ pub fn truncate(
         ..TruncateInfo::default()
     };
 
-    // S on the kept pattern, by rows: the merge of row i (F_ij) and column i (F_ji). Per row:
-    // (S row, dropped count, kept-below count, dropped exchange, total exchange, largest
-    // dropped, largest factor of the row).
+    // Entries are f32: T is compared as an f32 too, so that `1e-4` keeps an entry of 1e-4.
+    let cut = threshold as f32 as f64;
+    // A row whose whole sum is below T (a patch that sees next to nothing: one Monte Carlo
+    // hit) and that no pair would keep keeps its largest pair, so that its little exchange is
+    // not lost. A row that sums to T or more yet has no factor reaching T is refused below.
+    let forced: Vec<Option<u32>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            if !(target[i] > 0.0 && target[i] / area[i] < cut) {
+                return None;
+            }
+            let mut best: Option<(f64, u32)> = None;
+            let mut kept = false;
+            pairs(m, i, |j, fij, fji| {
+                let s = 0.5 * (area[i] * fij + area[j as usize] * fji);
+                kept |= fij.max(fji) >= cut && s > 0.0;
+                if s > 0.0 && best.is_none_or(|b| fij.max(fji) > b.0) {
+                    best = Some((fij.max(fji), j));
+                }
+            });
+            if kept {
+                None
+            } else {
+                best.map(|b| b.1)
+            }
+        })
+        .collect();
+    info.rows_kept_whole = forced.iter().filter(|f| f.is_some()).count();
+    // The forced pairs, both ways, sorted: (row, column).
+    let mut forced_pairs: Vec<(u32, u32)> = forced
+        .iter()
+        .enumerate()
+        .filter_map(|(i, f)| f.map(|j| [(i as u32, j), (j, i as u32)]))
+        .flatten()
+        .collect();
+    forced_pairs.sort_unstable();
+
+    // S on the kept pattern, by rows: the merge of row i (F_ij) and column i (F_ji), with
+    // what was dropped and the row's largest factor.
     struct RowScan {
         s: Vec<(u32, f64)>,
         dropped: usize,
@@ -213,27 +259,16 @@ pub fn truncate(
                 largest_dropped: (0.0, 0),
                 largest: 0.0,
             };
-            let (mut a, mut b) = (0, 0);
-            while a < r.len() || b < c.len() {
-                let ja = r.get(a).map_or(u32::MAX, |x| x.0);
-                let jb = c.get(b).map_or(u32::MAX, |x| x.0);
-                let j = ja.min(jb);
-                let fij = if ja == j { r[a].1 as f64 } else { 0.0 };
-                let fji = if jb == j { c[b].1 as f64 } else { 0.0 };
-                if ja == j {
-                    a += 1;
-                }
-                if jb == j {
-                    b += 1;
-                }
-                let present = ja == j && fij != 0.0;
+            pairs(m, i, |j, fij, fji| {
+                let present = fij != 0.0;
+                let s = 0.5 * (area[i] * fij + area[j as usize] * fji);
                 out.largest = out.largest.max(fij).max(fji);
                 out.exchange += area[i] * fij.max(0.0);
-                let keep = fij.max(fji) >= threshold;
-                let s = 0.5 * (area[i] * fij + area[j as usize] * fji);
+                let keep = fij.max(fji) >= cut
+                    || forced_pairs.binary_search(&(i as u32, j)).is_ok();
                 if keep && s > 0.0 {
                     out.s.push((j, s));
-                    if present && fij < threshold {
+                    if present && fij < cut {
                         out.kept_below += 1;
                     }
                 } else if present {
@@ -243,7 +278,7 @@ pub fn truncate(
                         out.largest_dropped = (fij, j as usize);
                     }
                 }
-            }
+            });
             out
         })
         .collect();
@@ -266,6 +301,7 @@ pub fn truncate(
         return Err(TruncateError::EmptyRow {
             row: row + 1,
             largest,
+            sum: target[row] / area[row],
             rows: empty.len(),
             limit: empty.iter().map(|e| e.1).fold(f64::INFINITY, f64::min),
         });
@@ -337,6 +373,27 @@ pub fn truncate(
         .fold(0.0, f64::max);
     info.worst_reciprocity = worst_reciprocity(&f, area);
     Ok((f, info))
+}
+
+/// Every pair (i, j) stored in row i or column i of `m`, columns increasing, as
+/// `visit(j, F_ij, F_ji)` (0 where not stored).
+fn pairs(m: &SparseMatrix, i: usize, mut visit: impl FnMut(u32, f64, f64)) {
+    let (r, c) = (m.row_entries(i), m.column_entries(i));
+    let (mut a, mut b) = (0, 0);
+    while a < r.len() || b < c.len() {
+        let ja = r.get(a).map_or(u32::MAX, |x| x.0);
+        let jb = c.get(b).map_or(u32::MAX, |x| x.0);
+        let j = ja.min(jb);
+        let fij = if ja == j { r[a].1 as f64 } else { 0.0 };
+        let fji = if jb == j { c[b].1 as f64 } else { 0.0 };
+        if ja == j {
+            a += 1;
+        }
+        if jb == j {
+            b += 1;
+        }
+        visit(j, fij, fji);
+    }
 }
 
 /// Largest |A_i F_ij − A_j F_ji| / max(A_i F_ij, A_j F_ji) over the stored pairs of `f`.
@@ -583,7 +640,7 @@ mod tests {
                 }
             }
         }
-        let sums: Vec<f64> = (0..n).map(|i| 1.0 - 0.5 * next()).collect();
+        let sums: Vec<f64> = (0..n).map(|_| 1.0 - 0.5 * next()).collect();
         let area: Vec<f64> = (0..n)
             .map(|i| w[i].iter().sum::<f64>() / sums[i])
             .collect();
@@ -732,10 +789,10 @@ mod tests {
             }
             e => panic!("{e}"),
         }
-        let msg = truncate(&m, &area, 2.0).unwrap_err().to_string();
+        let msg = truncate(&m, &area, 0.95).unwrap_err().to_string();
         assert!(msg.starts_with("row 1 would keep no entry"), "{msg}");
         assert!(msg.contains("and 23 more rows"), "{msg}");
-        for t in [f64::NAN, -1.0, f64::INFINITY] {
+        for t in [f64::NAN, -1.0, 1.5, f64::INFINITY] {
             assert!(matches!(
                 truncate(&m, &area, t),
                 Err(TruncateError::Threshold(_))
@@ -800,6 +857,25 @@ mod tests {
         assert!(info.worst_row_error.is_finite() && info.worst_row_error > 1e-3);
         assert!(f.row(1).iter().all(|e| e.1.is_finite()));
         assert!(info.worst_reciprocity < 1e-9);
+    }
+
+    /// A patch that sees next to nothing (its row sums to 5e-4, below T = 1e-3) keeps its
+    /// largest pair, and with it its whole sum; its other pair goes.
+    #[test]
+    fn a_row_summing_below_the_threshold_keeps_its_largest_pair() {
+        let m = SparseMatrix::from_rows(vec![
+            vec![(1, 0.4), (2, 3e-4), (3, 0.4)],
+            vec![(0, 0.4), (2, 2e-4), (3, 0.4)],
+            vec![(0, 3e-4), (1, 2e-4)],
+            vec![(0, 0.4), (1, 0.4)],
+        ]);
+        let area = [1.0; 4];
+        let (f, info) = truncate(&m, &area, 1e-3).unwrap();
+        check(&m, &area, &f, &info);
+        assert_eq!((info.rows_kept_whole, info.dropped, info.kept_below), (1, 2, 2));
+        assert_eq!(f.row(2).len(), 1);
+        assert_eq!(f.row(2)[0].0, 0);
+        assert!((f.row(2)[0].1 - 5e-4).abs() < 1e-9, "{:?}", f.row(2));
     }
 
     /// The same bits with one thread and with four.
