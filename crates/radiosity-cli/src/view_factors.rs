@@ -4,18 +4,18 @@ use crate::args::{FormFactorsArgs, MatrixFormatArg};
 use anyhow::{bail, Result};
 use radiosity::export::{patch_table_to, PatchRow};
 use radiosity::formfactor::{
-    aggregate, enforce, summary, truncate, Enforce, FactorRows, FormFactorMethod, Params,
-    Storage, TruncateInfo,
+    aggregate, enforce, summary, truncate, Enforce, FactorRows, FormFactorMethod, Params, Storage,
+    TruncateInfo,
 };
 use radiosity::geom::Vec3;
 use radiosity::io::{FileFormat, OutputError, Staged};
-use radiosity::system::SparseMatrix;
-use radiosity_experiments::MemoryProbe;
-use std::io::Write;
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::observe::Event;
 use radiosity::pipeline::{view_factors_over, ViewFactorSettings};
 use radiosity::scene::{vector_area, vs3, Scene};
+use radiosity::system::SparseMatrix;
+use radiosity_experiments::MemoryProbe;
+use std::io::Write;
 use std::path::Path;
 
 fn ext_is(path: &std::path::Path, format: FileFormat) -> bool {
@@ -250,9 +250,7 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     let mut staged = Staged::default();
     for (path, which) in outputs(&a.out, a.patches_out.as_deref()) {
         if which == Output::Matrix {
-            staged.write::<OutputError>(path, |w| {
-                write_matrix_market(w, &factors, &comment)
-            })?;
+            staged.write::<OutputError>(path, |w| write_matrix_market(w, &factors, &comment))?;
         } else {
             staged.write::<OutputError>(path, |w| patch_table_to(w, &rows))?;
         }
@@ -276,7 +274,10 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     if let Some(r) = &distributed {
         crate::report::ranks(r);
     }
-    println!("memory      heap peak {} MiB", crate::alloc::Probe.peak() >> 20);
+    println!(
+        "memory      heap peak {} MiB",
+        crate::alloc::Probe.peak() >> 20
+    );
     println!("wrote       {}", a.out.display());
     if let Some(p) = &a.patches_out {
         println!("wrote       {}", p.display());
@@ -409,11 +410,7 @@ fn print_truncation(t: &TruncateInfo) {
 /// Matrix Market `coordinate real general`, 1-based, rows in order, streamed from the rows
 /// (the format [`radiosity::io::matrix_market::write`] writes; an estimate's f32 entries
 /// printed as f32, a truncation's as f64).
-fn write_matrix_market(
-    w: &mut dyn Write,
-    f: &Factors,
-    comment: &[String],
-) -> std::io::Result<()> {
+fn write_matrix_market(w: &mut dyn Write, f: &Factors, comment: &[String]) -> std::io::Result<()> {
     writeln!(w, "%%MatrixMarket matrix coordinate real general")?;
     for c in comment {
         writeln!(w, "% {c}")?;
@@ -599,7 +596,10 @@ fn write_view3d(
     // + 0.0: an empty row sums to −0.0.
     println!("row sums    {:.6} … {:.6}", min_row + 0.0, max_row + 0.0);
     println!("reciprocity worst |A_i F_ij − A_j F_ji| / mean area = {reciprocity:.3e}");
-    println!("memory      heap peak {} MiB", crate::alloc::Probe.peak() >> 20);
+    println!(
+        "memory      heap peak {} MiB",
+        crate::alloc::Probe.peak() >> 20
+    );
     println!("wrote       {}", a.out.display());
     Ok(())
 }

@@ -264,8 +264,8 @@ pub fn truncate(
                 let s = 0.5 * (area[i] * fij + area[j as usize] * fji);
                 out.largest = out.largest.max(fij).max(fji);
                 out.exchange += area[i] * fij.max(0.0);
-                let keep = fij.max(fji) >= cut
-                    || forced_pairs.binary_search(&(i as u32, j)).is_ok();
+                let keep =
+                    fij.max(fji) >= cut || forced_pairs.binary_search(&(i as u32, j)).is_ok();
                 if keep && s > 0.0 {
                     out.s.push((j, s));
                     if present && fij < cut {
@@ -450,11 +450,7 @@ fn balance(s: &FactorRows, t: &[f64], info: &mut TruncateInfo) -> Vec<f64> {
         product(s, x, sx);
         *products += 1;
         r.par_iter_mut().enumerate().for_each(|(i, ri)| {
-            *ri = if active[i] {
-                t[i] - x[i] * sx[i]
-            } else {
-                0.0
-            };
+            *ri = if active[i] { t[i] - x[i] * sx[i] } else { 0.0 };
         });
         (0..n)
             .filter(|&i| active[i])
@@ -595,7 +591,11 @@ mod tests {
                 for b in 0..k {
                     let p = o + du * a as f64 + dv * b as f64;
                     let n = du.cross(dv);
-                    polys.push((vec![p, p + du, p + du + dv, p + dv], n.normalize(), n.length()));
+                    polys.push((
+                        vec![p, p + du, p + du + dv, p + dv],
+                        n.normalize(),
+                        n.length(),
+                    ));
                 }
             }
         }
@@ -607,7 +607,10 @@ mod tests {
                     .iter()
                     .enumerate()
                     .map(|(j, (pj, nj, _))| {
-                        (j as u32, polygon_factor(pi, *ni, *ai, pj, *nj, &mut scratch) as f32)
+                        (
+                            j as u32,
+                            polygon_factor(pi, *ni, *ai, pj, *nj, &mut scratch) as f32,
+                        )
                     })
                     .filter(|e| e.1 > 0.0)
                     .collect()
@@ -641,9 +644,7 @@ mod tests {
             }
         }
         let sums: Vec<f64> = (0..n).map(|_| 1.0 - 0.5 * next()).collect();
-        let area: Vec<f64> = (0..n)
-            .map(|i| w[i].iter().sum::<f64>() / sums[i])
-            .collect();
+        let area: Vec<f64> = (0..n).map(|i| w[i].iter().sum::<f64>() / sums[i]).collect();
         let rows = (0..n)
             .map(|i| {
                 (0..n)
@@ -659,7 +660,10 @@ mod tests {
     fn check(m: &SparseMatrix, area: &[f64], f: &FactorRows, info: &TruncateInfo) {
         for i in 0..m.n() {
             let (before, after) = (m.row_sum(i), f.row_sum(i));
-            assert!((after - before).abs() < 1e-6, "row {i}: {after} vs {before}");
+            assert!(
+                (after - before).abs() < 1e-6,
+                "row {i}: {after} vs {before}"
+            );
             assert!(f.row(i).iter().all(|e| e.1.is_finite() && e.1 > 0.0));
         }
         assert!(info.worst_row_error < 1e-6, "{info:?}");
@@ -683,7 +687,11 @@ mod tests {
                 (0..6u32)
                     .filter(|&j| j as usize != i)
                     .map(|j| {
-                        let f = if j as usize == (i + 3) % 6 { opposite } else { adjacent };
+                        let f = if j as usize == (i + 3) % 6 {
+                            opposite
+                        } else {
+                            adjacent
+                        };
                         (j, f as f32)
                     })
                     .collect()
@@ -712,7 +720,11 @@ mod tests {
     fn a_closed_box_keeps_closure_and_reciprocity() {
         let (m, area) = box_patches(3);
         for i in 0..m.n() {
-            assert!((m.row_sum(i) - 1.0).abs() < 1e-6, "row {i}: {}", m.row_sum(i));
+            assert!(
+                (m.row_sum(i) - 1.0).abs() < 1e-6,
+                "row {i}: {}",
+                m.row_sum(i)
+            );
         }
         for t in [0.01, 0.02, 0.05] {
             let (f, info) = truncate(&m, &area, t).unwrap();
@@ -726,7 +738,11 @@ mod tests {
             // Every entry left at or above T or the partner of one that is.
             for i in 0..f.n() {
                 for &(j, _) in f.row(i) {
-                    let fij = m.row_entries(i).iter().find(|e| e.0 == j).map_or(0.0, |e| e.1);
+                    let fij = m
+                        .row_entries(i)
+                        .iter()
+                        .find(|e| e.0 == j)
+                        .map_or(0.0, |e| e.1);
                     let fji = m
                         .row_entries(j as usize)
                         .iter()
@@ -821,7 +837,11 @@ mod tests {
                     let (du, dv) = (DVec3::X / k as f64, DVec3::Y / k as f64);
                     let (du, dv) = if flip { (dv, du) } else { (du, dv) };
                     let n = du.cross(dv);
-                    polys.push((vec![p, p + du, p + du + dv, p + dv], n.normalize(), n.length()));
+                    polys.push((
+                        vec![p, p + du, p + du + dv, p + dv],
+                        n.normalize(),
+                        n.length(),
+                    ));
                 }
             }
         }
@@ -834,7 +854,10 @@ mod tests {
                         .iter()
                         .enumerate()
                         .map(|(j, (pj, nj, _))| {
-                            (j as u32, polygon_factor(pi, *ni, *ai, pj, *nj, &mut scratch) as f32)
+                            (
+                                j as u32,
+                                polygon_factor(pi, *ni, *ai, pj, *nj, &mut scratch) as f32,
+                            )
                         })
                         .filter(|e| e.1 > 0.0)
                         .collect()
@@ -872,7 +895,10 @@ mod tests {
         let area = [1.0; 4];
         let (f, info) = truncate(&m, &area, 1e-3).unwrap();
         check(&m, &area, &f, &info);
-        assert_eq!((info.rows_kept_whole, info.dropped, info.kept_below), (1, 2, 2));
+        assert_eq!(
+            (info.rows_kept_whole, info.dropped, info.kept_below),
+            (1, 2, 2)
+        );
         assert_eq!(f.row(2).len(), 1);
         assert_eq!(f.row(2)[0].0, 0);
         assert!((f.row(2)[0].1 - 5e-4).abs() < 1e-9, "{:?}", f.row(2));

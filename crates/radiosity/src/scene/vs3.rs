@@ -595,7 +595,11 @@ fn collapse_repeated(
     warnings.push(format!(
         "{}:{line}: surface {n} repeats a corner; read as the {} it is (as View3D does)",
         path.display(),
-        if kept.len() == 3 { "triangle" } else { "polygon" }
+        if kept.len() == 3 {
+            "triangle"
+        } else {
+            "polygon"
+        }
     ));
     Ok(kept)
 }
@@ -778,9 +782,18 @@ mod tests {
     fn a_quad_with_a_repeated_corner_is_its_triangle() {
         let p = Path::new("tri.vs3");
         for (text, line) in [
-            ("F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 0 1 0\nS 1 1 2 3 3 0 0 0.5 a\n", 5),
-            ("F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 0 1 0\nS 1 1 1 2 3 0 0 0.5 a\n", 5),
-            ("F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 0 1 0\nS 1 1 2 3 1 0 0 0.5 a\n", 5),
+            (
+                "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 0 1 0\nS 1 1 2 3 3 0 0 0.5 a\n",
+                5,
+            ),
+            (
+                "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 0 1 0\nS 1 1 1 2 3 0 0 0.5 a\n",
+                5,
+            ),
+            (
+                "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 0 1 0\nS 1 1 2 3 1 0 0 0.5 a\n",
+                5,
+            ),
             ("F 3a\nS 1 Q 0 0 0.5 a\n 0 0 0 0 0 0 0 1 0 0 1 0 1\n", 2),
         ] {
             let v = parse(p, text).unwrap();
