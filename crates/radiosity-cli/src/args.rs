@@ -579,6 +579,12 @@ pub struct FormFactorsArgs {
     /// Make A_i F_ij = A_j F_ji keeping row sums (symmetric matrix scaling, Knight 2008).
     #[arg(long, help_heading = FORM_FACTORS)]
     pub symmetrize: bool,
+    /// Drop the entries F_ij below T (a pair is kept when either of its factors reaches T),
+    /// then restore reciprocity and each row's sum before the drop (1 in an enclosure; the
+    /// sky factor of an open scene is kept) by symmetric scaling of A F; reports what was
+    /// dropped and the worst row-sum error (docs/heat-transfer.md, "Truncated factors").
+    #[arg(long, value_name = "T", help_heading = FORM_FACTORS)]
+    pub threshold: Option<f64>,
     /// Output matrix (Matrix Market, coordinate real general, 1-based; or View3D's text format
     /// with --format view3d).
     #[arg(long, short, value_name = "F.mtx", help_heading = OUTPUT)]

@@ -2,16 +2,20 @@
 
 use crate::args::{FormFactorsArgs, MatrixFormatArg};
 use anyhow::{bail, Result};
-use radiosity::export::{write_patch_table, PatchRow};
+use radiosity::export::{patch_table_to, PatchRow};
 use radiosity::formfactor::{
-    aggregate, enforce, summary, Enforce, FormFactorMethod, Params, Storage,
+    aggregate, enforce, summary, truncate, Enforce, FactorRows, FormFactorMethod, Params, Storage,
+    TruncateInfo,
 };
 use radiosity::geom::Vec3;
-use radiosity::io::{matrix_market, FileFormat};
+use radiosity::io::{FileFormat, OutputError, Staged};
 use radiosity::mesh::{Mesh, MeshParams};
 use radiosity::observe::Event;
 use radiosity::pipeline::{view_factors_over, ViewFactorSettings};
 use radiosity::scene::{vector_area, vs3, Scene};
+use radiosity::system::SparseMatrix;
+use radiosity_experiments::MemoryProbe;
+use std::io::Write;
 use std::path::Path;
 
 fn ext_is(path: &std::path::Path, format: FileFormat) -> bool {
@@ -44,6 +48,12 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
             bail!("{}: unsupported output format (use .csv)", p.display());
         }
         crate::settings::check_output(p)?;
+    }
+    crate::settings::form_factor_files(&a.scene, &a.out, a.patches_out.as_deref())?;
+    if let Some(t) = a.threshold {
+        if !(0.0..=1.0).contains(&t) {
+            bail!("--threshold {t}: must be a number in [0, 1], as a view factor is");
+        }
     }
     let is_vs3 = FileFormat::from_path(Path::new(&a.scene)) == Some(FileFormat::Vs3)
         && Path::new(&a.scene).exists();
@@ -81,6 +91,13 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
         Some(v) => v.scene.clone(),
         None => crate::load_scene(&a.scene, false)?,
     };
+    // Total exchange factors need a dense inverse: refused before any work if it cannot fit.
+    if view3d && (a.script_f || vs3.as_ref().is_some_and(|v| v.control.emit)) {
+        crate::settings::dense_exchange_memory(match &vs3 {
+            Some(v) => v.reported.len(),
+            None => scene.polygons.len(),
+        })?;
+    }
     let params = Params {
         method,
         resolution: a.resolution,
@@ -198,8 +215,8 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
     } else {
         matrix
     };
-    let s = summary(&matrix, &area);
-    let comment = vec![
+    let (factors, truncation) = truncated(matrix, &area, a.threshold)?;
+    let mut comment = vec![
         format!(
             "view factors of {} by radiosity form-factors",
             scene.place()
@@ -223,31 +240,214 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
             a.clamp, a.normalize_rows, a.symmetrize
         ),
     ];
-    matrix_market::write(&a.out, &matrix, &comment)?;
-    if let Some(p) = &a.patches_out {
-        write_patch_table(p, &rows)?;
+    if let Some(t) = truncation.as_ref().filter(|t| t.dropped > 0) {
+        comment.push(format!(
+            "threshold {}: {} entries dropped, rows and reciprocity restored by symmetric scaling",
+            t.threshold, t.dropped
+        ));
     }
+    // Both outputs, or neither.
+    let mut staged = Staged::default();
+    for (path, which) in outputs(&a.out, a.patches_out.as_deref()) {
+        if which == Output::Matrix {
+            staged.write::<OutputError>(path, |w| write_matrix_market(w, &factors, &comment))?;
+        } else {
+            staged.write::<OutputError>(path, |w| patch_table_to(w, &rows))?;
+        }
+    }
+    staged.commit::<OutputError>()?;
+    let (min_row, max_row, reciprocity) = factors.summary(&area);
     println!(
         "rows        {} ({}), {} entries, fill {:.4}%",
-        matrix.n(),
+        factors.n(),
         if faces { "faces" } else { "patches" },
-        matrix.nnz(),
-        100.0 * s.fill
+        factors.nnz(),
+        100.0 * factors.nnz() as f64 / (factors.n() as f64).powi(2)
     );
     println!("method      {method} in {compute_s:.3} s");
-    println!("row sums    {:.6} … {:.6}", s.min_row_sum, s.max_row_sum);
-    println!(
-        "reciprocity worst |A_i F_ij − A_j F_ji| / mean area = {:.3e}",
-        s.worst_reciprocity
-    );
+    if let Some(t) = &truncation {
+        print_truncation(t);
+    }
+    // + 0.0: an empty row sums to −0.0.
+    println!("row sums    {:.6} … {:.6}", min_row + 0.0, max_row + 0.0);
+    println!("reciprocity worst |A_i F_ij − A_j F_ji| / mean area = {reciprocity:.3e}");
     if let Some(r) = &distributed {
         crate::report::ranks(r);
     }
+    println!(
+        "memory      heap peak {} MiB",
+        crate::alloc::Probe.peak() >> 20
+    );
     println!("wrote       {}", a.out.display());
     if let Some(p) = &a.patches_out {
         println!("wrote       {}", p.display());
     }
     Ok(())
+}
+
+/// Largest row-sum error `--threshold` accepts after rebalancing.
+const ROW_TOLERANCE: f64 = 1e-6;
+
+/// The factors as written: the estimate as computed (f32), or the truncated and rebalanced
+/// rows (f64, so that reciprocity holds to rounding).
+enum Factors {
+    Estimate(SparseMatrix),
+    Truncated(FactorRows),
+}
+
+impl Factors {
+    fn n(&self) -> usize {
+        match self {
+            Factors::Estimate(m) => m.n(),
+            Factors::Truncated(f) => f.n(),
+        }
+    }
+
+    fn nnz(&self) -> usize {
+        match self {
+            Factors::Estimate(m) => m.nnz(),
+            Factors::Truncated(f) => f.nnz(),
+        }
+    }
+
+    /// Row `i`'s entries into `put(j, F_ij)`, columns increasing.
+    fn row(&self, i: usize, mut put: impl FnMut(usize, f64)) {
+        match self {
+            Factors::Estimate(m) => m
+                .row_entries(i)
+                .iter()
+                .for_each(|&(j, v)| put(j as usize, v as f64)),
+            Factors::Truncated(f) => f.row(i).iter().for_each(|&(j, v)| put(j as usize, v)),
+        }
+    }
+
+    /// Smallest and largest row sum, and the worst |A_i F_ij − A_j F_ji| / mean area.
+    fn summary(&self, area: &[f64]) -> (f64, f64, f64) {
+        match self {
+            Factors::Estimate(m) => {
+                let s = summary(m, area);
+                (s.min_row_sum, s.max_row_sum, s.worst_reciprocity)
+            }
+            Factors::Truncated(f) => {
+                let (mut lo, mut hi, mut worst) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+                for i in 0..f.n() {
+                    let s = f.row_sum(i);
+                    (lo, hi) = (lo.min(s), hi.max(s));
+                    for &(j, v) in f.row(i) {
+                        let j = j as usize;
+                        let back = f
+                            .row(j)
+                            .binary_search_by_key(&(i as u32), |e| e.0)
+                            .map_or(0.0, |k| f.row(j)[k].1);
+                        worst = worst.max(
+                            (area[i] * v - area[j] * back).abs() / (0.5 * (area[i] + area[j])),
+                        );
+                    }
+                }
+                (lo, hi, worst)
+            }
+        }
+    }
+}
+
+/// `--threshold T`: drop the entries below T and rebalance ([`truncate`]); refused when a row
+/// would lose everything or the rows cannot be closed to [`ROW_TOLERANCE`]. Without T, or when
+/// T drops nothing, the estimate as it is.
+fn truncated(
+    m: SparseMatrix,
+    area: &[f64],
+    threshold: Option<f64>,
+) -> Result<(Factors, Option<TruncateInfo>)> {
+    let Some(t) = threshold else {
+        return Ok((Factors::Estimate(m), None));
+    };
+    let start = std::time::Instant::now();
+    let (rows, mut info) =
+        truncate(&m, area, t).map_err(|e| anyhow::anyhow!("--threshold {t}: {e}"))?;
+    info.seconds = start.elapsed().as_secs_f64();
+    if info.dropped == 0 {
+        return Ok((Factors::Estimate(m), Some(info)));
+    }
+    if info.worst_row_error > ROW_TOLERANCE {
+        bail!(
+            "--threshold {t}: the {} entries kept cannot restore every row's sum: worst row-sum error {:.2e} after rebalancing ({} of {} entries, {:.2} % of the exchange area, dropped); use a smaller threshold",
+            rows.nnz(),
+            info.worst_row_error,
+            info.dropped,
+            info.entries_before,
+            100.0 * info.dropped_share
+        );
+    }
+    Ok((Factors::Truncated(rows), Some(info)))
+}
+
+/// The summary's lines about a truncation.
+fn print_truncation(t: &TruncateInfo) {
+    if t.dropped == 0 {
+        println!(
+            "threshold   {}: no entry below it; factors as estimated",
+            t.threshold
+        );
+        return;
+    }
+    let (f, i, j) = t.largest_dropped;
+    println!(
+        "threshold   {}: dropped {} of {} entries ({:.4} % of the exchange area Σ A_i F_ij), largest dropped F[{}][{}] = {f:.3e}; {} entries below it kept as the reciprocal partners of larger ones",
+        t.threshold,
+        t.dropped,
+        t.entries_before,
+        100.0 * t.dropped_share,
+        i + 1,
+        j + 1,
+        t.kept_below
+    );
+    println!(
+        "rebalanced  symmetric scaling of A F, {} Newton steps ({} products with S) in {:.3} s: worst row-sum error {:.2e} (after dropping, before rebalancing: {:.2e}); reciprocity to {:.1e} relative",
+        t.newton_steps, t.products, t.seconds, t.worst_row_error, t.worst_row_loss, t.worst_reciprocity
+    );
+}
+
+/// Matrix Market `coordinate real general`, 1-based, rows in order, streamed from the rows
+/// (the format [`radiosity::io::matrix_market::write`] writes; an estimate's f32 entries
+/// printed as f32, a truncation's as f64).
+fn write_matrix_market(w: &mut dyn Write, f: &Factors, comment: &[String]) -> std::io::Result<()> {
+    writeln!(w, "%%MatrixMarket matrix coordinate real general")?;
+    for c in comment {
+        writeln!(w, "% {c}")?;
+    }
+    writeln!(w, "{} {} {}", f.n(), f.n(), f.nnz())?;
+    match f {
+        Factors::Estimate(m) => {
+            for (i, j, v) in m.triplets() {
+                writeln!(w, "{} {} {}", i + 1, j + 1, v)?;
+            }
+        }
+        Factors::Truncated(f) => {
+            for i in 0..f.n() {
+                for &(j, v) in f.row(i) {
+                    writeln!(w, "{} {} {}", i + 1, j + 1, v)?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Output {
+    Matrix,
+    Patches,
+}
+
+/// The outputs in the order they are staged: a device or pipe first, since it is written at
+/// the commit and cannot be taken back, so that a failure there leaves no file in place.
+fn outputs<'p>(out: &'p Path, patches: Option<&'p Path>) -> Vec<(&'p Path, Output)> {
+    let mut v = vec![(out, Output::Matrix)];
+    if let Some(p) = patches {
+        v.push((p, Output::Patches));
+    }
+    v.sort_by_key(|(p, _)| std::fs::metadata(p).map_or(true, |m| m.is_file()));
+    v
 }
 
 /// A stored view-factor matrix too large for memory: the remedy is fewer patches, whatever the
@@ -325,11 +525,8 @@ fn write_view3d(
     } else {
         grouped
     };
-    let s = summary(&grouped, &group_area);
-    let mut f = vec![0.0; k * k];
-    for (i, j, v) in grouped.triplets() {
-        f[i * k + j as usize] = v as f64;
-    }
+    let (grouped, truncation) = truncated(grouped, &group_area, a.threshold)?;
+    let (min_row, max_row, reciprocity) = grouped.summary(&group_area);
     let emissivity: Vec<f64> = match vs3 {
         Some(v) => v
             .reported
@@ -346,29 +543,39 @@ fn write_view3d(
             .collect(),
     };
     let emit = a.script_f || vs3.is_some_and(|v| v.control.emit);
-    if emit {
+    // Total exchange factors need the dense inverse (its memory was checked before the
+    // work began); view factors stream from the sparse rows, one row of k values at a time.
+    let exchange = if emit {
         if let Some(i) = emissivity.iter().position(|&e| e <= 0.0) {
             bail!("--script-f: surface {} has emissivity 0; total exchange factors need every emissivity in (0, 1]", i + 1);
         }
-        let needed = 3 * 8 * (k as u64).pow(2);
-        let limit = radiosity::pipeline::available_memory().unwrap_or(u64::MAX);
-        if needed > limit {
-            bail!(
-                "total exchange factors for {k} surfaces need {} MiB of dense matrices but only {} MiB are available",
-                needed >> 20,
-                limit >> 20
-            );
+        crate::settings::dense_exchange_memory(k)?;
+        let mut f = vec![0.0; k * k];
+        for i in 0..k {
+            grouped.row(i, |j, v| f[i * k + j] = v);
         }
-        f = radiosity::io::view3d::script_f(&f, &emissivity);
-    }
-    let table = radiosity::io::view3d::ViewFactorTable {
-        area: group_area,
-        f,
-        emissivity,
-        enclosure,
-        emit,
+        Some(radiosity::io::view3d::script_f(&f, &emissivity))
+    } else {
+        None
     };
-    radiosity::io::view3d::write(&a.out, &table)?;
+    let mut staged = Staged::default();
+    staged.write::<OutputError>(&a.out, |w| {
+        radiosity::io::view3d::write_rows_to(
+            w,
+            &group_area,
+            &emissivity,
+            enclosure,
+            emit,
+            |m, row| match &exchange {
+                Some(f) => row.copy_from_slice(&f[m * k..(m + 1) * k]),
+                None => {
+                    row.fill(0.0);
+                    grouped.row(m, |j, v| row[j] = v);
+                }
+            },
+        )
+    })?;
+    staged.commit::<OutputError>()?;
     println!(
         "rows        {k} ({}), View3D format{}",
         if vs3.is_some() {
@@ -383,10 +590,15 @@ fn write_view3d(
         }
     );
     println!("method      {method} in {compute_s:.3} s");
-    println!("row sums    {:.6} … {:.6}", s.min_row_sum, s.max_row_sum);
+    if let Some(t) = &truncation {
+        print_truncation(t);
+    }
+    // + 0.0: an empty row sums to −0.0.
+    println!("row sums    {:.6} … {:.6}", min_row + 0.0, max_row + 0.0);
+    println!("reciprocity worst |A_i F_ij − A_j F_ji| / mean area = {reciprocity:.3e}");
     println!(
-        "reciprocity worst |A_i F_ij − A_j F_ji| / mean area = {:.3e}",
-        s.worst_reciprocity
+        "memory      heap peak {} MiB",
+        crate::alloc::Probe.peak() >> 20
     );
     println!("wrote       {}", a.out.display());
     Ok(())

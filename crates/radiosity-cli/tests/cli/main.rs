@@ -18,6 +18,7 @@ mod coincident;
 mod errors;
 mod experiment;
 mod form_factors;
+mod form_factors_truncate;
 mod gltf_lights;
 mod lighting;
 mod lighting_pictures;

@@ -212,18 +212,21 @@ pub struct PatchRow {
 /// The rows of a form-factor matrix's patches (or faces), with [`PATCH_TABLE_HEADER`]; the
 /// `patch` column is the 0-based row (row k of a Matrix Market file is patch k − 1).
 pub fn write_patch_table(path: &Path, rows: &[PatchRow]) -> Result<(), ExportError> {
-    write_atomic(path, |out| {
-        writeln!(out, "{PATCH_TABLE_HEADER}")?;
-        for (k, r) in rows.iter().enumerate() {
-            let (c, n, rho, e) = (r.centre, r.normal, r.reflectance, r.emission);
-            writeln!(
-                out,
-                "{k},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                r.surface, r.area, c.x, c.y, c.z, n.x, n.y, n.z, rho.r, rho.g, rho.b, e.r, e.g, e.b
-            )?;
-        }
-        Ok(())
-    })
+    write_atomic(path, |out| patch_table_to(out, rows))
+}
+
+/// [`write_patch_table`] into a stream (an [`crate::io::Staged`] output, with others).
+pub fn patch_table_to(out: &mut dyn Write, rows: &[PatchRow]) -> std::io::Result<()> {
+    writeln!(out, "{PATCH_TABLE_HEADER}")?;
+    for (k, r) in rows.iter().enumerate() {
+        let (c, n, rho, e) = (r.centre, r.normal, r.reflectance, r.emission);
+        writeln!(
+            out,
+            "{k},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            r.surface, r.area, c.x, c.y, c.z, n.x, n.y, n.z, rho.r, rho.g, rho.b, e.r, e.g, e.b
+        )?;
+    }
+    Ok(())
 }
 
 /// Write `text` to `path` as it is (a trace's CSV, a Markdown summary).

@@ -14,7 +14,8 @@
 //! matrices in parallel, dense or sparse; [`OnDemandRows`] hands rows to the solvers when they
 //! ask (an [`crate::system::Operator`]), cached under a budget. Whether rows are stored or
 //! computed on demand is decided in one place, the pipeline. [`enforce()`] optionally makes a
-//! matrix physical, [`summary()`] describes one, [`quadrature`] spreads points over a patch.
+//! matrix physical, [`truncate()`] drops small entries and restores reciprocity and closure,
+//! [`summary()`] describes one, [`quadrature`] spreads points over a patch.
 //! This module produces linear systems and knows nothing of the solvers.
 
 pub mod adaptive;
@@ -31,6 +32,7 @@ pub mod quadrature;
 pub mod shaft;
 pub mod summary;
 pub mod tetrahedron;
+pub mod truncate;
 
 pub use crate::system::Entry;
 pub use enforce::{aggregate, enforce, Enforce};
@@ -38,6 +40,7 @@ pub use estimator::{Effort, Estimator, Scratch};
 pub use on_demand::OnDemandRows;
 pub use quadrature::gauss_legendre;
 pub use summary::{summary, Summary};
+pub use truncate::{truncate, FactorRows, TruncateError, TruncateInfo};
 
 use crate::system::SparseMatrix;
 

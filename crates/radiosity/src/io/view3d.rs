@@ -53,45 +53,70 @@ pub fn write(path: &Path, t: &ViewFactorTable) -> Result<(), OutputError> {
 
 /// Write View3D's text format row by row: `row(m, out)` fills `out` (length N) with the
 /// factors from surface m, so no N × N copy is ever held (one row of N values is). `area` and
-/// `emissivity` give N. Rows are asked for in order, 0 to N − 1, once each.
+/// `emissivity` give N. Rows are asked for in order, 0 to N − 1, once each. The file is
+/// written whole or not at all ([`write_atomic`]); [`write_rows_to`] writes into a stream
+/// (an [`super::Staged`] output, with others).
 pub fn write_rows(
     path: &Path,
     area: &[f64],
     emissivity: &[f64],
     enclosure: bool,
     emit: bool,
-    mut row: impl FnMut(usize, &mut [f64]),
+    row: impl FnMut(usize, &mut [f64]),
 ) -> Result<(), OutputError> {
-    let n = area.len();
     write_atomic(path, |w| {
-        if emissivity.len() != n {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                format!("{} areas but {} emissivities", n, emissivity.len()),
-            ));
-        }
-        let header = format!("View3D 3.2 0 {} {} {}", enclosure as u8, emit as u8, n);
-        writeln!(w, "{header:<30}")?;
-        let line =
-            |w: &mut dyn Write, v: &mut dyn Iterator<Item = String>| -> std::io::Result<()> {
-                let mut first = true;
-                for s in v {
-                    if !first {
-                        w.write_all(b" ")?;
-                    }
-                    first = false;
-                    w.write_all(s.as_bytes())?;
-                }
-                w.write_all(b"\n")
-            };
-        line(w, &mut area.iter().map(|a| format_g(*a)))?;
-        let mut buf = vec![0.0; n];
-        for m in 0..n {
-            row(m, &mut buf);
-            line(w, &mut buf.iter().map(|v| format!("{v:.6}")))?;
-        }
-        line(w, &mut emissivity.iter().map(|e| format!("{e:.3}")))
+        write_rows_to(w, area, emissivity, enclosure, emit, row)
     })
+}
+
+/// [`write_rows`] into `w`: the header, the areas, the N rows as `row` fills them, the
+/// emissivities. Holds one row of N values, never N × N.
+pub fn write_rows_to(
+    w: &mut dyn Write,
+    area: &[f64],
+    emissivity: &[f64],
+    enclosure: bool,
+    emit: bool,
+    mut row: impl FnMut(usize, &mut [f64]),
+) -> std::io::Result<()> {
+    let n = area.len();
+    if emissivity.len() != n {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("{} areas but {} emissivities", n, emissivity.len()),
+        ));
+    }
+    let header = format!("View3D 3.2 0 {} {} {}", enclosure as u8, emit as u8, n);
+    writeln!(w, "{header:<30}")?;
+    let line = |w: &mut dyn Write, v: &mut dyn Iterator<Item = String>| -> std::io::Result<()> {
+        let mut first = true;
+        for s in v {
+            if !first {
+                w.write_all(b" ")?;
+            }
+            first = false;
+            w.write_all(s.as_bytes())?;
+        }
+        w.write_all(b"\n")
+    };
+    line(w, &mut area.iter().map(|a| format_g(*a)))?;
+    let mut buf = vec![0.0; n];
+    let mut text = String::new();
+    for m in 0..n {
+        row(m, &mut buf);
+        // One row's text at a time, reused: no allocation per value.
+        text.clear();
+        for (k, v) in buf.iter().enumerate() {
+            use std::fmt::Write as _;
+            if k > 0 {
+                text.push(' ');
+            }
+            let _ = write!(text, "{v:.6}");
+        }
+        text.push('\n');
+        w.write_all(text.as_bytes())?;
+    }
+    line(w, &mut emissivity.iter().map(|e| format!("{e:.3}")))
 }
 
 /// Bytes [`script_f`] holds at once for N surfaces: the dense view factors it is given, the

@@ -456,6 +456,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Vs3, SceneError> {
                         line,
                     },
                 };
+                let vs = collapse_repeated(vs, path, line, n, &mut warnings)?;
                 surfaces.push(surface);
                 polygons.push(vs);
                 // Continue after the words this element used.
@@ -561,6 +562,47 @@ pub fn parse(path: &Path, text: &str) -> Result<Vs3, SceneError> {
         control,
         title,
     })
+}
+
+/// A surface's corners with repeated corners dropped: a triangle given as a quad (`1 2 3 3`, or
+/// an `F 3a` `Q` with two equal points), which View3D reads as the triangle it is (its
+/// polygon routines drop a side of zero length), is read so here too, with a warning naming the
+/// line, so that every command meshes the same triangle. Corners are compared as read (after
+/// the conversion to f32), cyclically, so `1 1 2 3` and `1 2 3 1` are triangles as well. Fewer
+/// than three distinct corners is no surface, and an error.
+fn collapse_repeated(
+    vs: Vec<Vec3>,
+    path: &Path,
+    line: usize,
+    n: i64,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Vec3>, SceneError> {
+    let m = vs.len();
+    let repeated = |k: usize| vs[k] == vs[(k + 1) % m];
+    if !(0..m).any(repeated) {
+        return Ok(vs);
+    }
+    let kept: Vec<Vec3> = (0..m).filter(|&k| !repeated(k)).map(|k| vs[k]).collect();
+    if kept.len() < 3 {
+        return Err(invalid(
+            path,
+            line,
+            format!(
+                "surface {n}: only {} distinct corner(s) of {m}; a surface needs three",
+                kept.len()
+            ),
+        ));
+    }
+    warnings.push(format!(
+        "{}:{line}: surface {n} repeats a corner; read as the {} it is (as View3D does)",
+        path.display(),
+        if kept.len() == 3 {
+            "triangle"
+        } else {
+            "polygon"
+        }
+    ));
+    Ok(kept)
 }
 
 /// `base cmb emit name` of a radiating surface.
@@ -724,9 +766,57 @@ mod tests {
             ("F 3a\nS 1 K 0 0 0.5 a\n 0 0 0 0 90 1 1\n", "shape 'K'"),
             ("Z\n", "'Z' is not a View3D input element"),
             ("F 3\nV 1 0 0 nan\n", "not a finite number"),
+            (
+                "F 3\nV 1 0 0 0\nV 2 1 0 0\nS 1 1 2 2 1 0 0 0.5 a\n",
+                "x.vs3:4: surface 1: only 2 distinct corner(s) of 4",
+            ),
         ] {
             let e = parse(p, text).unwrap_err().to_string();
             assert!(e.contains(needle), "{text:?}: {e}");
         }
+    }
+
+    /// A triangle given as a quad with a repeated corner (View3D reads it) is read as that
+    /// triangle, wherever the repeat sits and in either geometry format, with a warning naming
+    /// the file and line; its area is the triangle's, 1/2.
+    #[test]
+    fn a_quad_with_a_repeated_corner_is_its_triangle() {
+        let p = Path::new("tri.vs3");
+        for (text, line) in [
+            (
+                "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 0 1 0\nS 1 1 2 3 3 0 0 0.5 a\n",
+                5,
+            ),
+            (
+                "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 0 1 0\nS 1 1 1 2 3 0 0 0.5 a\n",
+                5,
+            ),
+            (
+                "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 0 1 0\nS 1 1 2 3 1 0 0 0.5 a\n",
+                5,
+            ),
+            ("F 3a\nS 1 Q 0 0 0.5 a\n 0 0 0 0 0 0 0 1 0 0 1 0 1\n", 2),
+        ] {
+            let v = parse(p, text).unwrap();
+            let poly = &v.scene.polygons[0];
+            assert_eq!(poly.vertices.len(), 3, "{text:?}");
+            let area = super::super::vector_area(&poly.vertices).length();
+            assert!((area - 0.5).abs() < 1e-6, "{text:?}: area {area}");
+            let w = &v.scene.warnings;
+            assert_eq!(w.len(), 1, "{w:?}");
+            assert!(
+                w[0].starts_with(&format!("tri.vs3:{line}: surface 1 repeats a corner")),
+                "{}",
+                w[0]
+            );
+        }
+        // A proper quad is left alone, without a warning.
+        let v = parse(
+            p,
+            "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 1 1 0\nV 4 0 1 0\nS 1 1 2 3 4 0 0 0.5 a\n",
+        )
+        .unwrap();
+        assert_eq!(v.scene.polygons[0].vertices.len(), 4);
+        assert!(v.scene.warnings.is_empty());
     }
 }
