@@ -355,8 +355,26 @@ impl Prepared {
                 let (g, h) = (ga.min(gb) as usize, ga.max(gb) as usize);
                 let (start, len) = t.ranges[g * t.groups + h];
                 if len != NOT_FACING && len > 0 {
-                    s.shaft.set(&s.pa, a.normal, &s.pb, b.normal);
+                    // The hull lies in the pair's bounding box: a candidate whose box is
+                    // clear of it (by far more than the shaft's slack) cuts no segment, and
+                    // the shaft is built only when some candidate's box meets it.
+                    let (mut lo, mut hi) = (s.pa[0], s.pa[0]);
+                    for p in s.pa.iter().chain(&s.pb) {
+                        lo = lo.min(*p);
+                        hi = hi.max(*p);
+                    }
+                    let margin = DVec3::splat(1e-6 * (hi - lo).length());
+                    let (lo, hi) = (lo - margin, hi + margin);
+                    let mut built = false;
                     for &k in &t.candidates[start as usize..(start + len) as usize] {
+                        let (bl, bh) = self.occluders.bounds(k);
+                        if bh.cmplt(lo).any() || bl.cmpgt(hi).any() {
+                            continue;
+                        }
+                        if !built {
+                            s.shaft.set(&s.pa, a.normal, &s.pb, b.normal);
+                            built = true;
+                        }
                         if !s.shaft.excludes_polygon(self.occluders.polygon(k)) {
                             s.found.push(k);
                         }
