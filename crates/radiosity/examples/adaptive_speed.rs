@@ -35,7 +35,9 @@ fn main() {
     let w0 = std::time::Instant::now();
     let est = Estimator::new(&mesh, &bvh, params).expect("estimator");
     let t1 = cpu_seconds();
-    let m = est.matrix(Storage::Sparse, &|_: Event<'_>| {}).into_sparse();
+    let m = est
+        .matrix(Storage::Sparse, &|_: Event<'_>| {})
+        .into_sparse();
     let t2 = cpu_seconds();
     let wall = w0.elapsed().as_secs_f64();
     let n = mesh.len();

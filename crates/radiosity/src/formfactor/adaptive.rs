@@ -1107,7 +1107,11 @@ pub fn point_polygon(x: DVec3, n: DVec3, p: &[DVec3]) -> f64 {
         // atan2(y, x) = atan(y / x) for x > 0 (the common case: an edge seen under less
         // than a right angle), which costs about half as much.
         let c = r1.dot(r2);
-        let angle = if c > 0.0 { (gl / c).atan() } else { gl.atan2(c) };
+        let angle = if c > 0.0 {
+            (gl / c).atan()
+        } else {
+            gl.atan2(c)
+        };
         sum += angle * n.dot(g) / gl;
     }
     -sum / (2.0 * PI)

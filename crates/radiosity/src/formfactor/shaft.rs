@@ -106,7 +106,9 @@ impl Occluders {
             nodes: Vec::new(),
             order: Vec::new(),
         };
-        occ.bounds = (0..occ.len() as u32).map(|k| occ.polygon_bounds(k)).collect();
+        occ.bounds = (0..occ.len() as u32)
+            .map(|k| occ.polygon_bounds(k))
+            .collect();
         occ.build_tree();
         occ
     }
