@@ -57,6 +57,8 @@ pub(super) struct Occluders {
     normal: Vec<DVec3>,
     /// The occluder holding each patch.
     pub(super) group: Vec<u32>,
+    /// Bounding box of each occluder.
+    bounds: Vec<(DVec3, DVec3)>,
     nodes: Vec<Node>,
     order: Vec<u32>,
 }
@@ -100,9 +102,13 @@ impl Occluders {
             start,
             normal,
             group,
+            bounds: Vec::new(),
             nodes: Vec::new(),
             order: Vec::new(),
         };
+        occ.bounds = (0..occ.len() as u32)
+            .map(|k| occ.polygon_bounds(k))
+            .collect();
         occ.build_tree();
         occ
     }
@@ -123,7 +129,12 @@ impl Occluders {
         self.normal[k as usize]
     }
 
-    fn bounds(&self, k: u32) -> (DVec3, DVec3) {
+    /// The bounding box of occluder `k`.
+    pub(super) fn bounds(&self, k: u32) -> (DVec3, DVec3) {
+        self.bounds[k as usize]
+    }
+
+    fn polygon_bounds(&self, k: u32) -> (DVec3, DVec3) {
         let p = self.polygon(k);
         p.iter()
             .fold((p[0], p[0]), |(lo, hi), v| (lo.min(*v), hi.max(*v)))
