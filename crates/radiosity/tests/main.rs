@@ -4,6 +4,7 @@ mod adaptive;
 mod distributed;
 mod formfactors;
 mod interchange;
+mod lightmap;
 mod physics;
 mod renderpark;
 mod solvers;

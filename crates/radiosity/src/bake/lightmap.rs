@@ -58,7 +58,10 @@ pub struct LightmapParams {
     pub indirect: u32,
     /// Texels between indirect records along each chart axis (1: every texel gathers).
     pub spacing: u32,
-    /// Near hits of the gather followed one level deeper ([`GatherParams::near`]).
+    /// Gather rays that hit closer than this many patch sizes are followed one level deeper
+    /// ([`GatherParams::near`]). 3, not a picture's 1: a texel at a contact (a block's side
+    /// near the floor) otherwise reads the solution's interpolated radiosity of patches that
+    /// straddle the contact, which held the Cornell box's block sides 2 % low.
     pub near: f32,
     /// Seed of the texels' streams.
     pub seed: u64,
@@ -71,7 +74,7 @@ impl Default for LightmapParams {
             direct: 16,
             indirect: 256,
             spacing: 4,
-            near: GatherParams::default().near,
+            near: 3.0,
             seed: 1,
         }
     }
@@ -112,7 +115,7 @@ pub struct Lightmap {
     /// What each texel is.
     pub kind: Vec<Texel>,
     /// The surface point each evaluated texel stands for (padding: `None`).
-    pub points: Vec<Option<Vec3>>,
+    pub points: Vec<Option<TexelPoint>>,
     /// Indirect records gathered (each [`LightmapParams::indirect`] pairs).
     pub records: usize,
 }
@@ -142,13 +145,30 @@ impl Lightmap {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = ((x - x0) as f64, (y - y0) as f64);
         let (x0, y0) = (x0 as u32, y0 as u32);
-        let (x1, y1) = ((x0 + 1).min(self.width() - 1), (y0 + 1).min(self.height() - 1));
+        let (x1, y1) = (
+            (x0 + 1).min(self.width() - 1),
+            (y0 + 1).min(self.height() - 1),
+        );
         let at = |x: u32, y: u32| self.texels[(y * self.width() + x) as usize];
         at(x0, y0) * ((1.0 - fx) * (1.0 - fy))
             + at(x1, y0) * (fx * (1.0 - fy))
             + at(x0, y1) * ((1.0 - fx) * fy)
             + at(x1, y1) * (fx * fy)
     }
+}
+
+/// Where an evaluated texel lies on the surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexelPoint {
+    /// The point.
+    pub x: Vec3,
+    /// The surface's normal there.
+    pub n: Vec3,
+    /// The face ([`Unwrap::mesh`] patch) it lies on.
+    pub face: u32,
+    /// Whether the texel's centre is inside the face (else the point is the face's closest
+    /// to it: a border texel the face only partly covers).
+    pub inside: bool,
 }
 
 /// One evaluated texel: where it is in the atlas and on the surface.
@@ -164,6 +184,8 @@ struct Sample {
     face: u32,
     /// Surface point.
     x: Vec3,
+    /// Whether the texel's centre is inside the face.
+    inside: bool,
 }
 
 /// Closest point of the 2-D segment `ab` to `p`.
@@ -260,6 +282,7 @@ fn chart_samples(u: &Unwrap, c: u32) -> Vec<Sample> {
                     local: (i, j),
                     face: f,
                     x,
+                    inside: d == 0.0,
                 });
             }
         }
@@ -375,7 +398,13 @@ pub fn bake(
         .par_iter()
         .map(|s| {
             let face = &u.mesh.patches[s.face as usize];
-            probe(&surfaces, s.x, face.normal, face.surface, lift[s.face as usize])
+            probe(
+                &surfaces,
+                s.x,
+                face.normal,
+                face.surface,
+                lift[s.face as usize],
+            )
         })
         .collect();
     for (s, p) in samples.iter_mut().zip(&mut probes) {
@@ -386,8 +415,9 @@ pub fn bake(
     for (k, s) in samples.iter().enumerate() {
         slot[s.index as usize] = k as u32;
     }
-    let is_record =
-        |s: &Sample| s.local.0 % spacing == PADDING % spacing && s.local.1 % spacing == PADDING % spacing;
+    let is_record = |s: &Sample| {
+        s.local.0 % spacing == PADDING % spacing && s.local.1 % spacing == PADDING % spacing
+    };
     let seed = params.seed;
     let indirect_at = |k: usize| {
         let s = &samples[k];
@@ -408,7 +438,9 @@ pub fn bake(
         .map(|k| {
             let s = &samples[k];
             let m = &scene.materials[u.mesh.patches[s.face as usize].material as usize];
-            let Probe { covered, own, n, .. } = probes[k];
+            let Probe {
+                covered, own, n, ..
+            } = probes[k];
             if covered || m.reflectance.max_channel() <= 0.0 {
                 return m.emission;
             }
@@ -422,11 +454,11 @@ pub fn bake(
             } else {
                 let (i, j) = (s.local.0 as i64, s.local.1 as i64);
                 let (p, sp) = (PADDING as i64 % spacing as i64, spacing as i64);
-                let (i0, j0) = (p + (i - p).div_euclid(sp) * sp, p + (j - p).div_euclid(sp) * sp);
-                let (fx, fy) = (
-                    (i - i0) as f64 / sp as f64,
-                    (j - j0) as f64 / sp as f64,
+                let (i0, j0) = (
+                    p + (i - p).div_euclid(sp) * sp,
+                    p + (j - p).div_euclid(sp) * sp,
                 );
+                let (fx, fy) = ((i - i0) as f64 / sp as f64, (j - j0) as f64 / sp as f64);
                 let (mut sum, mut wsum) = (Rgb::BLACK, 0.0f64);
                 for (di, dj, w) in [
                     (0, 0, (1.0 - fx) * (1.0 - fy)),
@@ -482,7 +514,12 @@ pub fn bake(
         } else {
             Texel::Surface
         };
-        points[s.index as usize] = Some(s.x);
+        points[s.index as usize] = Some(TexelPoint {
+            x: s.x,
+            n: p.n,
+            face: s.face,
+            inside: s.inside,
+        });
     }
     dilate(&u, &mut texels, &kind);
     Ok(Lightmap {
@@ -543,4 +580,3 @@ fn dilate(u: &Unwrap, texels: &mut [Rgb], kind: &[Texel]) {
         }
     }
 }
-

@@ -124,7 +124,9 @@ pub enum UnwrapError {
     #[error("the scene has no surface with area to map")]
     NoArea,
     /// The charts need a larger atlas than allowed.
-    #[error("at texel size {texel} the charts need an atlas of {need} texels a side, more than {limit}")]
+    #[error(
+        "at texel size {texel} the charts need an atlas of {need} texels a side, more than {limit}"
+    )]
     TooLarge {
         /// Texel size tried.
         texel: f32,
@@ -182,7 +184,9 @@ pub fn unwrap(scene: &Scene, density: Density) -> Result<Unwrap, UnwrapError> {
             // Bisection on the texel size between one that cannot fit (area alone) and one
             // that surely does (the largest chart's extent over a texel or two).
             let mut lo = (area / (n as f64 * n as f64)).sqrt() as f32;
-            let diag = Aabb::from_points(mesh.vertices.iter()).diagonal().max(1e-30);
+            let diag = Aabb::from_points(mesh.vertices.iter())
+                .diagonal()
+                .max(1e-30);
             let mut hi = diag.max(lo * 2.0);
             if pack(&mut charts, hi, n) > n {
                 // Even one texel a chart does not fit: too many charts for this atlas.
@@ -246,8 +250,16 @@ fn root(parent: &mut [u32], mut i: u32) -> u32 {
 /// The faces joined into planar charts, each with its plane frame (not yet placed).
 fn charts(mesh: &Mesh) -> Vec<Chart> {
     let n = mesh.len();
-    let diag = Aabb::from_points(mesh.vertices.iter()).diagonal().max(1e-30);
-    let key = |p: Vec3| [(p.x + 0.0).to_bits(), (p.y + 0.0).to_bits(), (p.z + 0.0).to_bits()];
+    let diag = Aabb::from_points(mesh.vertices.iter())
+        .diagonal()
+        .max(1e-30);
+    let key = |p: Vec3| {
+        [
+            (p.x + 0.0).to_bits(),
+            (p.y + 0.0).to_bits(),
+            (p.z + 0.0).to_bits(),
+        ]
+    };
     let mut parent: Vec<u32> = (0..n as u32).collect();
     // Each edge, by its ends' positions in order, to the first face that has it.
     let mut edges: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::with_capacity(n * 4);
@@ -372,7 +384,10 @@ fn frame(mesh: &Mesh, c: &mut Chart) {
 fn size(c: &Chart, l: f32) -> (u32, u32) {
     let t = |e: f32| ((e / l).ceil() as u64).clamp(1, 1 << 40) + 2 * PADDING as u64;
     let (w, h) = (t(c.extent[0]), t(c.extent[1]));
-    (w.min(u32::MAX as u64 / 4) as u32, h.min(u32::MAX as u64 / 4) as u32)
+    (
+        w.min(u32::MAX as u64 / 4) as u32,
+        h.min(u32::MAX as u64 / 4) as u32,
+    )
 }
 
 /// Shelf packing into `width` texels: places every chart (sorted by height, tallest first) and
@@ -458,7 +473,10 @@ mod tests {
                 a += s[0] * t[1] - t[0] * s[1];
             }
             let want = p.area / (u.texel * u.texel);
-            assert!((a.abs() * 0.5 - want).abs() <= 1e-3 * want + 1e-2, "{a} vs {want}");
+            assert!(
+                (a.abs() * 0.5 - want).abs() <= 1e-3 * want + 1e-2,
+                "{a} vs {want}"
+            );
         }
         for (i, a) in u.charts.iter().enumerate() {
             for b in &u.charts[i + 1..] {

@@ -448,7 +448,11 @@ pub fn lightmap_srgb8(map: &crate::bake::lightmap::Lightmap, scale: f32) -> Vec<
 /// clamped. The PNG holds the display colour `min(1, B · scale)` and the exposure `scale`
 /// rides in `extras.radiosity.lightmap_scale` of the material, so `B = texel / scale` below
 /// clipping; the unclipped linear `B` is what [`write_lightmap_exr`] writes.
-pub fn write_lightmap_gltf(path: &Path, bake: &LightmapBake, binary: bool) -> Result<(), ExportError> {
+pub fn write_lightmap_gltf(
+    path: &Path,
+    bake: &LightmapBake,
+    binary: bool,
+) -> Result<(), ExportError> {
     use serde_json::json;
     let map = bake.lightmap;
     let mesh = &map.unwrap.mesh;
@@ -478,8 +482,7 @@ pub fn write_lightmap_gltf(path: &Path, bake: &LightmapBake, binary: bool) -> Re
     let total: usize = groups.iter().map(|g| g.vertices.len()).sum();
     let tri_total: usize = groups.iter().map(|g| g.triangles.len()).sum();
     let (pos_bytes, uv_bytes, index_bytes) = (total * 12, total * 8, tri_total * 12);
-    let mut buf: Vec<u8> =
-        Vec::with_capacity(pos_bytes + uv_bytes + index_bytes + png.len() + 4);
+    let mut buf: Vec<u8> = Vec::with_capacity(pos_bytes + uv_bytes + index_bytes + png.len() + 4);
     for g in &groups {
         for &v in &g.vertices {
             push_f32s(&mut buf, &mesh.vertices[v as usize].to_array());
@@ -514,12 +517,18 @@ pub fn write_lightmap_gltf(path: &Path, bake: &LightmapBake, binary: bool) -> Re
             }
         }
         let base = accessors.len();
-        accessors.push(json!({"bufferView": 0, "byteOffset": voff * 12, "componentType": 5126,
-            "count": n, "type": "VEC3", "min": lo, "max": hi}));
-        accessors.push(json!({"bufferView": 1, "byteOffset": voff * 8, "componentType": 5126,
-            "count": n, "type": "VEC2"}));
-        accessors.push(json!({"bufferView": 2, "byteOffset": ioff * 12, "componentType": 5125,
-            "count": g.triangles.len() * 3, "type": "SCALAR"}));
+        accessors.push(
+            json!({"bufferView": 0, "byteOffset": voff * 12, "componentType": 5126,
+            "count": n, "type": "VEC3", "min": lo, "max": hi}),
+        );
+        accessors.push(
+            json!({"bufferView": 1, "byteOffset": voff * 8, "componentType": 5126,
+            "count": n, "type": "VEC2"}),
+        );
+        accessors.push(
+            json!({"bufferView": 2, "byteOffset": ioff * 12, "componentType": 5125,
+            "count": g.triangles.len() * 3, "type": "SCALAR"}),
+        );
         voff += n;
         ioff += g.triangles.len();
         let m = &bake.scene.materials[g.material];
@@ -546,8 +555,10 @@ pub fn write_lightmap_gltf(path: &Path, bake: &LightmapBake, binary: bool) -> Re
         let diag = crate::geom::Aabb::from_points(mesh.vertices.iter()).diagonal();
         cameras.push(json!({"type": "perspective", "perspective": {
             "yfov": c.fov_y_deg.to_radians(), "znear": (diag * 1e-3).max(1e-6)}}));
-        nodes.push(json!({"name": "camera", "camera": 0, "translation": c.eye.to_array(),
-            "rotation": look_rotation(c.target - c.eye, c.up)}));
+        nodes.push(
+            json!({"name": "camera", "camera": 0, "translation": c.eye.to_array(),
+            "rotation": look_rotation(c.target - c.eye, c.up)}),
+        );
     }
     let mut root = json!({
         "asset": {"version": "2.0", "generator": concat!("radiosity ", env!("CARGO_PKG_VERSION"))},
