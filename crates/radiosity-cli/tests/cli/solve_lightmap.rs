@@ -44,7 +44,11 @@ fn lightmap_bake_writes_a_valid_gltf_and_an_exr() {
     );
     let report =
         crate::validator::validate_gltf_report(&[dir.join("lit.glb"), dir.join("lit.gltf")]);
-    assert_eq!(report.matches(": 0 errors, 0 warnings").count(), 2, "{report}");
+    assert_eq!(
+        report.matches(": 0 errors, 0 warnings").count(),
+        2,
+        "{report}"
+    );
     let text = read(&dir, "lit.gltf");
     for needle in ["\"MOZ_lightmap\"", "\"TEXCOORD_1\"", "\"image/png\""] {
         assert!(text.contains(needle), "{needle}");
@@ -77,7 +81,10 @@ fn lightmap_options_are_checked() {
             vec!["--bake", "lightmap", "--texel-size", "0.001"],
             vec!["texel size 0.001", "more than 16384"],
         ),
-        (vec!["--lightmap-size", "64"], vec!["--lightmap-size", "--bake lightmap"]),
+        (
+            vec!["--lightmap-size", "64"],
+            vec!["--lightmap-size", "--bake lightmap"],
+        ),
         (
             vec!["--bake", "lightmap", "--lightmap-out", "a.png"],
             vec!["a.png", ".exr"],

@@ -153,7 +153,7 @@ pub fn unwrap(scene: &Scene, density: Density) -> Result<Unwrap, UnwrapError> {
     }
     let mesh = Mesh::build(scene, MeshParams::Faces)?;
     let area: f64 = mesh.patches.iter().map(|p| p.area as f64).sum();
-    if mesh.is_empty() || !(area > 0.0) {
+    if mesh.is_empty() || area.is_nan() || area <= 0.0 {
         return Err(UnwrapError::NoArea);
     }
     let mut charts = charts(&mesh);
@@ -264,7 +264,7 @@ fn charts(mesh: &Mesh) -> Vec<Chart> {
     // Each edge, by its ends' positions in order, to the first face that has it.
     let mut edges: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::with_capacity(n * 4);
     for (f, p) in mesh.patches.iter().enumerate() {
-        if !(p.area > 0.0) {
+        if p.area.is_nan() || p.area <= 0.0 {
             continue;
         }
         let m = if p.is_triangle() { 3 } else { 4 };
@@ -294,7 +294,7 @@ fn charts(mesh: &Mesh) -> Vec<Chart> {
     let mut index = vec![u32::MAX; n];
     let mut out: Vec<Chart> = Vec::new();
     for f in 0..n as u32 {
-        if !(mesh.patches[f as usize].area > 0.0) {
+        if mesh.patches[f as usize].area.is_nan() || mesh.patches[f as usize].area <= 0.0 {
             continue;
         }
         let r = root(&mut parent, f) as usize;
