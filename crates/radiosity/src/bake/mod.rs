@@ -22,7 +22,7 @@
 //! let params = LightmapParams { density: Density::AtlasSize(64), direct: 2, indirect: 8, ..Default::default() };
 //! let map = bake(&scene, s.surfaces(), &vertex, &params).unwrap();
 //! assert_eq!((map.width(), map.height()), (64, 64));
-//! // The lit texels are positive and finite, the ceiling's lamp brightest of all.
+//! // Every texel is finite and non-negative.
 //! assert!(map.texels.iter().all(|b| b.r.is_finite() && b.r >= 0.0));
 //! ```
 
