@@ -150,6 +150,7 @@ const OUTPUT: &str = "Output";
 const CAMERA: &str = "Camera";
 const RUN: &str = "Run";
 const PICTURE: &str = "Picture";
+const LIGHTMAP: &str = "Lightmap";
 
 /// Diffuse global illumination by the radiosity method: baked light, view factors and heat
 /// transfer, and every classic solver side by side.
@@ -865,6 +866,38 @@ pub struct SolveCmdArgs {
     /// centre, radiosity, exposed: the fraction not inside a closed solid).
     #[arg(long, value_name = "elements.csv", help_heading = OUTPUT)]
     pub elements_out: Option<PathBuf>,
+    /// Baked glTF: light at the vertices (`vertex`: COLOR_0) or in a lightmap texture on a
+    /// generated second UV set (`lightmap`: TEXCOORD_1, MOZ_lightmap, the atlas as PNG).
+    #[arg(long, value_enum, default_value_t = BakeArg::Vertex, help_heading = LIGHTMAP)]
+    pub bake: BakeArg,
+    /// Lightmap: atlas side in texels (1 to 16384); alone, the texel size is the finest whose
+    /// charts fit. Default 1024 when --texel-size is not given either.
+    #[arg(long, value_name = "N", help_heading = LIGHTMAP)]
+    pub lightmap_size: Option<u32>,
+    /// Lightmap: texel size in scene units; alone, the atlas is as large as the charts need.
+    #[arg(long, value_name = "L", help_heading = LIGHTMAP)]
+    pub texel_size: Option<f32>,
+    /// Lightmap: also write the atlas as OpenEXR, linear float radiosity B per channel.
+    #[arg(long, value_name = "lightmap.exr", help_heading = LIGHTMAP)]
+    pub lightmap_out: Option<PathBuf>,
+    /// Lightmap: shadow rays to the emitters per texel.
+    #[arg(long, value_name = "N", default_value_t = radiosity::bake::lightmap::LightmapParams::default().direct, help_heading = LIGHTMAP)]
+    pub lightmap_direct: u32,
+    /// Lightmap: indirect sample pairs per record (records every --lightmap-spacing texels).
+    #[arg(long, value_name = "N", default_value_t = radiosity::bake::lightmap::LightmapParams::default().indirect, help_heading = LIGHTMAP)]
+    pub lightmap_indirect: u32,
+    /// Lightmap: texels between indirect records along each chart axis (1: every texel).
+    #[arg(long, value_name = "N", default_value_t = radiosity::bake::lightmap::LightmapParams::default().spacing, help_heading = LIGHTMAP)]
+    pub lightmap_spacing: u32,
+}
+
+/// What `solve --bake` puts in a baked glTF.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BakeArg {
+    /// Radiosity at the patch mesh's vertices (COLOR_0).
+    Vertex,
+    /// A lightmap texture on a second UV set (TEXCOORD_1, MOZ_lightmap).
+    Lightmap,
 }
 
 /// `radiosity view`.

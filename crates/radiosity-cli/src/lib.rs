@@ -13,6 +13,7 @@ pub mod ranks;
 mod render;
 mod report;
 pub mod settings;
+mod solve_lightmap;
 mod thermal;
 mod validate;
 mod view_factors;
@@ -312,10 +313,12 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
             settings::check_output(p)?;
         }
     }
+    let lightmap = solve_lightmap::params(&a)?;
     settings::distinct_files(
         &[("scene", std::path::Path::new(&a.solve.scene))],
         &[
             Some(("--out", a.out.as_path())),
+            a.lightmap_out.as_deref().map(|p| ("--lightmap-out", p)),
             a.solve.trace.as_deref().map(|p| ("--trace", p)),
             a.links_out.as_deref().map(|p| ("--links-out", p)),
             a.elements_out.as_deref().map(|p| ("--elements-out", p)),
@@ -352,7 +355,17 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
         }
     }
     let t = Instant::now();
-    if baked {
+    let mut lightmap_summary = None;
+    if let Some(params) = &lightmap {
+        let map = solve_lightmap::write(&a, params, &scene, &solution)?;
+        lightmap_summary = Some((
+            map.width(),
+            map.height(),
+            map.surface_texels(),
+            map.unwrap.texel,
+            map.unwrap.charts.len(),
+        ));
+    } else if baked {
         let vertex = solution.vertex_display_radiosity();
         let bake = Bake {
             scene: &scene,
@@ -370,6 +383,10 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
         let mut v = report::summary_json(&scene, &solution, None);
         v["seconds"]["write"] = serde_json::json!(write_s);
         v["out"] = serde_json::json!(a.out);
+        if let Some((w, h, texels, texel, charts)) = lightmap_summary {
+            v["lightmap"] = serde_json::json!({"width": w, "height": h, "texels": texels,
+                "texel_size": texel, "charts": charts, "seconds": write_s});
+        }
         if let Some(r) = &distributed {
             v["ranks"] = serde_json::json!(r.blocks.len());
             v["bytes_sent"] = serde_json::json!(r.bytes_sent());
@@ -380,6 +397,19 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     report::summary(&scene, &solution, None);
     if let Some(r) = &distributed {
         report::ranks(r);
+    }
+    if let Some((w, h, texels, texel, charts)) = lightmap_summary {
+        println!(
+            "lightmap    {w}×{h} atlas, {texels} surface texels of {texel:.4} scene units in {charts} charts"
+        );
+        println!(
+            "wrote       {}{} in {write_s:.3} s (bake included)",
+            a.out.display(),
+            a.lightmap_out
+                .as_ref()
+                .map_or(String::new(), |p| format!(" and {}", p.display()))
+        );
+        return capped(&a.solve, &solution.info, &a.out);
     }
     println!(
         "wrote       {} ({} patches) in {write_s:.3} s",

@@ -11,6 +11,7 @@
 //! | solve a scene | [`pipeline::solve`] (over MPI ranks: [`pipeline::solve_over`]) |
 //! | make a picture | [`pipeline::Solution::render_gather`], [`pipeline::Solution::render`] |
 //! | bake light into a mesh | [`export::bake::write`] |
+//! | bake a lightmap (texture on a second UV set) | [`bake::lightmap::bake`], [`export::bake::write_lightmap_gltf`] |
 //! | view factors | [`pipeline::view_factors`] |
 //! | radiative heat transfer | [`pipeline::thermal`] |
 //! | solve a given system | [`pipeline::solve_system`] |
@@ -35,6 +36,7 @@
 #![deny(unsafe_code)]
 
 pub mod accel;
+pub mod bake;
 pub mod color;
 pub mod comm;
 pub mod daylight;

@@ -5,6 +5,7 @@ mod coincident;
 mod distributed;
 mod formfactors;
 mod interchange;
+mod lightmap;
 mod physics;
 mod renderpark;
 mod solvers;

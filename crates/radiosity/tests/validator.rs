@@ -8,6 +8,13 @@ use std::process::Command;
 /// `files`, asserting no errors. `.ci/run` installs it into `target/gltf-validator`; a test
 /// that needs it fails, naming the way to install it, when it is missing (no silent skip).
 pub fn validate_gltf(files: &[PathBuf]) {
+    validate_gltf_report(files);
+}
+
+/// [`validate_gltf`], returning the validator's report (one summary line a file, `FILE: N
+/// errors, N warnings, …`, then each error and warning) for tests that also refuse warnings.
+#[allow(dead_code)]
+pub fn validate_gltf_report(files: &[PathBuf]) -> String {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let module = std::env::var_os("GLTF_VALIDATOR_MODULE")
         .map(PathBuf::from)
@@ -33,4 +40,5 @@ pub fn validate_gltf(files: &[PathBuf]) {
         files.len(),
         "{report}"
     );
+    report.into_owned()
 }

@@ -26,6 +26,7 @@ mod mpi;
 mod render;
 mod render_lighting;
 mod solve;
+mod solve_lightmap;
 mod solve_system;
 mod thermal;
 mod validate;

@@ -281,14 +281,6 @@ pub fn write_gltf(path: &Path, bake: &Bake, binary: bool) -> Result<(), ExportEr
             "rotation": look_rotation(c.target - c.eye, c.up)}),
         );
     }
-    let buffer_length = buf.len();
-    let mut buffer = json!({"byteLength": buffer_length});
-    if !binary {
-        buffer["uri"] = json!(format!(
-            "data:application/octet-stream;base64,{}",
-            base64::engine::general_purpose::STANDARD.encode(&buf)
-        ));
-    }
     let mut root = json!({
         "asset": {"version": "2.0", "generator": concat!("radiosity ", env!("CARGO_PKG_VERSION"))},
         "extensionsUsed": ["KHR_materials_unlit"],
@@ -304,11 +296,31 @@ pub fn write_gltf(path: &Path, bake: &Bake, binary: bool) -> Result<(), ExportEr
             {"buffer": 0, "byteOffset": 2 * vec3_bytes, "byteLength": vec3_bytes, "byteStride": 12, "target": 34962},
             {"buffer": 0, "byteOffset": 3 * vec3_bytes, "byteLength": index_bytes, "target": 34963}
         ],
-        "buffers": [buffer]
     });
     if !cameras.is_empty() {
         root["cameras"] = json!(cameras);
     }
+    write_gltf_file(path, root, buf, binary)
+}
+
+/// Finish a glTF: the one buffer (embedded as a base64 `data:` URI unless `binary`), then the
+/// file, `.glb` framing when `binary`, written atomically.
+fn write_gltf_file(
+    path: &Path,
+    mut root: serde_json::Value,
+    mut buf: Vec<u8>,
+    binary: bool,
+) -> Result<(), ExportError> {
+    use serde_json::json;
+    let buffer_length = buf.len();
+    let mut buffer = json!({"byteLength": buffer_length});
+    if !binary {
+        buffer["uri"] = json!(format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&buf)
+        ));
+    }
+    root["buffers"] = json!([buffer]);
     let text = serde_json::to_string(&root).map_err(|e| OutputError {
         path: path.to_path_buf(),
         source: std::io::Error::other(e),
@@ -387,5 +399,214 @@ pub fn write_ply(path: &Path, bake: &Bake) -> Result<(), ExportError> {
             out.write_all(&rec)?;
         }
         Ok(())
+    })
+}
+
+/// A lightmapped glTF: the scene's faces with their second UV set and the atlas.
+#[derive(Clone, Copy, Debug)]
+pub struct LightmapBake<'a> {
+    /// The scene (materials, names).
+    pub scene: &'a Scene,
+    /// The baked lightmap: faces, UVs, atlas of B.
+    pub lightmap: &'a crate::bake::lightmap::Lightmap,
+    /// Exposure: the PNG's texel holds `srgb(min(1, B · scale))`.
+    pub scale: f32,
+    /// A camera to include, if any.
+    pub camera: Option<Camera>,
+}
+
+/// `MOZ_lightmap`'s intensity: three.js (and Hubs, which defined the extension) light a white
+/// matte material by a lightmap texel `t` as `t · intensity / π` (the Lambert BRDF of the
+/// texel taken as irradiance), so π shows the texel's display colour itself, as `COLOR_0` is
+/// shown in a vertex-colour bake.
+pub const LIGHTMAP_INTENSITY: f64 = std::f64::consts::PI;
+
+/// The atlas as 8-bit sRGB RGB bytes, rows top to bottom: `srgb(min(1, B · scale))`, the
+/// display colour of our PNG pictures.
+pub fn lightmap_srgb8(map: &crate::bake::lightmap::Lightmap, scale: f32) -> Vec<u8> {
+    let mut out = Vec::with_capacity(map.texels.len() * 3);
+    for b in &map.texels {
+        for c in [b.r, b.g, b.b] {
+            let c = ((c as f32) * scale).clamp(0.0, 1.0);
+            out.push((srgb_encode(c) * 255.0 + 0.5) as u8);
+        }
+    }
+    out
+}
+
+/// Write a lightmapped glTF (binary `.glb` when `binary`, else `.gltf` with everything
+/// embedded).
+///
+/// Layout: one mesh, one primitive per material, each with its own vertices: `POSITION`,
+/// `TEXCOORD_1` (float VEC2, the lightmap's UV set; [`crate::bake::uv`]; the same accessor is
+/// also `TEXCOORD_0`, since glTF's texture-coordinate sets must start at 0) and u32 triangle
+/// indices (quads split along their first diagonal). Every material is white, matte
+/// (metallic 0, roughness 1; not `KHR_materials_unlit`, which the Khronos validator warns may
+/// not combine with another extension), carries `extras.radiosity` as a vertex bake does, and
+/// `MOZ_lightmap: {"index": 0, "texCoord": 1, "intensity": π}` ([`LIGHTMAP_INTENSITY`]):
+/// texture 0 is the atlas, an 8-bit sRGB PNG embedded in the buffer, sampled linearly and
+/// clamped. The PNG holds the display colour `min(1, B · scale)` and the exposure `scale`
+/// rides in `extras.radiosity.lightmap_scale` of the material, so `B = texel / scale` below
+/// clipping; the unclipped linear `B` is what [`write_lightmap_exr`] writes.
+pub fn write_lightmap_gltf(
+    path: &Path,
+    bake: &LightmapBake,
+    binary: bool,
+) -> Result<(), ExportError> {
+    use serde_json::json;
+    let map = bake.lightmap;
+    let mesh = &map.unwrap.mesh;
+    let groups = groups(&Bake {
+        scene: bake.scene,
+        mesh,
+        vertex_radiosity: &[],
+        scale: bake.scale,
+        camera: None,
+    });
+    let fail = |e: std::io::Error| OutputError {
+        path: path.to_path_buf(),
+        source: e,
+    };
+    let mut png = Vec::new();
+    {
+        let enc = image::codecs::png::PngEncoder::new(&mut png);
+        image::ImageEncoder::write_image(
+            enc,
+            &lightmap_srgb8(map, bake.scale),
+            map.width(),
+            map.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| fail(std::io::Error::other(e)))?;
+    }
+    let total: usize = groups.iter().map(|g| g.vertices.len()).sum();
+    let tri_total: usize = groups.iter().map(|g| g.triangles.len()).sum();
+    let (pos_bytes, uv_bytes, index_bytes) = (total * 12, total * 8, tri_total * 12);
+    let mut buf: Vec<u8> = Vec::with_capacity(pos_bytes + uv_bytes + index_bytes + png.len() + 4);
+    for g in &groups {
+        for &v in &g.vertices {
+            push_f32s(&mut buf, &mesh.vertices[v as usize].to_array());
+        }
+    }
+    for g in &groups {
+        for &v in &g.vertices {
+            push_f32s(&mut buf, &map.unwrap.uv[v as usize]);
+        }
+    }
+    for g in &groups {
+        for t in &g.triangles {
+            for i in t {
+                buf.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+    }
+    let png_offset = buf.len();
+    buf.extend_from_slice(&png);
+    let mut accessors = Vec::new();
+    let mut primitives = Vec::new();
+    let mut materials = Vec::new();
+    let (mut voff, mut ioff) = (0usize, 0usize);
+    for g in &groups {
+        let n = g.vertices.len();
+        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+        for &v in &g.vertices {
+            let p = mesh.vertices[v as usize].to_array();
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let base = accessors.len();
+        accessors.push(
+            json!({"bufferView": 0, "byteOffset": voff * 12, "componentType": 5126,
+            "count": n, "type": "VEC3", "min": lo, "max": hi}),
+        );
+        accessors.push(
+            json!({"bufferView": 1, "byteOffset": voff * 8, "componentType": 5126,
+            "count": n, "type": "VEC2"}),
+        );
+        accessors.push(
+            json!({"bufferView": 2, "byteOffset": ioff * 12, "componentType": 5125,
+            "count": g.triangles.len() * 3, "type": "SCALAR"}),
+        );
+        voff += n;
+        ioff += g.triangles.len();
+        let m = &bake.scene.materials[g.material];
+        primitives.push(json!({
+            "attributes": {"POSITION": base, "TEXCOORD_0": base + 1, "TEXCOORD_1": base + 1},
+            "indices": base + 2,
+            "material": materials.len(),
+            "mode": 4
+        }));
+        materials.push(json!({
+            "name": m.name,
+            "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0],
+                "metallicFactor": 0.0, "roughnessFactor": 1.0},
+            "extensions": {
+                "MOZ_lightmap": {"index": 0, "texCoord": 1, "intensity": LIGHTMAP_INTENSITY}
+            },
+            "extras": {"radiosity": {"reflectance": m.reflectance.to_array(),
+                "emission": m.emission.to_array(), "lightmap_scale": bake.scale}}
+        }));
+    }
+    let mut nodes = vec![json!({"name": bake.scene.name, "mesh": 0})];
+    let mut cameras = Vec::new();
+    if let Some(c) = bake.camera {
+        let diag = crate::geom::Aabb::from_points(mesh.vertices.iter()).diagonal();
+        cameras.push(json!({"type": "perspective", "perspective": {
+            "yfov": c.fov_y_deg.to_radians(), "znear": (diag * 1e-3).max(1e-6)}}));
+        nodes.push(
+            json!({"name": "camera", "camera": 0, "translation": c.eye.to_array(),
+            "rotation": look_rotation(c.target - c.eye, c.up)}),
+        );
+    }
+    let mut root = json!({
+        "asset": {"version": "2.0", "generator": concat!("radiosity ", env!("CARGO_PKG_VERSION"))},
+        "extensionsUsed": ["MOZ_lightmap"],
+        "scene": 0,
+        "scenes": [{"name": bake.scene.name, "nodes": (0..nodes.len()).collect::<Vec<_>>()}],
+        "nodes": nodes,
+        "meshes": [{"name": bake.scene.name, "primitives": primitives}],
+        "materials": materials,
+        "accessors": accessors,
+        "images": [{"name": "lightmap", "bufferView": 3, "mimeType": "image/png"}],
+        "samplers": [{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}],
+        "textures": [{"name": "lightmap", "source": 0, "sampler": 0}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": pos_bytes, "byteStride": 12, "target": 34962},
+            {"buffer": 0, "byteOffset": pos_bytes, "byteLength": uv_bytes, "byteStride": 8, "target": 34962},
+            {"buffer": 0, "byteOffset": pos_bytes + uv_bytes, "byteLength": index_bytes, "target": 34963},
+            {"buffer": 0, "byteOffset": png_offset, "byteLength": png.len()}
+        ],
+    });
+    if !cameras.is_empty() {
+        root["cameras"] = json!(cameras);
+    }
+    write_gltf_file(path, root, buf, binary)
+}
+
+/// Write the atlas as OpenEXR, linear 32-bit float RGB holding the radiosity B (W/m² per
+/// channel, scene units), rows top to bottom as in the glTF's texture, layer `radiosity`.
+pub fn write_lightmap_exr(
+    path: &Path,
+    map: &crate::bake::lightmap::Lightmap,
+) -> Result<(), ExportError> {
+    use exr::prelude::*;
+    let (w, h) = (map.width() as usize, map.height() as usize);
+    write_atomic(path, |out| {
+        let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+            let b = map.texels[pos.y() * w + pos.x()];
+            (b.r as f32, b.g as f32, b.b as f32)
+        });
+        let layer = Layer::new(
+            (w, h),
+            LayerAttributes::named("radiosity"),
+            Encoding::FAST_LOSSLESS,
+            channels,
+        );
+        exr::image::Image::from_layer(layer)
+            .write()
+            .to_buffered(out)
+            .map_err(std::io::Error::other)
     })
 }

@@ -554,6 +554,31 @@ impl<'a> Gather<'a> {
         self.incoming(x, n, u32::MAX, 0, rng) * std::f64::consts::PI
     }
 
+    /// The irradiance at a point `x` (normal `n`) on patch `own` (or `u32::MAX` when on
+    /// none) in two parts, each in the scene's exitance units: the sampled emitters' by
+    /// `direct` shadow rays (their choice stratified, shifted by one draw), and the solution's
+    /// reflected light gathered by `indirect` sample pairs, near hits followed one level
+    /// deeper, as in a camera sample. `B(x) = E + ρ (direct + indirect)`: how a lightmap texel
+    /// is computed ([`crate::bake::lightmap`]). One estimate each; `indirect` 0 gives 0.
+    pub fn irradiance_parts(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        own: u32,
+        (direct, indirect): (u32, u32),
+        rng: &mut Rng64,
+    ) -> (Rgb, Rgb) {
+        let nd = direct.max(1);
+        let shift = uniform(rng) as f64;
+        let d = self.direct(x, n, own, nd, (0, nd, shift), rng);
+        let i = if indirect > 0 {
+            self.indirect(x, n, own, indirect, 0, rng).0
+        } else {
+            Rgb::BLACK
+        };
+        (d, i)
+    }
+
     /// Radiance leaving point `x` on `patch` (for tests and probes): one gather estimate.
     pub fn radiance_at(&self, x: Vec3, patch: u32, rng: &mut Rng64) -> Rgb {
         let n = self.surfaces.mesh.patches[patch as usize].normal;

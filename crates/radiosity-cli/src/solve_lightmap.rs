@@ -1,0 +1,100 @@
+//! `solve --bake lightmap`: flags → [`radiosity::bake::lightmap`] → the lightmapped glTF
+//! ([`radiosity::export::bake::write_lightmap_gltf`]) and, with `--lightmap-out`, the linear
+//! atlas ([`radiosity::export::bake::write_lightmap_exr`]).
+
+use crate::args::{BakeArg, SolveCmdArgs};
+use anyhow::{bail, Result};
+use radiosity::bake::lightmap::{bake, Lightmap, LightmapParams};
+use radiosity::bake::uv::{Density, MAX_ATLAS};
+use radiosity::export::bake::{write_lightmap_exr, write_lightmap_gltf, LightmapBake};
+use radiosity::io::FileFormat;
+use radiosity::pipeline::Solution;
+use radiosity::scene::Scene;
+
+/// The lightmap's parameters from the flags, checked before any work; `None` for a vertex bake
+/// (and then no lightmap flag may be given).
+pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
+    if a.bake == BakeArg::Vertex {
+        for (flag, given) in [
+            ("--lightmap-size", a.lightmap_size.is_some()),
+            ("--texel-size", a.texel_size.is_some()),
+            ("--lightmap-out", a.lightmap_out.is_some()),
+        ] {
+            if given {
+                bail!("{flag}: only a lightmap bake has it (add --bake lightmap)");
+            }
+        }
+        return Ok(None);
+    }
+    if !matches!(
+        FileFormat::from_path(&a.out),
+        Some(FileFormat::Glb | FileFormat::Gltf)
+    ) {
+        bail!(
+            "{}: --bake lightmap writes glTF (use .glb or .gltf)",
+            a.out.display()
+        );
+    }
+    if let Some(n) = a.lightmap_size {
+        if n == 0 || n > MAX_ATLAS {
+            bail!("--lightmap-size {n}: must be 1 to {MAX_ATLAS} texels");
+        }
+    }
+    if let Some(l) = a.texel_size {
+        if !(l.is_finite() && l > 0.0) {
+            bail!("--texel-size {l}: must be a positive length in scene units");
+        }
+    }
+    for (flag, n) in [
+        ("--lightmap-direct", a.lightmap_direct),
+        ("--lightmap-indirect", a.lightmap_indirect),
+        ("--lightmap-spacing", a.lightmap_spacing),
+    ] {
+        if n == 0 {
+            bail!("{flag} 0: at least 1 is needed");
+        }
+    }
+    if let Some(p) = &a.lightmap_out {
+        if FileFormat::from_path(p) != Some(FileFormat::Exr) {
+            bail!("{}: --lightmap-out writes OpenEXR (use .exr)", p.display());
+        }
+        crate::settings::check_output(p)?;
+    }
+    let density = match (a.texel_size, a.lightmap_size) {
+        (Some(l), Some(n)) => Density::Both(l, n),
+        (Some(l), None) => Density::TexelSize(l),
+        (None, Some(n)) => Density::AtlasSize(n),
+        (None, None) => LightmapParams::default().density,
+    };
+    Ok(Some(LightmapParams {
+        density,
+        direct: a.lightmap_direct,
+        indirect: a.lightmap_indirect,
+        spacing: a.lightmap_spacing,
+        seed: a.solve.seed,
+        ..Default::default()
+    }))
+}
+
+/// Bake the lightmap of a solved scene and write it; the lightmap, for the summary.
+pub(crate) fn write(
+    a: &SolveCmdArgs,
+    params: &LightmapParams,
+    scene: &Scene,
+    solution: &Solution,
+) -> Result<Lightmap> {
+    let vertex = radiosity::render::vertex_radiosity(&solution.mesh, &solution.radiosity);
+    let map = bake(scene, solution.surfaces(), &vertex, params)?;
+    let lightmap_bake = LightmapBake {
+        scene,
+        lightmap: &map,
+        scale: solution.auto_exposure() * 2f32.powf(a.exposure),
+        camera: Some(solution.default_camera(scene)),
+    };
+    let binary = FileFormat::from_path(&a.out) == Some(FileFormat::Glb);
+    write_lightmap_gltf(&a.out, &lightmap_bake, binary)?;
+    if let Some(p) = &a.lightmap_out {
+        write_lightmap_exr(p, &map)?;
+    }
+    Ok(map)
+}
