@@ -12,6 +12,10 @@
 //! - [`direct`]: the exact direct illuminance at points from point luminaires, by the
 //!   inverse-square cosine law E = I(ω) cos θ / d², with one shadow ray each.
 //!
+//! - [`sky`]: the CIE standard general skies, the CIE overcast and uniform skies scaled to
+//!   their horizontal illuminance, the sun's position, the scene's frame (daylight, issue 58).
+//! - [`glazing`]: a clear pane's angular transmittance (Fresnel, interreflections in the
+//!   pane, absorption scaled to the given normal transmittance).
 //! - [`gltf`](mod@gltf): luminaires from a glTF scene's own `KHR_lights_punctual` and
 //!   `EXT_lights_ies` lights.
 //!
@@ -20,10 +24,12 @@
 //! [`crate::pipeline::lighting`].
 
 pub mod direct;
+pub mod glazing;
 pub mod gltf;
 pub mod luminaire;
 pub mod points;
 pub mod schedule;
+pub mod sky;
 #[cfg(test)]
 mod tests;
 pub mod workplane;
