@@ -78,12 +78,25 @@ pub enum SkyModel {
 
 impl SkyModel {
     /// Every model's name, as [`SkyModel::parse`] reads them.
-    pub fn names() -> Vec<String> {
-        let mut v: Vec<String> = (1..=15).map(|k| format!("cie-{k}")).collect();
-        v.push("cie-overcast".into());
-        v.push("uniform".into());
-        v
-    }
+    pub const NAMES: [&'static str; 17] = [
+        "cie-1",
+        "cie-2",
+        "cie-3",
+        "cie-4",
+        "cie-5",
+        "cie-6",
+        "cie-7",
+        "cie-8",
+        "cie-9",
+        "cie-10",
+        "cie-11",
+        "cie-12",
+        "cie-13",
+        "cie-14",
+        "cie-15",
+        "cie-overcast",
+        "uniform",
+    ];
 
     /// `cie-1` … `cie-15`, `cie-overcast` or `uniform`.
     pub fn parse(s: &str) -> Result<SkyModel, LightingError> {

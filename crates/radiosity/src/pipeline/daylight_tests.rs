@@ -267,7 +267,6 @@ fn daylight_coefficients_reproduce_a_direct_solve() {
     sun_only.push(en);
     let sun_dc = dc.apply(&sun_only);
     for i in 0..points.len() {
-        assert!((dc_direct[i] - r.direct[i]).abs() < 1e-9 * r.direct[i]);
         assert!(from_dc[i] > dc_direct[i], "the walls reflect");
         let want = r.by_group[2 * i];
         assert!(
@@ -285,4 +284,48 @@ fn daylight_coefficients_reproduce_a_direct_solve() {
     // The patches tile the sky: their horizontal illuminances add up to π.
     let sum: f64 = sources[..48].iter().map(|s| s.horizontal()).sum();
     assert!((sum - PI).abs() < 1e-12, "{sum}");
+}
+
+/// A uniform sky of luminance L seen through an opening is a Lambertian source of exitance
+/// πL filling the opening: the daylight pipeline in a grey room (ρ = 0.5) against the
+/// luminaire pipeline with the opening an emitting polygon of πL facing in. Both are Monte
+/// Carlo over the same mesh (its rows 256 rays, the gathers a few hundred samples): the
+/// room's mean illuminance over the floor points agrees to 2 %.
+#[test]
+fn a_uniform_sky_is_an_emitting_opening() {
+    let (w, d, h) = (4.0f32, 4.0f32, 3.0f32);
+    let hole = [1.5f32, 2.5, 1.0, 3.0];
+    let rho = 0.5;
+    let scene = roof_room((w, d, h), hole, rho, None);
+    let points = floor(w as f64, d as f64, 0.25, 0.5);
+    let sky = Sky::new(SkyModel::Uniform, None, 10_000.0).unwrap();
+    let mut s = settings(600);
+    s.point_rays = 4096;
+    let r = daylight(&scene, &points, &sky, None, &s, &crate::observe::Silent).unwrap();
+    let mut lamp = scene.clone();
+    lamp.materials.push(Material::emitter(
+        "sky",
+        Rgb::BLACK,
+        Rgb::splat(PI * sky.zenith_luminance),
+    ));
+    let mut p = lamp.polygons[0].clone();
+    let [x0, x1, y0, y1] = hole;
+    // Facing down into the room.
+    p.vertices = vec![
+        Vec3::new(x0, y0, h),
+        Vec3::new(x0, y1, h),
+        Vec3::new(x1, y1, h),
+        Vec3::new(x1, y0, h),
+    ];
+    p.material = 1;
+    lamp.polygons.push(p);
+    let mut ls = s.lighting;
+    ls.mesh = MeshParams::Patches(600);
+    ls.gather.direct = 64;
+    let e = super::super::lighting(&lamp, &[], &points, &ls, &crate::observe::Silent).unwrap();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (a, b) = (mean(&r.total), mean(&e.total));
+    assert!((a - b).abs() < 0.02 * b, "daylight {a} lx, emitting opening {b} lx");
+    // And the interreflection is a sizeable part of it.
+    assert!(mean(&r.direct) < 0.85 * a);
 }
