@@ -258,7 +258,10 @@ pub fn run(a: LightingArgs) -> Result<()> {
     let t = std::time::Instant::now();
     let result = (|| -> Result<(radiosity::pipeline::LightingResult, Option<Vec<f64>>)> {
         let Some(d) = &day else {
-            return Ok((lighting(&scene, &luminaires, &points, &settings, &progress)?, None));
+            return Ok((
+                lighting(&scene, &luminaires, &points, &settings, &progress)?,
+                None,
+            ));
         };
         // Luminaires beside the sky: their light passes the panes (the luminaire pipeline
         // has no glazing; the panes are left out of its scene).
@@ -274,7 +277,13 @@ pub fn run(a: LightingArgs) -> Result<()> {
                 .polygons
                 .retain(|p| opaque.materials[p.material].transmittance <= 0.0);
             opaque.origins.clear();
-            Some(lighting(&opaque, &luminaires, &points, &settings, &progress)?)
+            Some(lighting(
+                &opaque,
+                &luminaires,
+                &points,
+                &settings,
+                &progress,
+            )?)
         };
         let (r, df) = crate::daylight::run(&scene, &points, d, lum, &progress)?;
         Ok((r, Some(df)))

@@ -14,6 +14,7 @@ mod common;
 mod validator;
 
 mod adaptive;
+mod daylight;
 mod errors;
 mod experiment;
 mod form_factors;

@@ -201,7 +201,11 @@ pub fn relative_horizontal_illuminance(model: SkyModel, sun: [f64; 3]) -> f64 {
 /// The rule of [`relative_horizontal_illuminance`] with `panels` Gauss–Legendre panels of 16
 /// points in χ and `m` trapezoid points in ψ.
 fn integrate(model: SkyModel, sun: [f64; 3], panels: usize, m: usize) -> f64 {
-    let s = if model.needs_sun() { sun } else { [0.0, 0.0, 1.0] };
+    let s = if model.needs_sun() {
+        sun
+    } else {
+        [0.0, 0.0, 1.0]
+    };
     // A frame (u, v, s) about the sun.
     let (u, v) = {
         let a = if s[2].abs() < 0.9 {
@@ -463,7 +467,10 @@ mod tests {
                 let m = SkyModel::Cie(k);
                 let got = relative_horizontal_illuminance(m, sun);
                 let fine = integrate(m, sun, 16, 1440);
-                assert!((got - fine).abs() < 1e-8 * fine, "cie-{k} sun {alt}°: {got} {fine}");
+                assert!(
+                    (got - fine).abs() < 1e-8 * fine,
+                    "cie-{k} sun {alt}°: {got} {fine}"
+                );
                 let want = brute(m, sun, 800, 1600);
                 assert!(
                     (got - want).abs() < 2e-5 * want,

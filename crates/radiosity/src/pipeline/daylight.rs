@@ -578,8 +578,7 @@ impl Outside<'_> {
                     let phi = std::f32::consts::TAU * (q as f32 + uniform(rng)) / m as f32;
                     let d = (c + st * (r * phi.cos()) + sb * (r * phi.sin())).normalize();
                     count += 1;
-                    if n.dot(d) <= 0.0 || self.bvh.occluded(&Ray::new(origin, d), f32::INFINITY)
-                    {
+                    if n.dot(d) <= 0.0 || self.bvh.occluded(&Ray::new(origin, d), f32::INFINITY) {
                         continue;
                     }
                     e += cos_c * self.through_glass(origin, d);
@@ -632,9 +631,8 @@ fn solve_columns(
     let mut panes = Vec::with_capacity(scene.materials.len());
     for m in &scene.materials {
         panes.push(if m.transmittance > 0.0 {
-            let g = Glazing::new(m.transmittance, m.ior.unwrap_or(GLASS_INDEX)).map_err(|e| {
-                LightingError::Parameter(format!("material '{}': {e}", m.name))
-            })?;
+            let g = Glazing::new(m.transmittance, m.ior.unwrap_or(GLASS_INDEX))
+                .map_err(|e| LightingError::Parameter(format!("material '{}': {e}", m.name)))?;
             Some(g)
         } else {
             None
@@ -734,7 +732,10 @@ fn solve_columns(
             (out, counted)
         })
         .collect();
-    let direct: Vec<f64> = at_points.iter().flat_map(|(d, _)| d.iter().copied()).collect();
+    let direct: Vec<f64> = at_points
+        .iter()
+        .flat_map(|(d, _)| d.iter().copied())
+        .collect();
     let gather_weight = 1.0 / (kx * kx) as f64;
     // Steps 2 and 3, a column at a time.
     let mut total = direct.clone();
@@ -742,12 +743,16 @@ fn solve_columns(
     // One F for every column (its rows at the settings' fixed rays), so that the columns are
     // solved with the same operator and add up exactly.
     let any = (0..nc).any(|c| {
-        (0..mesh.len()).any(|p| at_patches[p * nc + c] > 0.0 && base.reflectance[p].max_channel() > 0.0)
+        (0..mesh.len())
+            .any(|p| at_patches[p * nc + c] > 0.0 && base.reflectance[p].max_channel() > 0.0)
     });
     let mut f = if any {
         observer.event(Event::Stage(Stage::FormFactors));
         let est = crate::formfactor::Estimator::new(&mesh, &bvh, ls.form_factors)?;
-        Some(est.matrix(crate::formfactor::Storage::Sparse, observer).into_sparse())
+        Some(
+            est.matrix(crate::formfactor::Storage::Sparse, observer)
+                .into_sparse(),
+        )
     } else {
         None
     };

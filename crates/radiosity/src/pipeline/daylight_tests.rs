@@ -100,15 +100,7 @@ fn a_uniform_sky_through_a_roof_opening_is_pi_l_times_the_configuration_factor()
     let sky = Sky::new(SkyModel::Uniform, None, 10_000.0).unwrap();
     let mut s = settings(400);
     s.point_rays = 65_536;
-    let r = daylight(
-        &scene,
-        &points,
-        &sky,
-        None,
-        &s,
-        &crate::observe::Silent,
-    )
-    .unwrap();
+    let r = daylight(&scene, &points, &sky, None, &s, &crate::observe::Silent).unwrap();
     let l = sky.zenith_luminance;
     assert!((l - 10_000.0 / PI).abs() < 1e-6);
     let mut worst = 0.0f64;
@@ -191,7 +183,8 @@ fn glazing_passes_the_sun_at_its_angular_transmittance() {
         0.0,
         Some(tau_n),
     );
-    let points = vec![SensorPoint::new([3.0 - h / 3f64.sqrt(), 3.0, 0.0], [0.0, 0.0, 1.0]).unwrap()];
+    let points =
+        vec![SensorPoint::new([3.0 - h / 3f64.sqrt(), 3.0, 0.0], [0.0, 0.0, 1.0]).unwrap()];
     let dark = Sky::new(SkyModel::Uniform, None, 0.0).unwrap();
     let sun = SunPosition::new(60.0, 90.0).unwrap();
     let r = daylight(
@@ -205,7 +198,11 @@ fn glazing_passes_the_sun_at_its_angular_transmittance() {
     .unwrap();
     let g = Glazing::new(tau_n, GLASS_INDEX).unwrap();
     let want = 1000.0 * 60f64.to_radians().sin() * g.transmittance(30f64.to_radians().cos());
-    assert!((r.total[0] - want).abs() < 1e-4 * want, "{} {want}", r.total[0]);
+    assert!(
+        (r.total[0] - want).abs() < 1e-4 * want,
+        "{} {want}",
+        r.total[0]
+    );
     assert!(g.transmittance(30f64.to_radians().cos()) < tau_n);
 }
 
@@ -325,7 +322,10 @@ fn a_uniform_sky_is_an_emitting_opening() {
     let e = super::super::lighting(&lamp, &[], &points, &ls, &crate::observe::Silent).unwrap();
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let (a, b) = (mean(&r.total), mean(&e.total));
-    assert!((a - b).abs() < 0.02 * b, "daylight {a} lx, emitting opening {b} lx");
+    assert!(
+        (a - b).abs() < 0.02 * b,
+        "daylight {a} lx, emitting opening {b} lx"
+    );
     // And the interreflection is a sizeable part of it.
     assert!(mean(&r.direct) < 0.85 * a);
 }

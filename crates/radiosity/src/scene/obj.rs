@@ -150,15 +150,19 @@ fn load_mtl(
                         return Err(invalid(
                             path,
                             line,
-                            format!("Tf {} {} {}: a transmission filter must be in [0, 1]", c.r, c.g, c.b),
+                            format!(
+                                "Tf {} {} {}: a transmission filter must be in [0, 1]",
+                                c.r, c.g, c.b
+                            ),
                         ));
                     }
                     e.0 = c;
                 } else {
                     // `d -halo v`: the halo form is read as plain dissolve.
-                    let v = args.iter().rfind(|a| !a.starts_with('-')).ok_or_else(|| {
-                        invalid(path, line, format!("{key} needs a number"))
-                    })?;
+                    let v = args
+                        .iter()
+                        .rfind(|a| !a.starts_with('-'))
+                        .ok_or_else(|| invalid(path, line, format!("{key} needs a number")))?;
                     let v = parse_f64(path, line, v, key)?;
                     if !(0.0..=1.0).contains(&v) {
                         return Err(invalid(path, line, format!("{key} {v}: must be in [0, 1]")));
