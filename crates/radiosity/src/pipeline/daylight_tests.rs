@@ -329,3 +329,39 @@ fn a_uniform_sky_is_an_emitting_opening() {
     // And the interreflection is a sizeable part of it.
     assert!(mean(&r.direct) < 0.85 * a);
 }
+
+/// A glTF material with `KHR_materials_transmission` (factor 0.9, white) and
+/// `KHR_materials_ior` 1.5 is a pane of 0.9 × (1 − r₀)/(1 + r₀), r₀ = 0.04, of index 1.5.
+#[test]
+fn a_gltf_transmission_material_is_a_pane() {
+    use base64::Engine as _;
+    let pos: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&pos)
+    );
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"material":0}}]}}],
+"materials":[{{"name":"glass","pbrMetallicRoughness":{{"baseColorFactor":[1,1,1,1]}},
+"extensions":{{"KHR_materials_transmission":{{"transmissionFactor":0.9}},"KHR_materials_ior":{{"ior":1.5}}}}}}],
+"extensionsUsed":["KHR_materials_transmission","KHR_materials_ior"],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}],
+"bufferViews":[{{"buffer":0,"byteLength":36}}],"buffers":[{{"byteLength":36,"uri":"{uri}"}}]}}"#
+    );
+    let dir = std::env::temp_dir().join(format!("radiosity-pane-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("pane.gltf");
+    std::fs::write(&path, json).unwrap();
+    let scene = crate::scene::gltf::load_with(&path, false).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let m = scene.materials.iter().find(|m| m.name == "glass").unwrap();
+    let want = 0.9 * 0.96 / 1.04;
+    assert!((m.transmittance - want).abs() < 1e-6, "{}", m.transmittance);
+    assert_eq!(m.ior, Some(1.5));
+    let g = Glazing::new(m.transmittance, 1.5).unwrap();
+    assert!((g.transmittance(1.0) - m.transmittance).abs() < 1e-12);
+}
