@@ -126,8 +126,11 @@ fn layout(case: Case) -> (bool, bool) {
     }
 }
 
+/// Points with their labels.
+type Labelled = Vec<(String, [f64; 3])>;
+
 /// The room's polygons round the opening, the opening, and the floor points.
-fn room(roof: bool) -> (Vec<(Rect, f64)>, Rect, Vec<(String, [f64; 3])>) {
+fn room(roof: bool) -> (Vec<(Rect, f64)>, Rect, Labelled) {
     let (w, d, h) = (4.0, 4.0, 3.0);
     let r = |axis: usize, at: f64, lo: [f64; 2], hi: [f64; 2]| Rect { axis, at, lo, hi };
     let mut faces = vec![

@@ -45,6 +45,9 @@ use crate::Error;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
+/// A point's patches hit by its sky rays, each with its count of rays.
+type PatchCounts = Vec<(u32, u32)>;
+
 /// Most panes a sky ray is followed through.
 const MAX_PANES: usize = 16;
 
@@ -702,7 +705,7 @@ fn solve_columns(
     // patch's front read its exitance: E_from_surfaces = (1/N) Σ B_hit (cosine sampling),
     // kept as each point's patches and their ray counts, a linear map applied to every
     // column's solution.
-    let at_points: Vec<(Vec<f64>, Vec<(u32, u32)>)> = points
+    let at_points: Vec<(Vec<f64>, PatchCounts)> = points
         .par_iter()
         .enumerate()
         .map(|(i, p)| {
