@@ -12,7 +12,7 @@
 //! | 5.6 | one diffuse reflection from a floor | Gauss–Legendre quadrature of ρ E(y)/π · cos cos / r² over the floor, E(y) closed form |
 //! | 5.7 | the same from a wall, an obstruction hiding part of it | the same over the part of the wall each point sees (found exactly) |
 //! | 5.8 | interreflection in a 4 m cube of one reflectance | the radiosity equation solved by collocation with exact configuration factors on the cube's symmetry, extrapolated; the mean by the integrating sphere |
-//! | 5.9–5.12 | the sky component through a roof and a façade opening, unglazed and glazed, 17 skies | Gauss–Legendre quadrature of the sky's luminance over the opening ([`daylight`](mod@daylight)) |
+//! | 5.9–5.12 | the sky component through a roof and a façade opening, unglazed and glazed, 17 skies | Gauss–Legendre quadrature of the sky's luminance over the opening (`cie171/daylight.rs`) |
 //!
 //! Where CIE 171's text gives the geometry (rooms 4 × 4 × 3 m, 4 m cube, the measurement
 //! lines) it is followed; what was chosen here is said in each case's module and in
