@@ -151,6 +151,7 @@ const CAMERA: &str = "Camera";
 const RUN: &str = "Run";
 const PICTURE: &str = "Picture";
 const LIGHTMAP: &str = "Lightmap";
+const DAYLIGHT: &str = "Daylight";
 
 /// Diffuse global illumination by the radiosity method: baked light, view factors and heat
 /// transfer, and every classic solver side by side.
@@ -421,6 +422,37 @@ pub struct LightingArgs {
     /// the stem is the --grid file's, or `workplane-MATERIAL`. Each grid must lie in one plane.
     #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
     pub pictures: Option<PathBuf>,
+    /// Daylight: the sky outside, `cie-1` … `cie-15` (ISO 15469 / CIE S 011 general skies),
+    /// `cie-overcast` (L = L_z (1 + 2 sin θ)/3) or `uniform`; adds the groups `sky` (and
+    /// `sun`) and a `daylight_factor` column to the grid.
+    #[arg(long, value_name = "SKY", value_parser = clap::builder::PossibleValuesParser::new(radiosity::lighting::sky::SkyModel::NAMES), help_heading = DAYLIGHT)]
+    pub sky: Option<String>,
+    /// The sun's position, degrees: altitude, azimuth clockwise from north (north is +y in a
+    /// z-up scene, −z in a y-up one; see --north).
+    #[arg(long, value_name = "ALTITUDE,AZIMUTH", requires = "sky", allow_hyphen_values = true, help_heading = DAYLIGHT)]
+    pub sun: Option<String>,
+    /// The sky's unobstructed horizontal illuminance, lux (the sun's disc not included).
+    #[arg(long, value_name = "LX", default_value_t = 10_000.0, requires = "sky", help_heading = DAYLIGHT)]
+    pub sky_illuminance: f64,
+    /// The sun's direct normal illuminance, lux (0: no sun disc); needs --sun.
+    #[arg(long, value_name = "LX", default_value_t = 0.0, requires = "sun", help_heading = DAYLIGHT)]
+    pub sun_illuminance: f64,
+    /// True north, degrees counter-clockwise (seen from above) from the scene's north (+y in a
+    /// z-up scene, −z in a y-up one).
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, requires = "sky", allow_hyphen_values = true, help_heading = DAYLIGHT)]
+    pub north: f64,
+    /// Reflectance of the ground plane outside, lit by the sky and the sun.
+    #[arg(long, value_name = "R", default_value_t = 0.2, requires = "sky", help_heading = DAYLIGHT)]
+    pub ground_reflectance: f64,
+    /// A material that is a clear pane of this normal transmittance (Fresnel at n = 1.52 with
+    /// the pane's interreflections; at most 0.918); more than once for several. Materials
+    /// with MTL `Tf`/`d` or glTF `KHR_materials_transmission` are glazing already.
+    #[arg(long, value_name = "NAME=TRANSMITTANCE", help_heading = DAYLIGHT)]
+    pub glazing: Vec<String>,
+    /// Sky rays at each calculation point (stratified; the error at an opening's edge falls
+    /// as N^(−3/4)).
+    #[arg(long, value_name = "N", default_value_t = 16_384, requires = "sky", help_heading = DAYLIGHT)]
+    pub sky_rays: u32,
 }
 
 /// `radiosity thermal`.

@@ -6,6 +6,7 @@
 
 pub mod alloc;
 pub mod args;
+mod daylight;
 mod experiment;
 pub mod false_colour;
 mod lighting;

@@ -209,7 +209,8 @@ pub fn run(a: LightingArgs) -> Result<()> {
         ));
         points.extend(p);
     }
-    let scene = crate::load_scene(&a.scene, false)?;
+    let mut scene = crate::load_scene(&a.scene, false)?;
+    crate::daylight::glaze(&mut scene, &a.glazing)?;
     if let Some(spec) = &a.workplane {
         let (material, height) = match spec.rsplit_once(':') {
             Some((m, h)) => match h.parse::<f64>() {
@@ -252,11 +253,43 @@ pub fn run(a: LightingArgs) -> Result<()> {
     };
     settings.form_factors.seed = a.seed;
     settings.gather.indirect = a.indirect_samples;
+    let day = crate::daylight::prepare(&a, up, settings)?;
     let progress = crate::report::Progress::new(a.tolerance.max(1e-12));
     let t = std::time::Instant::now();
-    let result = lighting(&scene, &luminaires, &points, &settings, &progress);
+    let result = (|| -> Result<(radiosity::pipeline::LightingResult, Option<Vec<f64>>)> {
+        let Some(d) = &day else {
+            return Ok((
+                lighting(&scene, &luminaires, &points, &settings, &progress)?,
+                None,
+            ));
+        };
+        // Luminaires beside the sky: their light passes the panes (the luminaire pipeline
+        // has no glazing; the panes are left out of its scene).
+        let emits = scene
+            .polygons
+            .iter()
+            .any(|p| scene.materials[p.material].emission.max_channel() > 0.0);
+        let lum = if luminaires.is_empty() && !emits {
+            None
+        } else {
+            let mut opaque = scene.clone();
+            opaque
+                .polygons
+                .retain(|p| opaque.materials[p.material].transmittance <= 0.0);
+            opaque.origins.clear();
+            Some(lighting(
+                &opaque,
+                &luminaires,
+                &points,
+                &settings,
+                &progress,
+            )?)
+        };
+        let (r, df) = crate::daylight::run(&scene, &points, d, lum, &progress)?;
+        Ok((r, Some(df)))
+    })();
     progress.finish();
-    let r = result?;
+    let (r, daylight_factor) = result?;
     let seconds = t.elapsed().as_secs_f64();
 
     // grid.csv: the fixed columns, then a column a group when there are several.
@@ -268,6 +301,9 @@ pub fn run(a: LightingArgs) -> Result<()> {
                 write!(out, ",illuminance_{g}")?;
             }
         }
+        if daylight_factor.is_some() {
+            write!(out, ",daylight_factor")?;
+        }
         writeln!(out)?;
         let ng = r.groups.len();
         for (i, p) in points.iter().enumerate() {
@@ -278,6 +314,9 @@ pub fn run(a: LightingArgs) -> Result<()> {
                 for e in &r.by_group[i * ng..(i + 1) * ng] {
                     write!(out, ",{e}")?;
                 }
+            }
+            if let Some(df) = &daylight_factor {
+                write!(out, ",{}", df[i])?;
             }
             writeln!(out)?;
         }
@@ -319,8 +358,31 @@ pub fn run(a: LightingArgs) -> Result<()> {
         if r.groups.len() == 1 { "" } else { "s" },
         r.groups.join(", ")
     );
+    if let Some(d) = &day {
+        println!(
+            "daylight    sky {}: {:.0} lx horizontal, zenith {:.1} cd/m²{}, ground reflectance {}",
+            d.sky.model.name(),
+            d.sky.horizontal_illuminance,
+            d.sky.zenith_luminance,
+            match d.sun {
+                Some((s, en)) => format!(
+                    "; sun at {}°, azimuth {}°, {:.0} lx direct normal",
+                    s.altitude, s.azimuth, en
+                ),
+                None => String::new(),
+            },
+            d.settings.ground_reflectance
+        );
+    }
     let mut grid_json = Vec::new();
     for (name, range) in &grids {
+        if let Some(df) = &daylight_factor {
+            let s = Stats::of(&df[range.clone()]);
+            println!(
+                "daylight    {name}: daylight factor average {:.2} %, min {:.2} %, max {:.2} %",
+                s.mean, s.min, s.max
+            );
+        }
         let s = Stats::of(&r.total[range.clone()]);
         println!(
             "grid        {name}: {} points, average {:.1} lx, min {:.1} lx, max {:.1} lx, U0 {:.3}, min/max {:.3}",
@@ -331,7 +393,7 @@ pub fn run(a: LightingArgs) -> Result<()> {
             s.u0(),
             s.ud()
         );
-        grid_json.push(serde_json::json!({
+        let mut g = serde_json::json!({
             "file": name,
             "points": s.points,
             "average": s.mean,
@@ -339,7 +401,13 @@ pub fn run(a: LightingArgs) -> Result<()> {
             "max": s.max,
             "u0": s.u0(),
             "min_over_max": s.ud(),
-        }));
+        });
+        if let Some(df) = &daylight_factor {
+            let d = Stats::of(&df[range.clone()]);
+            g["daylight_factor"] =
+                serde_json::json!({"average": d.mean, "min": d.min, "max": d.max});
+        }
+        grid_json.push(g);
     }
     let luminaire_json: Vec<serde_json::Value> = luminaires
         .iter()
@@ -360,7 +428,9 @@ pub fn run(a: LightingArgs) -> Result<()> {
             })
         })
         .collect();
-    print_books(&r.groups, &r.books);
+    if !r.books.is_empty() {
+        print_books(&r.groups, &r.books);
+    }
     if !r.converged {
         eprintln!(
             "radiosity: warning: the interreflection stopped before its tolerance {}; the light left unshot is in the books",
@@ -390,6 +460,18 @@ pub fn run(a: LightingArgs) -> Result<()> {
             "books": books_json(&r.groups, &r.books),
             "converged": r.converged,
             "seconds": seconds,
+            "daylight": day.as_ref().map(|d| serde_json::json!({
+                "sky": d.sky.model.name(),
+                "sky_illuminance": d.sky.horizontal_illuminance,
+                "zenith_luminance": d.sky.zenith_luminance,
+                "sun": d.sun.map(|(s, en)| serde_json::json!({
+                    "altitude": s.altitude,
+                    "azimuth": s.azimuth,
+                    "illuminance": en,
+                })),
+                "ground_reflectance": d.settings.ground_reflectance,
+                "north": a.north,
+            })),
         });
         write_atomic::<OutputError>(p, |out| writeln!(out, "{v:#}"))
             .context("writing the summary")?;

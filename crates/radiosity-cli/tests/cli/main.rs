@@ -15,6 +15,7 @@ mod validator;
 
 mod adaptive;
 mod coincident;
+mod daylight;
 mod errors;
 mod experiment;
 mod form_factors;

@@ -12,6 +12,7 @@
 //! | 5.6 | one diffuse reflection from a floor | Gauss–Legendre quadrature of ρ E(y)/π · cos cos / r² over the floor, E(y) closed form |
 //! | 5.7 | the same from a wall, an obstruction hiding part of it | the same over the part of the wall each point sees (found exactly) |
 //! | 5.8 | interreflection in a 4 m cube of one reflectance | the radiosity equation solved by collocation with exact configuration factors on the cube's symmetry, extrapolated; the mean by the integrating sphere |
+//! | 5.9–5.12 | the sky component through a roof and a façade opening, unglazed and glazed, 17 skies | Gauss–Legendre quadrature of the sky's luminance over the opening (`cie171/daylight.rs`) |
 //!
 //! Where CIE 171's text gives the geometry (rooms 4 × 4 × 3 m, 4 m cube, the measurement
 //! lines) it is followed; what was chosen here is said in each case's module and in
@@ -20,6 +21,7 @@
 //! ([`Case::target_percent`]).
 
 pub mod closed_form;
+mod daylight;
 mod direct;
 mod interreflection;
 mod photometry;
@@ -56,17 +58,29 @@ pub enum Case {
     Obstruction,
     /// 5.8: the interreflected light in a 4 m cube of one reflectance.
     Interreflection,
+    /// 5.9: the sky component through an unglazed roof opening, every sky.
+    SkyRoof,
+    /// 5.10: the same through a glazed roof opening.
+    SkyRoofGlazed,
+    /// 5.11: the sky component through an unglazed façade opening, every sky.
+    SkyFacade,
+    /// 5.12: the same through a glazed façade opening.
+    SkyFacadeGlazed,
 }
 
 impl Case {
     /// Every case, in order.
-    pub const ALL: [Case; 6] = [
+    pub const ALL: [Case; 10] = [
         Case::PointSource,
         Case::AreaSource,
         Case::Flux,
         Case::Reflection,
         Case::Obstruction,
         Case::Interreflection,
+        Case::SkyRoof,
+        Case::SkyRoofGlazed,
+        Case::SkyFacade,
+        Case::SkyFacadeGlazed,
     ];
 
     /// CIE 171's number: "5.2" … "5.8".
@@ -78,6 +92,10 @@ impl Case {
             Case::Reflection => "5.6",
             Case::Obstruction => "5.7",
             Case::Interreflection => "5.8",
+            Case::SkyRoof => "5.9",
+            Case::SkyRoofGlazed => "5.10",
+            Case::SkyFacade => "5.11",
+            Case::SkyFacadeGlazed => "5.12",
         }
     }
 
@@ -97,6 +115,12 @@ impl Case {
                 "one diffuse reflection from a 4 × 3 m wall, ρ = 0.6, behind an obstruction"
             }
             Case::Interreflection => "interreflection in a 4 m cube, ρ = 0.05 … 0.95",
+            Case::SkyRoof => "sky component, unglazed 1 × 1 m roof opening, 17 skies",
+            Case::SkyRoofGlazed => "sky component, glazed 1 × 1 m roof opening (τ 0.8), 17 skies",
+            Case::SkyFacade => "sky component, unglazed 2 × 1 m façade opening, 17 skies",
+            Case::SkyFacadeGlazed => {
+                "sky component, glazed 2 × 1 m façade opening (τ 0.8), 17 skies"
+            }
         }
     }
 
@@ -118,6 +142,9 @@ impl Case {
             }
             Case::Interreflection => {
                 "points: E_ind = rho F (E_d + E_ind) by collocation with exact element factors (Howell), m = 12/24/48 extrapolated; mean: integrating sphere Phi rho / (A (1 - rho))"
+            }
+            Case::SkyRoof | Case::SkyRoofGlazed | Case::SkyFacade | Case::SkyFacadeGlazed => {
+                "SC = 100/E_h Int_opening L tau cos cos / r^2 dA, ISO 15469 luminance, Gauss-Legendre 24^2 panels x 6^2; E_h by quadrature"
             }
         }
     }
@@ -210,6 +237,9 @@ pub fn run(case: Case) -> Result<CaseResult, radiosity::Error> {
         Case::Reflection => reflection::floor(),
         Case::Obstruction => reflection::obstructed_wall(),
         Case::Interreflection => interreflection::cube(),
+        Case::SkyRoof | Case::SkyRoofGlazed | Case::SkyFacade | Case::SkyFacadeGlazed => {
+            daylight::run(case)
+        }
     }
 }
 

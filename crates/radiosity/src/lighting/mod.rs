@@ -14,7 +14,10 @@
 //! - [`first_shot`]: the luminaires' first shot into the patches, each patch's flux
 //!   integrated over its solid angle with visibility (an adaptive rule, exact for an
 //!   unshadowed isotropic source).
-//!
+//! - [`sky`]: the CIE standard general skies, the CIE overcast and uniform skies scaled to
+//!   their horizontal illuminance, the sun's position, the scene's frame (daylight, issue 58).
+//! - [`glazing`]: a clear pane's angular transmittance (Fresnel, interreflections in the
+//!   pane, absorption scaled to the given normal transmittance).
 //! - [`gltf`](mod@gltf): luminaires from a glTF scene's own `KHR_lights_punctual` and
 //!   `EXT_lights_ies` lights.
 //!
@@ -24,10 +27,12 @@
 
 pub mod direct;
 pub mod first_shot;
+pub mod glazing;
 pub mod gltf;
 pub mod luminaire;
 pub mod points;
 pub mod schedule;
+pub mod sky;
 #[cfg(test)]
 mod tests;
 pub mod workplane;

@@ -9,6 +9,7 @@
 //! one memory model every pipeline checks a job against. Each takes the ranks of a distributed
 //! run where it can run over several ([`crate::comm::Ranks`]; `None` for one process).
 
+mod daylight;
 mod lighting;
 mod memory;
 mod radiant;
@@ -21,6 +22,10 @@ mod view_factors;
 /// The bridge from a meshed scene to its linear system (it lives with the mesh).
 pub use crate::mesh::patch_system;
 pub use crate::observe::{Event, Observer, Stage};
+pub use daylight::{
+    daylight, daylight_coefficients, DaylightCoefficients, DaylightResult, DaylightSettings,
+    DaylightSource,
+};
 pub use lighting::{
     lighting, lighting_solution, luminance, EnergyBooks, LightingResult, LightingSettings,
     LightingSolution, SurfaceLight, BLACK_ROW_RAYS, ESCAPE_BANDS, ESCAPE_SECTORS, SCENE_GROUP,

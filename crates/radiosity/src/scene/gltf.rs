@@ -53,6 +53,7 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_materials_unlit",
     "KHR_texture_transform",
     "KHR_materials_ior",
+    "KHR_materials_transmission",
     "KHR_materials_specular",
     "KHR_mesh_quantization",
     "KHR_lights_punctual",
@@ -400,7 +401,21 @@ impl<'a> Reader<'a> {
                 e = e * self.texture_mean(t.texture(), &format!("{what}.emissiveTexture"))?;
             }
         }
-        Ok((Material::emitter(&name, rho, e), m.double_sided()))
+        let mut material = Material::emitter(&name, rho, e);
+        // KHR_materials_transmission: a clear pane passing transmissionFactor × the base
+        // colour's luminance of what a non-absorbing pane of its IOR (KHR_materials_ior,
+        // default 1.5) passes at normal incidence, (1 − r₀)/(1 + r₀).
+        if let Some(t) = m.transmission() {
+            let factor = t.transmission_factor() as f64;
+            if factor > 0.0 {
+                let n = m.ior().map(f64::from).filter(|n| *n > 1.0).unwrap_or(1.5);
+                let r0 = ((n - 1.0) / (n + 1.0)).powi(2);
+                let tint = 0.2126 * f[0] as f64 + 0.7152 * f[1] as f64 + 0.0722 * f[2] as f64;
+                material.transmittance = factor * tint.clamp(0.0, 1.0) * (1.0 - r0) / (1.0 + r0);
+                material.ior = Some(n);
+            }
+        }
+        Ok((material, m.double_sided()))
     }
 }
 

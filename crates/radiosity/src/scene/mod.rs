@@ -32,6 +32,14 @@ pub struct Material {
     pub reflectance: Rgb,
     /// Emitted radiant exitance E per channel, W/m² (≥ 0).
     pub emission: Rgb,
+    /// Glazing: the normal transmittance of a clear pane (MTL `Tf`/`d`, glTF
+    /// `KHR_materials_transmission`); 0 for an opaque surface. Daylight
+    /// ([`crate::lighting::glazing`]) lets light through such a surface with the pane's angular
+    /// dependence; the other calculations treat it as opaque.
+    pub transmittance: f64,
+    /// The pane's refractive index where the file gives one (glTF `KHR_materials_ior`);
+    /// `None`: soda-lime glass, 1.52.
+    pub ior: Option<f64>,
 }
 
 impl Material {
@@ -41,6 +49,8 @@ impl Material {
             name: name.to_string(),
             reflectance,
             emission: Rgb::BLACK,
+            transmittance: 0.0,
+            ior: None,
         }
     }
 
@@ -50,6 +60,8 @@ impl Material {
             name: name.to_string(),
             reflectance,
             emission,
+            transmittance: 0.0,
+            ior: None,
         }
     }
 }

@@ -91,6 +91,9 @@ fn load_mtl(
 ) -> Result<(), SceneError> {
     let text = read(path)?;
     let mut current: Option<usize> = None;
+    // Per material of this file: its transmission filter `Tf` and transparency (1 − `d`, or
+    // `Tr`); its transmittance is their product (Y of the filter), set at the end.
+    let mut see_through: HashMap<usize, (Rgb, f64)> = HashMap::new();
     for (k, raw) in text.lines().enumerate() {
         let line = k + 1;
         let s = raw.split('#').next().unwrap_or("").trim();
@@ -136,8 +139,42 @@ fn load_mtl(
                     out[m].emission = c;
                 }
             }
+            "Tf" | "d" | "Tr" => {
+                let Some(m) = current else {
+                    return Err(invalid(path, line, format!("{key} before any newmtl")));
+                };
+                let e = see_through.entry(m).or_insert((Rgb::splat(1.0), 0.0));
+                if key == "Tf" {
+                    let c = parse_rgb(path, line, &args, key)?;
+                    if c.min_channel() < 0.0 || c.max_channel() > 1.0 {
+                        return Err(invalid(
+                            path,
+                            line,
+                            format!(
+                                "Tf {} {} {}: a transmission filter must be in [0, 1]",
+                                c.r, c.g, c.b
+                            ),
+                        ));
+                    }
+                    e.0 = c;
+                } else {
+                    // `d -halo v`: the halo form is read as plain dissolve.
+                    let v = args
+                        .iter()
+                        .rfind(|a| !a.starts_with('-'))
+                        .ok_or_else(|| invalid(path, line, format!("{key} needs a number")))?;
+                    let v = parse_f64(path, line, v, key)?;
+                    if !(0.0..=1.0).contains(&v) {
+                        return Err(invalid(path, line, format!("{key} {v}: must be in [0, 1]")));
+                    }
+                    e.1 = if key == "d" { 1.0 - v } else { v };
+                }
+            }
             _ => {}
         }
+    }
+    for (m, (tf, t)) in see_through {
+        out[m].transmittance = t * (0.2126 * tf.r + 0.7152 * tf.g + 0.0722 * tf.b);
     }
     Ok(())
 }

@@ -502,11 +502,8 @@ impl Reader {
         } else {
             key.0.clone()
         };
-        self.materials.push(Material {
-            name: label,
-            reflectance,
-            emission,
-        });
+        self.materials
+            .push(Material::emitter(&label, reflectance, emission));
         self.dropped.push(m.rs + m.ts + m.td);
         let i = self.materials.len() - 1;
         self.converted.insert(key, i);

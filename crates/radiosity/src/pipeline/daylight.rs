@@ -1,0 +1,815 @@
+//! Daylight: the sky, the sun and the ground outside as sources at infinity (issue 58).
+//!
+//! Each *column* of light is one source: the whole sky of a [`Sky`] (with the ground it
+//! lights), the sun (with the ground it lights), or, for daylight coefficients, one patch of
+//! a subdivided sky of unit luminance or one sun position of unit direct normal illuminance.
+//! Radiosity is linear in its sources, so columns add, and a sky given as patch luminances is
+//! the coefficient matrix times those luminances ([`daylight_coefficients`]).
+//!
+//! Per column the pipeline
+//! 1. integrates, at each patch's centre and each sensor point, the light arriving straight
+//!    from outside: `rays` directions cosine-distributed about the normal, stratified
+//!    (a k × k grid of Malley's map, one jittered direction a cell), each either blocked by
+//!    the opaque geometry or escaping, through any glazing it crosses (× τ(θ) a pane,
+//!    [`Glazing`]), to the sky (luminance L(ω) above the horizon) or the ground (below it:
+//!    luminance ρ_g E_h/π, E_h the unobstructed horizontal illuminance of the column's sky and
+//!    sun); E ≈ π/N Σ L τ. The sun: shadow rays to stratified points of its disc (0.533°),
+//!    E = E_n cos θ × the mean visibility × τ;
+//! 2. solves the interreflection with the engine's solver, ρ E (step 1 at the patches) as the
+//!    initial exitance;
+//! 3. adds at each sensor point the light arriving from the surfaces: the sensor's own sky
+//!    rays that hit a patch's front read its exitance, E = (1/N) Σ B_hit (cosine sampling),
+//!    a linear map from the solution to the points, traced once and applied to every
+//!    column (so daylight coefficients add up exactly, and 145 columns cost 145 sums).
+//!
+//! Glazing (materials with a transmittance) is left out of the interreflection's mesh: the
+//! sky and sun rays are attenuated by its angular transmittance, while the diffuse light
+//! passes it both ways unattenuated in the interreflection (from a room through a window
+//! into the open it escapes; between outside obstructions and the room it is overestimated
+//! by 1/τ_diffuse, about 20 % of that part).
+
+use super::lighting::{luminance, LightingSettings};
+use super::{patch_system, MemoryCheck};
+use crate::accel::Bvh;
+use crate::color::Rgb;
+use crate::geom::{orthonormal_basis, Ray, Vec3};
+use crate::lighting::glazing::{Glazing, GLASS_INDEX};
+use crate::lighting::sky::{direction, Sky, SkyFrame, SunPosition, SUN_DIAMETER_DEG};
+use crate::lighting::{LightingError, SensorPoint};
+use crate::mesh::{Mesh, MeshParams};
+use crate::observe::{Event, Observer, Stage};
+use crate::sampling::{stream, uniform};
+use crate::scene::Scene;
+use crate::system::System;
+use crate::Error;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// A point's patches hit by its sky rays, each with its count of rays.
+type PatchCounts = Vec<(u32, u32)>;
+
+/// Most panes a sky ray is followed through.
+const MAX_PANES: usize = 16;
+
+/// What decides a daylight calculation beyond [`LightingSettings`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DaylightSettings {
+    /// Mesh, form factors, solver, gather, unit and memory, as for luminaires.
+    pub lighting: LightingSettings,
+    /// Sky rays at each sensor point (rounded to a square k × k of strata). Stratified
+    /// sampling of a visibility edge errs about N^(−3/4): 16,384 keep a 10 % opening's sky
+    /// component to a few tenths of a per cent.
+    pub point_rays: u32,
+    /// Sky rays at each patch's centre (its first shot; the same stratification).
+    pub patch_rays: u32,
+    /// Shadow rays to the sun's disc per receiver (stratified over the disc).
+    pub sun_rays: u32,
+    /// Reflectance of the ground plane outside, in [0, 1).
+    pub ground_reflectance: f64,
+    /// How the scene's axes sit in the sky frame.
+    pub frame: SkyFrame,
+}
+
+impl Default for DaylightSettings {
+    fn default() -> Self {
+        Self {
+            lighting: LightingSettings::default(),
+            point_rays: 16_384,
+            patch_rays: 1_024,
+            sun_rays: 16,
+            ground_reflectance: 0.2,
+            frame: SkyFrame {
+                up: [0.0, 0.0, 1.0],
+                north: [0.0, 1.0, 0.0],
+                east: [1.0, 0.0, 0.0],
+            },
+        }
+    }
+}
+
+impl DaylightSettings {
+    /// Check the ranges. Errors name the parameter.
+    pub fn validate(&self) -> Result<(), LightingError> {
+        if !(0.0..1.0).contains(&self.ground_reflectance) {
+            return Err(LightingError::Parameter(format!(
+                "ground reflectance {}: must be in [0, 1)",
+                self.ground_reflectance
+            )));
+        }
+        for (what, n) in [
+            ("sky rays at points", self.point_rays),
+            ("sky rays at patches", self.patch_rays),
+            ("sun rays", self.sun_rays),
+        ] {
+            if n == 0 || n > 1 << 24 {
+                return Err(LightingError::Parameter(format!(
+                    "{what} {n}: must be 1 … 16777216"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One source of daylight coefficients.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DaylightSource {
+    /// A patch of the sky between two altitudes and two azimuths (degrees; azimuth clockwise
+    /// from north, the range may wrap past 360, e.g. `[348, 372]`), of unit luminance
+    /// (1 cd/m²). Tregenza's and Reinhart's patches are such; the zenith cap is altitude
+    /// `[84, 90]`, azimuth `[0, 360]`.
+    Patch {
+        /// Lower and upper altitude, degrees, 0 ≤ lower < upper ≤ 90.
+        altitude: [f64; 2],
+        /// Start and end azimuth, degrees, start < end ≤ start + 360.
+        azimuth: [f64; 2],
+    },
+    /// The sun's disc at this position, of unit direct normal illuminance (1 lx).
+    Sun(SunPosition),
+}
+
+impl DaylightSource {
+    /// Its solid angle, sr (a patch: Δaz (sin α₁ − sin α₀); the sun's disc).
+    pub fn solid_angle(&self) -> f64 {
+        match *self {
+            DaylightSource::Patch { altitude, azimuth } => {
+                (azimuth[1] - azimuth[0]).to_radians()
+                    * (altitude[1].to_radians().sin() - altitude[0].to_radians().sin())
+            }
+            DaylightSource::Sun(_) => {
+                2.0 * PI * (1.0 - (0.5 * SUN_DIAMETER_DEG).to_radians().cos())
+            }
+        }
+    }
+
+    /// Its central direction in the sky frame (a patch: mid altitude, mid azimuth).
+    pub fn direction(&self) -> [f64; 3] {
+        match *self {
+            DaylightSource::Patch { altitude, azimuth } => direction(
+                (0.5 * (altitude[0] + altitude[1])).to_radians(),
+                (0.5 * (azimuth[0] + azimuth[1])).to_radians(),
+            ),
+            DaylightSource::Sun(s) => s.direction(),
+        }
+    }
+
+    /// The unobstructed horizontal illuminance it gives per unit (patch: ∫ sin α dω =
+    /// Δaz (sin² α₁ − sin² α₀)/2; sun: sin γ_s).
+    pub fn horizontal(&self) -> f64 {
+        match *self {
+            DaylightSource::Patch { altitude, azimuth } => {
+                let s = |a: f64| a.to_radians().sin().powi(2);
+                0.5 * (azimuth[1] - azimuth[0]).to_radians() * (s(altitude[1]) - s(altitude[0]))
+            }
+            DaylightSource::Sun(s) => s.altitude.to_radians().sin(),
+        }
+    }
+
+    fn validate(&self) -> Result<(), LightingError> {
+        if let DaylightSource::Patch { altitude, azimuth } = *self {
+            let ok = altitude.iter().chain(&azimuth).all(|x| x.is_finite())
+                && 0.0 <= altitude[0]
+                && altitude[0] < altitude[1]
+                && altitude[1] <= 90.0
+                && azimuth[0] < azimuth[1]
+                && azimuth[1] <= azimuth[0] + 360.0;
+            if !ok {
+                return Err(LightingError::Parameter(format!(
+                    "sky patch altitude {altitude:?}, azimuth {azimuth:?}: need 0 ≤ a₀ < a₁ ≤ 90 and az₀ < az₁ ≤ az₀ + 360"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Daylight coefficients: lux at each point per unit of each source, row-major points ×
+/// sources (patches: per cd/m² of the patch's luminance; suns: per lux of direct normal
+/// illuminance). The ground outside is lit by each source alone and is part of its column.
+#[derive(Clone, Debug)]
+pub struct DaylightCoefficients {
+    /// The sources, in the order given.
+    pub sources: usize,
+    /// Everything: direct (through openings and glazing) and interreflected.
+    pub total: Vec<f64>,
+    /// Of `total`, what came straight from the sky, sun and ground.
+    pub direct: Vec<f64>,
+    /// Patches of the interreflection.
+    pub patches: usize,
+    /// Whether every column's interreflection reached the solver's tolerance.
+    pub converged: bool,
+}
+
+impl DaylightCoefficients {
+    /// The illuminance at each point under the source strengths `values` (cd/m² for patches,
+    /// lux of direct normal illuminance for suns): E_i = Σ_k C_ik v_k.
+    pub fn apply(&self, values: &[f64]) -> Vec<f64> {
+        self.total
+            .chunks_exact(self.sources.max(1))
+            .map(|row| row.iter().zip(values).map(|(c, v)| c * v).sum())
+            .collect()
+    }
+}
+
+/// The illuminance from a sky (and sun) at the points.
+#[derive(Clone, Debug)]
+pub struct DaylightResult {
+    /// `sky` (the sky and the ground it lights), then `sun` when its illuminance is > 0.
+    pub groups: Vec<String>,
+    /// Lux at each point, every group together.
+    pub total: Vec<f64>,
+    /// Lux, row-major points × groups.
+    pub by_group: Vec<f64>,
+    /// Of `total`, what came straight from outside.
+    pub direct: Vec<f64>,
+    /// Per cent of the sky's unobstructed horizontal illuminance: 100 E_sky / E_h (the `sky`
+    /// group: the sky directly, the ground it lights and their interreflection; no sun).
+    pub daylight_factor: Vec<f64>,
+    /// Patches of the interreflection.
+    pub patches: usize,
+    /// Whether every group's interreflection reached the solver's tolerance.
+    pub converged: bool,
+}
+
+/// The illuminance at `points` in `scene` from `sky` and, with `sun` = (position, direct
+/// normal illuminance in lux > 0), the sun's disc, the ground outside lit by both, the
+/// interreflection included. Errors: bad settings, glazing of an impossible transmittance,
+/// meshing.
+pub fn daylight(
+    scene: &Scene,
+    points: &[SensorPoint],
+    sky: &Sky,
+    sun: Option<(SunPosition, f64)>,
+    settings: &DaylightSettings,
+    observer: &dyn Observer,
+) -> Result<DaylightResult, Error> {
+    let rho_g = settings.ground_reflectance;
+    let mut groups = vec!["sky".to_string()];
+    let mut suns = Vec::new();
+    if let Some((pos, en)) = sun {
+        if !(en.is_finite() && en >= 0.0) {
+            return Err(LightingError::Parameter(format!(
+                "sun illuminance {en} lx: must be finite and ≥ 0"
+            ))
+            .into());
+        }
+        if en > 0.0 {
+            groups.push("sun".to_string());
+            let d = pos.direction();
+            suns.push(SunColumn {
+                direction: d,
+                scale: en,
+                ground: rho_g * en * d[2].max(0.0) / PI,
+            });
+        }
+    }
+    let columns = WholeSky {
+        sky: *sky,
+        ground: rho_g * sky.horizontal_illuminance / PI,
+    };
+    let c = solve_columns(scene, points, &columns, &suns, settings, observer)?;
+    let ng = groups.len();
+    let n = points.len();
+    let total: Vec<f64> = (0..n)
+        .map(|i| c.total[i * ng..(i + 1) * ng].iter().sum())
+        .collect();
+    let direct = (0..n)
+        .map(|i| c.direct[i * ng..(i + 1) * ng].iter().sum())
+        .collect();
+    let eh = sky.horizontal_illuminance;
+    let daylight_factor = (0..n)
+        .map(|i| {
+            if eh > 0.0 {
+                100.0 * c.total[i * ng] / eh
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    Ok(DaylightResult {
+        groups,
+        total,
+        by_group: c.total,
+        direct,
+        daylight_factor,
+        patches: c.patches,
+        converged: c.converged,
+    })
+}
+
+/// Daylight coefficients of `points` in `scene` for `sources` (a subdivided sky's patches,
+/// Tregenza's 145 or Reinhart's finer ones, and sun positions): one column a source, each
+/// the direct light integrated as in [`daylight`] (a ray counts for the patch whose altitude
+/// and azimuth ranges hold its direction; rays below the horizon see the ground lit by the
+/// source alone, luminance ρ_g × [`DaylightSource::horizontal`] / π) and its own
+/// interreflection solve. A sky of patch luminances L_k and suns of E_n is then
+/// [`DaylightCoefficients::apply`]. Sky directions that no patch holds get nothing. Errors:
+/// bad settings or sources, glazing, meshing.
+pub fn daylight_coefficients(
+    scene: &Scene,
+    points: &[SensorPoint],
+    sources: &[DaylightSource],
+    settings: &DaylightSettings,
+    observer: &dyn Observer,
+) -> Result<DaylightCoefficients, Error> {
+    let rho_g = settings.ground_reflectance;
+    let mut patches = Vec::new();
+    let mut suns = Vec::new();
+    let mut order = Vec::new(); // source k → column
+    for s in sources {
+        s.validate()?;
+    }
+    for s in sources {
+        if let DaylightSource::Patch { altitude, azimuth } = *s {
+            order.push(patches.len());
+            patches.push(PatchBounds {
+                altitude: [altitude[0].to_radians(), altitude[1].to_radians()],
+                azimuth: [azimuth[0].to_radians(), azimuth[1].to_radians()],
+                ground: rho_g * s.horizontal() / PI,
+            });
+        } else {
+            order.push(usize::MAX);
+        }
+    }
+    let np = patches.len();
+    for (k, s) in sources.iter().enumerate() {
+        if let DaylightSource::Sun(pos) = *s {
+            order[k] = np + suns.len();
+            let d = pos.direction();
+            suns.push(SunColumn {
+                direction: d,
+                scale: 1.0,
+                ground: rho_g * s.horizontal() / PI,
+            });
+        }
+    }
+    let columns = PatchSky::new(patches);
+    let c = solve_columns(scene, points, &columns, &suns, settings, observer)?;
+    let nc = sources.len();
+    let reorder = |v: &[f64]| -> Vec<f64> {
+        let mut out = vec![0.0; v.len()];
+        for i in 0..points.len() {
+            for (k, &col) in order.iter().enumerate() {
+                out[i * nc + k] = v[i * nc + col];
+            }
+        }
+        out
+    };
+    Ok(DaylightCoefficients {
+        sources: nc,
+        total: reorder(&c.total),
+        direct: reorder(&c.direct),
+        patches: c.patches,
+        converged: c.converged,
+    })
+}
+
+/// The sky's columns: which column a sky-frame direction above the horizon lights, and with
+/// what luminance per unit of the column; the ground's luminance per unit of each column.
+trait SkyColumns: Sync {
+    fn columns(&self) -> usize;
+    fn bin(&self, d: [f64; 3]) -> Option<(usize, f64)>;
+    fn ground(&self, k: usize) -> f64;
+}
+
+/// One column: a whole [`Sky`] at its luminance.
+struct WholeSky {
+    sky: Sky,
+    ground: f64,
+}
+
+impl SkyColumns for WholeSky {
+    fn columns(&self) -> usize {
+        1
+    }
+    fn bin(&self, d: [f64; 3]) -> Option<(usize, f64)> {
+        Some((0, self.sky.luminance(d)))
+    }
+    fn ground(&self, _: usize) -> f64 {
+        self.ground
+    }
+}
+
+/// A patch of the sky in radians, and its ground luminance per unit luminance.
+#[derive(Clone, Copy, Debug)]
+struct PatchBounds {
+    altitude: [f64; 2],
+    azimuth: [f64; 2],
+    ground: f64,
+}
+
+/// One column a patch of unit luminance; patches grouped by altitude band for the look-up.
+struct PatchSky {
+    patches: Vec<PatchBounds>,
+    /// Bands (lower, upper altitude) sorted, each with its patches' indices.
+    bands: Vec<([f64; 2], Vec<usize>)>,
+}
+
+impl PatchSky {
+    fn new(patches: Vec<PatchBounds>) -> Self {
+        let mut bands: Vec<([f64; 2], Vec<usize>)> = Vec::new();
+        for (k, p) in patches.iter().enumerate() {
+            match bands.iter_mut().find(|(a, _)| *a == p.altitude) {
+                Some((_, v)) => v.push(k),
+                None => bands.push((p.altitude, vec![k])),
+            }
+        }
+        bands.sort_by(|a, b| a.0[0].total_cmp(&b.0[0]));
+        Self { patches, bands }
+    }
+}
+
+impl SkyColumns for PatchSky {
+    fn columns(&self) -> usize {
+        self.patches.len()
+    }
+    fn bin(&self, d: [f64; 3]) -> Option<(usize, f64)> {
+        let alt = d[2].clamp(-1.0, 1.0).asin();
+        let az = d[0].atan2(d[1]).rem_euclid(std::f64::consts::TAU);
+        for (a, members) in &self.bands {
+            if alt < a[0] || (alt >= a[1] && a[1] < std::f64::consts::FRAC_PI_2) {
+                continue;
+            }
+            for &k in members {
+                let p = &self.patches[k];
+                // The azimuth measured from the patch's start, in [0, 2π).
+                let from = (az - p.azimuth[0]).rem_euclid(std::f64::consts::TAU);
+                if from < p.azimuth[1] - p.azimuth[0] {
+                    return Some((k, 1.0));
+                }
+            }
+        }
+        None
+    }
+    fn ground(&self, k: usize) -> f64 {
+        self.patches[k].ground
+    }
+}
+
+/// A sun column: its sky-frame direction, direct normal illuminance, and the ground's
+/// luminance it gives.
+#[derive(Clone, Copy, Debug)]
+struct SunColumn {
+    direction: [f64; 3],
+    scale: f64,
+    ground: f64,
+}
+
+/// What [`solve_columns`] returns: lux at the points, row-major points × columns (sky
+/// columns, then suns).
+struct Columns {
+    total: Vec<f64>,
+    direct: Vec<f64>,
+    patches: usize,
+    converged: bool,
+}
+
+/// What light from outside meets: the opaque geometry and the panes.
+struct Outside<'a> {
+    bvh: &'a Bvh,
+    glass: Option<(Mesh, Bvh)>,
+    /// Per scene material, its pane (None: not glazing).
+    panes: Vec<Option<Glazing>>,
+    frame: SkyFrame,
+}
+
+impl Outside<'_> {
+    /// The transmittance along a ray that the opaque geometry does not block: the product
+    /// of every pane it crosses.
+    fn through_glass(&self, origin: Vec3, d: Vec3) -> f64 {
+        let Some((mesh, bvh)) = &self.glass else {
+            return 1.0;
+        };
+        let mut tau = 1.0;
+        let mut o = origin;
+        for _ in 0..MAX_PANES {
+            let Some(h) = bvh.closest_hit(&Ray::new(o, d), f32::INFINITY) else {
+                return tau;
+            };
+            let p = &mesh.patches[h.patch as usize];
+            if let Some(g) = self.panes[p.material as usize] {
+                tau *= g.transmittance(p.normal.dot(d) as f64);
+            }
+            o = o + d * h.t + d * bvh.ray_offset();
+        }
+        tau
+    }
+
+    /// The light from outside arriving at `x` facing `n` (scene frame), added into `out`
+    /// (sky columns, then suns; lux per unit of each): `k × k` stratified sky rays and
+    /// `sun_rays` shadow rays to each sun's disc.
+    #[allow(clippy::too_many_arguments)]
+    fn receive(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        k: usize,
+        sun_rays: usize,
+        sky: &dyn SkyColumns,
+        suns: &[SunColumn],
+        rng: &mut crate::sampling::Rng64,
+        out: &mut [f64],
+        mut hits: Option<&mut Vec<u32>>,
+    ) {
+        let n = n.normalize_or_zero();
+        if n == Vec3::ZERO {
+            return;
+        }
+        let origin = x + n * self.bvh.ray_offset();
+        let (t, b) = orthonormal_basis(n);
+        let w = PI / (k * k) as f64;
+        let mut ground = 0.0;
+        for i in 0..k {
+            for j in 0..k {
+                let u1 = (i as f32 + uniform(rng)) / k as f32;
+                let u2 = (j as f32 + uniform(rng)) / k as f32;
+                let d = concentric_cosine(n, t, b, u1, u2);
+                let ray = Ray::new(origin, d);
+                match hits.as_deref_mut() {
+                    Some(list) => {
+                        if let Some(h) = self.bvh.closest_hit(&ray, f32::INFINITY) {
+                            if h.front {
+                                list.push(h.patch);
+                            }
+                            continue;
+                        }
+                    }
+                    None => {
+                        if self.bvh.occluded(&ray, f32::INFINITY) {
+                            continue;
+                        }
+                    }
+                }
+                let tau = self.through_glass(origin, d);
+                if tau <= 0.0 {
+                    continue;
+                }
+                let ds = self.frame.to_sky(d.as_dvec3().to_array());
+                if ds[2] > 0.0 {
+                    if let Some((c, l)) = sky.bin(ds) {
+                        out[c] += w * tau * l;
+                    }
+                } else {
+                    ground += w * tau;
+                }
+            }
+        }
+        let nsky = sky.columns();
+        for (c, o) in out[..nsky].iter_mut().enumerate() {
+            *o += ground * sky.ground(c);
+        }
+        // The sun: stratified points over its disc (concentric rings, equal areas).
+        let radius = (0.5 * SUN_DIAMETER_DEG).to_radians().tan() as f32;
+        let m = ((sun_rays as f64).sqrt().ceil() as usize).max(1);
+        for (s, col) in suns.iter().zip(&mut out[nsky..]) {
+            *col += ground * s.ground;
+            let centre = self.frame.to_scene(s.direction);
+            let c = Vec3::new(centre[0] as f32, centre[1] as f32, centre[2] as f32);
+            if n.dot(c) <= 0.0 {
+                continue;
+            }
+            let (st, sb) = orthonormal_basis(c);
+            // E_n is the disc's normal illuminance: E = E_n cos θ_c × the disc's mean
+            // visibility and transmittance (cos θ over the disc averages to cos θ_c within
+            // (0.27°)² / 4 ≈ 5e-6).
+            let cos_c = n.dot(c) as f64;
+            let mut e = 0.0;
+            let mut count = 0usize;
+            for a in 0..m {
+                for q in 0..m {
+                    let r = radius * ((a as f32 + uniform(rng)) / m as f32).sqrt();
+                    let phi = std::f32::consts::TAU * (q as f32 + uniform(rng)) / m as f32;
+                    let d = (c + st * (r * phi.cos()) + sb * (r * phi.sin())).normalize();
+                    count += 1;
+                    if n.dot(d) <= 0.0 || self.bvh.occluded(&Ray::new(origin, d), f32::INFINITY) {
+                        continue;
+                    }
+                    e += cos_c * self.through_glass(origin, d);
+                }
+            }
+            *col += s.scale * e / count as f64;
+        }
+    }
+}
+
+/// A direction about `n` (frame `t, b, n`) with density cos θ/π: Shirley & Chiu's
+/// concentric map of the unit square onto the disc, lifted onto the hemisphere (Malley).
+/// Unlike the polar map it keeps square strata compact, so fewer of them straddle an
+/// opening's edge.
+#[inline]
+fn concentric_cosine(n: Vec3, t: Vec3, b: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let (a, c) = (2.0 * u1 - 1.0, 2.0 * u2 - 1.0);
+    let (r, phi) = if a == 0.0 && c == 0.0 {
+        (0.0, 0.0)
+    } else if a.abs() > c.abs() {
+        (a, std::f32::consts::FRAC_PI_4 * (c / a))
+    } else {
+        (
+            c,
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (a / c),
+        )
+    };
+    let (s, co) = phi.sin_cos();
+    let z = (1.0 - r * r).max(0.0).sqrt();
+    t * (r * co) + b * (r * s) + n * z
+}
+
+/// The columns' direct light at the patches and points, their interreflections and the
+/// gathers: lux at the points per column.
+fn solve_columns(
+    scene: &Scene,
+    points: &[SensorPoint],
+    sky: &dyn SkyColumns,
+    suns: &[SunColumn],
+    settings: &DaylightSettings,
+    observer: &dyn Observer,
+) -> Result<Columns, Error> {
+    settings.validate()?;
+    let ls = &settings.lighting;
+    scene.validate_geometry()?;
+    ls.mesh.validate()?;
+    ls.form_factors.validate()?;
+    ls.params.validate()?;
+    // The panes, and the opaque scene without them.
+    let mut panes = Vec::with_capacity(scene.materials.len());
+    for m in &scene.materials {
+        panes.push(if m.transmittance > 0.0 {
+            let g = Glazing::new(m.transmittance, m.ior.unwrap_or(GLASS_INDEX))
+                .map_err(|e| LightingError::Parameter(format!("material '{}': {e}", m.name)))?;
+            Some(g)
+        } else {
+            None
+        });
+    }
+    let is_glass = |p: &crate::scene::Polygon| panes[p.material].is_some();
+    let mut opaque = scene.clone();
+    opaque.polygons.retain(|p| !is_glass(p));
+    opaque.origins.clear();
+    let glass = if opaque.polygons.len() < scene.polygons.len() {
+        let mut g = scene.clone();
+        g.polygons.retain(is_glass);
+        g.origins.clear();
+        let mesh = Mesh::build(&g, MeshParams::Faces)?;
+        let bvh = Bvh::build(&mesh);
+        Some((mesh, bvh))
+    } else {
+        None
+    };
+    let limit = ls.memory_limit.bytes();
+    let memory = MemoryCheck {
+        limit,
+        stored_rows: true,
+        rays: ls.form_factors.rays,
+    };
+    memory.before_meshing(&opaque, ls.mesh)?;
+    observer.event(Event::Stage(Stage::Mesh));
+    let mesh = Mesh::build(&opaque, ls.mesh)?;
+    memory.check(mesh.len() as u64)?;
+    observer.event(Event::Stage(Stage::Bvh));
+    let bvh = Bvh::build(&mesh);
+    let base = patch_system(&opaque, &mesh);
+    let outside = Outside {
+        bvh: &bvh,
+        glass,
+        panes,
+        frame: settings.frame,
+    };
+    let nc = sky.columns() + suns.len();
+    let seed = ls.params.seed;
+    let side = |rays: u32| ((rays as f64).sqrt().round() as usize).max(1);
+    let (kp, kx) = (side(settings.patch_rays), side(settings.point_rays));
+    let sun_rays = settings.sun_rays as usize;
+    // Step 1: the direct light, patches × columns and points × columns.
+    let at_patches: Vec<f64> = mesh
+        .patches
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(p, patch)| {
+            let mut rng = stream(seed, 0x0044_4159, 0, p as u64);
+            let mut out = vec![0.0; nc];
+            outside.receive(
+                patch.centre,
+                patch.normal,
+                kp,
+                sun_rays,
+                sky,
+                suns,
+                &mut rng,
+                &mut out,
+                None,
+            );
+            out
+        })
+        .collect();
+    // At the points the same rays that miss the scene bring the sky, and those that hit a
+    // patch's front read its exitance: E_from_surfaces = (1/N) Σ B_hit (cosine sampling),
+    // kept as each point's patches and their ray counts, a linear map applied to every
+    // column's solution.
+    let at_points: Vec<(Vec<f64>, PatchCounts)> = points
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let mut rng = stream(seed, 0x0044_4159, 1, i as u64);
+            let mut out = vec![0.0; nc];
+            let mut hits = Vec::new();
+            let v = |a: [f64; 3]| Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32);
+            outside.receive(
+                v(p.position),
+                v(p.normal),
+                kx,
+                sun_rays,
+                sky,
+                suns,
+                &mut rng,
+                &mut out,
+                Some(&mut hits),
+            );
+            hits.sort_unstable();
+            let mut counted: Vec<(u32, u32)> = Vec::new();
+            for h in hits {
+                match counted.last_mut() {
+                    Some((q, c)) if *q == h => *c += 1,
+                    _ => counted.push((h, 1)),
+                }
+            }
+            (out, counted)
+        })
+        .collect();
+    let direct: Vec<f64> = at_points
+        .iter()
+        .flat_map(|(d, _)| d.iter().copied())
+        .collect();
+    let gather_weight = 1.0 / (kx * kx) as f64;
+    // Steps 2 and 3, a column at a time.
+    let mut total = direct.clone();
+    let mut converged = true;
+    // One F for every column (its rows at the settings' fixed rays), so that the columns are
+    // solved with the same operator and add up exactly.
+    let any = (0..nc).any(|c| {
+        (0..mesh.len())
+            .any(|p| at_patches[p * nc + c] > 0.0 && base.reflectance[p].max_channel() > 0.0)
+    });
+    let mut f = if any {
+        observer.event(Event::Stage(Stage::FormFactors));
+        let est = crate::formfactor::Estimator::new(&mesh, &bvh, ls.form_factors)?;
+        Some(
+            est.matrix(crate::formfactor::Storage::Sparse, observer)
+                .into_sparse(),
+        )
+    } else {
+        None
+    };
+    for c in 0..nc {
+        let emission: Vec<Rgb> = (0..mesh.len())
+            .map(|p| base.reflectance[p] * at_patches[p * nc + c])
+            .collect();
+        if emission.iter().all(|e| e.max_channel() <= 0.0) {
+            continue;
+        }
+        let system = System {
+            area: base.area.clone(),
+            reflectance: base.reflectance.clone(),
+            emission,
+        };
+        observer.event(Event::Stage(Stage::Solve));
+        let rows = f.as_mut().expect("F is built when a column reflects");
+        let mut params = ls.params;
+        params.memory_limit = params.memory_limit.min(limit / 2);
+        let mut solver = crate::solve::start(ls.solver, &system, rows, &params)?;
+        let info = crate::solve::run(&mut *solver, rows, &params, false, &mut |s, sv| {
+            observer.event(Event::Solve(s, sv));
+            !observer.cancelled()
+        });
+        converged &= info.converged;
+        let mut b = Vec::new();
+        solver.radiosity(&mut b);
+        drop(solver);
+        if points.is_empty() {
+            continue;
+        }
+        let y: Vec<f64> = b.iter().map(|x| luminance(*x)).collect();
+        let from_surfaces: Vec<f64> = at_points
+            .par_iter()
+            .map(|(_, hits)| {
+                gather_weight
+                    * hits
+                        .iter()
+                        .map(|&(p, n)| n as f64 * y[p as usize])
+                        .sum::<f64>()
+            })
+            .collect();
+        for (i, e) in from_surfaces.into_iter().enumerate() {
+            total[i * nc + c] += e;
+        }
+    }
+    Ok(Columns {
+        total,
+        direct,
+        patches: mesh.len(),
+        converged,
+    })
+}
+
+#[cfg(test)]
+#[path = "daylight_tests.rs"]
+mod tests;
