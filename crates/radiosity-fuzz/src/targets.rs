@@ -59,11 +59,13 @@ pub enum Target {
     /// A glTF file's lights (`KHR_lights_punctual` point and spot, `EXT_lights_ies` profiles
     /// in a data URI), read as luminaires.
     GltfLights,
+    /// An EnergyPlus weather file (one day of hourly records) for the annual daylight run.
+    Epw,
 }
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 20] = [
+    pub const ALL: [Target; 21] = [
         Target::Obj,
         Target::Mtl,
         Target::Mgf,
@@ -84,6 +86,7 @@ impl Target {
         Target::Schedule,
         Target::Points,
         Target::GltfLights,
+        Target::Epw,
     ];
 
     /// Its name.
@@ -109,6 +112,7 @@ impl Target {
             Target::Schedule => "schedule",
             Target::Points => "points",
             Target::GltfLights => "gltf-lights",
+            Target::Epw => "epw",
         }
     }
 }
@@ -181,6 +185,7 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
         // The schedule first: the mutations fall on the first file.
         Target::Schedule => vec![s("lights.csv", SCHEDULE), s("lamp.ies", IES)],
         Target::Points => vec![s("desk.pts", POINTS)],
+        Target::Epw => vec![("golden.epw".into(), epw_day().into_bytes())],
         Target::GltfLights => vec![s("lights.gltf", GLTF_LIGHTS)],
         Target::Pfm => vec![("ref.pfm".into(), {
             let mut b = b"PF\n2 2\n-1.0\n".to_vec();
@@ -190,6 +195,32 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
             b
         })],
     }
+}
+
+/// One day (21 June) of hourly weather in EnergyPlus's layout: the site, the data period and
+/// 24 records with irradiance and illuminance by day, dark by night.
+fn epw_day() -> String {
+    let mut s = String::from(
+        "LOCATION,Golden,CO,USA,Hand,724666,39.74,-105.18,-7.0,1829.0\nDESIGN CONDITIONS,0\n\
+         TYPICAL/EXTREME PERIODS,0\nGROUND TEMPERATURES,0\nHOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0\n\
+         COMMENTS 1,fuzz seed\nCOMMENTS 2,\nDATA PERIODS,1,1,Data,Sunday, 6/21, 6/21\n",
+    );
+    for hour in 1..=24 {
+        let (ghi, dni, dhi) = if (7..=20).contains(&hour) {
+            (300, 400, 100)
+        } else {
+            (0, 0, 0)
+        };
+        s.push_str(&format!(
+            "1999,6,21,{hour},60,?9?9?9?9E0?9?9?9?9?9?9?9?9?9?9?9?9?9*9*9?9?9?9,24.5,6.2,30,82000,\
+             1300,1360,400,{ghi},{dni},{dhi},{},{},{},9999,200,3.5,2,1,16.1,77777,9,999999999,10,\
+             0.05,0,88,0.2,0,0\n",
+            ghi * 110,
+            dni * 95,
+            dhi * 120
+        ));
+    }
+    s
 }
 
 /// A small binary glTF: the built-in furnace baked by our own writer.
@@ -310,6 +341,7 @@ fn parse(target: Target, dir: &Path) -> bool {
                 .is_ok()
         }
         Target::Points => radiosity::lighting::read_points(&dir.join("desk.pts")).is_ok(),
+        Target::Epw => radiosity::daylight::epw::read_epw(&dir.join("golden.epw")).is_ok(),
         Target::GltfLights => {
             radiosity::lighting::gltf_luminaires(&dir.join("lights.gltf")).is_ok()
         }

@@ -58,6 +58,7 @@ fn a_short_fuzz_of_every_parser_and_the_options_runs_clean() {
         "schedule",
         "points",
         "gltf-lights",
+        "epw",
         "options",
     ] {
         let row = rows
