@@ -31,6 +31,7 @@
 //! undetermined.
 
 pub mod boundary;
+pub mod matrix_free;
 
 use crate::comm::{Ranks, Serial};
 use crate::system::SparseMatrix;
@@ -38,6 +39,7 @@ use faer::linalg::solvers::Solve;
 use rayon::prelude::*;
 
 pub use boundary::{read_boundary_csv, BoundaryRow};
+pub use matrix_free::{open_share, solve_matrix_free, MatrixFreeInfo, MatrixFreeParams};
 
 /// Stefan–Boltzmann constant σ, W m⁻² K⁻⁴ (CODATA 2018, exact in the SI since 2019).
 pub const STEFAN_BOLTZMANN: f64 = 5.670_374_419e-8;
@@ -130,6 +132,42 @@ impl LinearSolver {
     }
 }
 
+/// Whether the view factors are stored.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ThermalSolver {
+    /// Stored up to [`STORED_MAX`] patches when the matrix fits in memory, else matrix-free.
+    #[default]
+    Auto,
+    /// F computed and stored, the system solved by a [`LinearSolver`]: exact to F's accuracy.
+    Stored,
+    /// No F: stochastic Jacobi sweeps of gathering rays ([`matrix_free`]), with each patch's
+    /// Monte Carlo error.
+    MatrixFree,
+}
+
+impl ThermalSolver {
+    /// Every choice.
+    pub const ALL: [ThermalSolver; 3] = [
+        ThermalSolver::Auto,
+        ThermalSolver::Stored,
+        ThermalSolver::MatrixFree,
+    ];
+
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            ThermalSolver::Auto => "auto",
+            ThermalSolver::Stored => "stored",
+            ThermalSolver::MatrixFree => "matrix-free",
+        }
+    }
+}
+
+/// Most patches [`ThermalSolver::Auto`] stores F for: the adaptive factors of 20,265 facets
+/// take about a minute and 2.5 GB (docs/heat-transfer.md); beyond, their N² pairs grow past
+/// what the matrix-free solve needs for the same per-patch accuracy.
+pub const STORED_MAX: usize = 20_000;
+
 /// Largest system [`LinearSolver::Auto`] solves by dense LU.
 pub const DIRECT_MAX: usize = 3000;
 
@@ -213,6 +251,9 @@ pub struct ThermalInfo {
     pub opening: f64,
     /// Seconds in the linear solve.
     pub seconds: f64,
+    /// The matrix-free solve's schedule and errors ([`matrix_free`]); `None` for the solves
+    /// of a stored F.
+    pub matrix_free: Option<MatrixFreeInfo>,
 }
 
 /// The solved state of every patch.
@@ -226,6 +267,13 @@ pub struct ThermalSolution {
     pub temperature: Vec<f64>,
     /// Net radiative flux leaving, W/m².
     pub flux: Vec<f64>,
+    /// Monte Carlo standard error of each patch's flux, W/m² (0 where the flux is
+    /// prescribed): the matrix-free solve's; empty for the solves of a stored F.
+    pub flux_std_error: Vec<f64>,
+    /// Standard error of each patch's temperature, K (0 where prescribed); empty as above.
+    pub temperature_std_error: Vec<f64>,
+    /// Standard error of each boundary's net power, W; empty as above.
+    pub boundary_power_std_error: Vec<f64>,
     /// The solve and its balance.
     pub info: ThermalInfo,
 }
@@ -259,14 +307,26 @@ impl ThermalSystem {
     /// Check lengths, indices and physical ranges.
     pub fn validate(&self, f: &SparseMatrix) -> Result<(), ThermalError> {
         let n = self.area.len();
-        let bad = |m: String| Err(ThermalError::Malformed(m));
-        if self.group.len() != n || f.n() != n {
-            return bad(format!(
-                "{} areas, {} groups, a {}×{} matrix",
+        if f.n() != n {
+            return Err(ThermalError::Malformed(format!(
+                "{} areas, a {}×{} matrix",
                 n,
-                self.group.len(),
                 f.n(),
                 f.n()
+            )));
+        }
+        self.validate_patches(n)
+    }
+
+    /// [`Self::validate`] without a matrix: `n` patches.
+    pub fn validate_patches(&self, n: usize) -> Result<(), ThermalError> {
+        let bad = |m: String| Err(ThermalError::Malformed(m));
+        if self.group.len() != n || self.area.len() != n {
+            return bad(format!(
+                "{} areas, {} groups, {} patches",
+                self.area.len(),
+                self.group.len(),
+                n
             ));
         }
         if let Some(i) = (0..n).find(|&i| !(self.area[i].is_finite() && self.area[i] > 0.0)) {
@@ -541,6 +601,9 @@ pub fn solve_ranks(
         irradiation: g,
         temperature,
         flux,
+        flux_std_error: Vec::new(),
+        temperature_std_error: Vec::new(),
+        boundary_power_std_error: Vec::new(),
         info: ThermalInfo {
             method: if direct {
                 "direct"
@@ -556,6 +619,7 @@ pub fn solve_ranks(
             balance_error,
             opening,
             seconds: start.elapsed().as_secs_f64(),
+            matrix_free: None,
         },
     })
 }
