@@ -32,6 +32,8 @@
 
 pub mod boundary;
 pub mod matrix_free;
+#[cfg(test)]
+mod matrix_free_tests;
 
 use crate::comm::{Ranks, Serial};
 use crate::system::SparseMatrix;
