@@ -93,9 +93,24 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         ..MatrixFreeParams::default()
     };
     for (flag, value, lo, hi) in [
-        ("--flux-rays", a.flux_rays, 1, thermal::matrix_free::MAX_RAYS),
-        ("--temperature-rays", a.temperature_rays, 1, thermal::matrix_free::MAX_RAYS),
-        ("--sweep-rays", a.sweep_rays, 1, thermal::matrix_free::MAX_RAYS),
+        (
+            "--flux-rays",
+            a.flux_rays,
+            1,
+            thermal::matrix_free::MAX_RAYS,
+        ),
+        (
+            "--temperature-rays",
+            a.temperature_rays,
+            1,
+            thermal::matrix_free::MAX_RAYS,
+        ),
+        (
+            "--sweep-rays",
+            a.sweep_rays,
+            1,
+            thermal::matrix_free::MAX_RAYS,
+        ),
         ("--batches", a.batches, 2, 4096),
     ] {
         if !(lo..=hi).contains(&value) {
@@ -399,7 +414,11 @@ pub fn run(a: ThermalArgs) -> Result<()> {
                 solution.flux[i],
                 system.area[i] * solution.flux[i],
                 solution.flux_std_error.get(i).copied().unwrap_or(0.0),
-                solution.temperature_std_error.get(i).copied().unwrap_or(0.0),
+                solution
+                    .temperature_std_error
+                    .get(i)
+                    .copied()
+                    .unwrap_or(0.0),
             ]
             .iter()
             .all(|v| v.is_finite())

@@ -248,7 +248,13 @@ impl Gather<'_> {
             .enumerate()
             .with_min_len(64)
             .for_each_init(
-                || (Vec::<u32>::new(), Vec::<Ray>::new(), Vec::<Option<Hit>>::new()),
+                || {
+                    (
+                        Vec::<u32>::new(),
+                        Vec::<Ray>::new(),
+                        Vec::<Option<Hit>>::new(),
+                    )
+                },
                 |(perm, rays, hits), (i, (h, lost))| {
                     (*h, *lost) = self.patch(i, j, s(i), tag, perm, rays, hits);
                 },
@@ -447,14 +453,7 @@ pub fn solve_matrix_free(
 
     // Common sweeps from every patch seeing the surroundings.
     let mut j: Vec<f64> = (0..n)
-        .map(|i| {
-            e[i] + d[i]
-                * if system.closed {
-                    0.0
-                } else {
-                    sigma_te4
-                }
-        })
+        .map(|i| e[i] + d[i] * if system.closed { 0.0 } else { sigma_te4 })
         .collect();
     let mut h = vec![0.0; n];
     let mut lost = vec![0.0; n];
@@ -469,7 +468,10 @@ pub fn solve_matrix_free(
         rays_cast += (n as u64) * (s_sweep * s_sweep) as u64;
         next.copy_from_slice(&j);
         update(&h, &mut next);
-        let delta: f64 = (0..n).map(|i| area[i] * (next[i] - j[i])).sum::<f64>().abs();
+        let delta: f64 = (0..n)
+            .map(|i| area[i] * (next[i] - j[i]))
+            .sum::<f64>()
+            .abs();
         let scale: f64 = (0..n).map(|i| area[i] * next[i].abs()).sum();
         std::mem::swap(&mut j, &mut next);
         deltas.push(delta);
@@ -618,10 +620,7 @@ pub fn solve_matrix_free(
     };
     let total_area: f64 = area.iter().sum();
     let opening = (0..n).map(|i| area[i] * m_lost.mean[i]).sum::<f64>() / total_area;
-    let boundary_power_std_error = group_power
-        .iter()
-        .map(|p| mean_and_error(p).1)
-        .collect();
+    let boundary_power_std_error = group_power.iter().map(|p| mean_and_error(p).1).collect();
     Ok(ThermalSolution {
         radiosity,
         irradiation,

@@ -64,12 +64,30 @@ fn plates() -> Scene {
 /// The unit cube seen from inside, one material per face.
 fn cube() -> Scene {
     let faces = [
-        ([[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]], Vec3::Z),
-        ([[0., 0., 1.], [1., 0., 1.], [1., 1., 1.], [0., 1., 1.]], -Vec3::Z),
-        ([[0., 0., 0.], [0., 0., 1.], [0., 1., 1.], [0., 1., 0.]], Vec3::X),
-        ([[1., 0., 0.], [1., 0., 1.], [1., 1., 1.], [1., 1., 0.]], -Vec3::X),
-        ([[0., 0., 0.], [1., 0., 0.], [1., 0., 1.], [0., 0., 1.]], Vec3::Y),
-        ([[0., 1., 0.], [1., 1., 0.], [1., 1., 1.], [0., 1., 1.]], -Vec3::Y),
+        (
+            [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]],
+            Vec3::Z,
+        ),
+        (
+            [[0., 0., 1.], [1., 0., 1.], [1., 1., 1.], [0., 1., 1.]],
+            -Vec3::Z,
+        ),
+        (
+            [[0., 0., 0.], [0., 0., 1.], [0., 1., 1.], [0., 1., 0.]],
+            Vec3::X,
+        ),
+        (
+            [[1., 0., 0.], [1., 0., 1.], [1., 1., 1.], [1., 1., 0.]],
+            -Vec3::X,
+        ),
+        (
+            [[0., 0., 0.], [1., 0., 0.], [1., 0., 1.], [0., 0., 1.]],
+            Vec3::Y,
+        ),
+        (
+            [[0., 1., 0.], [1., 1., 0.], [1., 1., 1.], [0., 1., 1.]],
+            -Vec3::Y,
+        ),
     ];
     scene(
         "cube",
@@ -140,7 +158,12 @@ fn agree(stored: &ThermalOutcome, free: &ThermalOutcome) {
             s.temperature[i]
         );
     }
-    for (k, (a, b)) in stored.per_boundary.iter().zip(&free.per_boundary).enumerate() {
+    for (k, (a, b)) in stored
+        .per_boundary
+        .iter()
+        .zip(&free.per_boundary)
+        .enumerate()
+    {
         let se = f.boundary_power_std_error[k];
         assert!(
             (a.1 - b.1).abs() <= 4.0 * se + 1e-9 * scale,
@@ -229,7 +252,10 @@ fn closed_cube_with_mixed_conditions_matches_the_stored_solve() {
     };
     let stored = go(ThermalSolver::Stored);
     let free = go(ThermalSolver::MatrixFree);
-    assert!(stored.closed && free.closed, "the rays find the cube closed");
+    assert!(
+        stored.closed && free.closed,
+        "the rays find the cube closed"
+    );
     agree(&stored, &free);
     // Closed: the fluxes sum to zero within their error.
     let mf = free.solution.info.matrix_free.unwrap();

@@ -29,6 +29,10 @@
 //! in parallel over the stored columns of F. The iterative solve stops at a relative residual of
 //! 1e-12. A closed enclosure with no prescribed temperature is refused: its temperatures are
 //! undetermined.
+//!
+//! **Without F.** [`matrix_free`] solves the same equations by stochastic Jacobi sweeps of
+//! rays gathered from every patch, for scenes whose F would not fit (10⁶ patches), with each
+//! patch's Monte Carlo standard error; [`ThermalSolver`] chooses.
 
 pub mod boundary;
 pub mod matrix_free;
