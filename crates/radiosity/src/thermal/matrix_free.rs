@@ -43,7 +43,9 @@
 //! noise floor). The slowest mode of the non-negative D K has a non-negative eigenvector
 //! (Perron–Frobenius), so it shows whole in this area-weighted sum, where the noise of N
 //! patches averages out. Then `batches` independent batches, each `batch_sweeps` sweeps from
-//! that common start with streams of its own, the last gathering `rays` a patch; the result is
+//! that common start with streams of its own, the last gathering `flux_rays` at each patch of
+//! prescribed temperature (whose flux is the answer) and `temperature_rays` at the others
+//! (whose temperature is); the result is
 //! the mean of the batches and its **standard error** (of every patch's flux and temperature,
 //! of each boundary's power, of the energy balance) the batches' sample standard deviation
 //! over √batches. What it leaves out: the common start's own noise, which reaches a batch's
@@ -52,10 +54,13 @@
 //! same way).
 //!
 //! **Energy books.** The power lost to the surroundings is estimated from the same rays as the
-//! irradiation: `Σ_i A_i F̂_ie (J_i − σT_e⁴)`, F̂_ie the share of patch i's final rays that met
-//! nothing. Σ A_i q_i equals it in expectation (by reciprocity, Σ_i A_i F_ij = A_j (1 − F_je)),
-//! not to rounding as in the stored solve, whose irradiation goes through Fᵀ: the difference
-//! is the Monte Carlo error of the sum over all patches, reported with its standard error.
+//! irradiation: `Σ_i A_i F̂_ie (J_i − σT_e⁴)`, F̂_ie the share of patch i's final rays in a
+//! batch that met nothing, taken with the mean J of the *other* batches (a batch's own J is
+//! correlated with its shares: a patch that lost more rays gathered less). Σ A_i q_i equals it
+//! in expectation (by reciprocity, Σ_i A_i F_ij = A_j (1 − F_je)) once the iteration has
+//! converged, not to rounding as in the stored solve, whose irradiation goes through Fᵀ: the
+//! difference is the Monte Carlo error of the sums (reported with its standard error) plus
+//! Σ A_j (1 − F_je)(J_j − J_j^prev), what the last sweep still moved.
 //!
 //! **Determinism.** Every patch's rays come from a stream keyed by (seed, batch, sweep,
 //! patch); every sum over patches is taken in patch order. The result is the same bits for
