@@ -329,6 +329,20 @@ pub enum EnclosureArg {
     Open,
 }
 
+/// Whether `thermal` stores the view factors (`thermal --solver`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ThermalSolverArg {
+    /// Stored up to 20,000 patches when the matrix fits in memory, matrix-free beyond (under
+    /// mpirun, stored).
+    Auto,
+    /// F computed by --form-factors and stored; the system solved by --linear-solver: exact
+    /// to F's accuracy.
+    Stored,
+    /// No F: stochastic Jacobi sweeps of rays gathered from every patch, with each patch's
+    /// Monte Carlo standard error reported (docs/heat-transfer.md).
+    MatrixFree,
+}
+
 /// How the net-radiation system is solved (`thermal --linear-solver`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum LinearSolverArg {
@@ -506,9 +520,28 @@ pub struct ThermalArgs {
     /// Seed of Monte Carlo.
     #[arg(long, value_name = "S", default_value_t = 1, help_heading = FORM_FACTORS)]
     pub seed: u64,
-    /// How the net-radiation system is solved.
+    /// Store F (exact to its accuracy) or not (matrix-free: Monte Carlo, each patch's error
+    /// reported); auto stores it up to 20,000 patches when it fits in memory.
+    #[arg(long, value_enum, default_value = "auto", help_heading = SOLVER)]
+    pub solver: ThermalSolverArg,
+    /// How the net-radiation system of a stored F is solved.
     #[arg(long, value_enum, default_value = "auto", help_heading = SOLVER)]
     pub linear_solver: LinearSolverArg,
+    /// Matrix-free: rays each patch at a prescribed temperature (whose flux is computed)
+    /// gathers in the last sweep of every batch (rounded up to a square; stratified over the
+    /// patch and the hemisphere). The flux's standard error falls as about 1/√N or faster.
+    #[arg(long, value_name = "N", default_value_t = radiosity::thermal::MatrixFreeParams::default().flux_rays, help_heading = SOLVER)]
+    pub flux_rays: u32,
+    /// Matrix-free: the same for every other patch (prescribed flux or adiabatic: its
+    /// temperature is computed).
+    #[arg(long, value_name = "N", default_value_t = radiosity::thermal::MatrixFreeParams::default().temperature_rays, help_heading = SOLVER)]
+    pub temperature_rays: u32,
+    /// Matrix-free: rays each patch gathers in the other sweeps (rounded up to a square).
+    #[arg(long, value_name = "N", default_value_t = radiosity::thermal::MatrixFreeParams::default().sweep_rays, help_heading = SOLVER)]
+    pub sweep_rays: u32,
+    /// Matrix-free: independent batches, whose spread gives the standard errors (2 to 4096).
+    #[arg(long, value_name = "B", default_value_t = radiosity::thermal::MatrixFreeParams::default().batches, help_heading = SOLVER)]
+    pub batches: u32,
     /// Output: one row per boundary name, `name,area,emissivity,temperature,flux,power`
     /// (m², K, W/m², W).
     #[arg(long, short, value_name = "surfaces.csv", help_heading = OUTPUT)]

@@ -1,6 +1,6 @@
 //! `radiosity thermal`: net radiative heat transfer between grey diffuse surfaces.
 
-use crate::args::{EnclosureArg, LinearSolverArg, ThermalArgs};
+use crate::args::{EnclosureArg, LinearSolverArg, ThermalArgs, ThermalSolverArg};
 use anyhow::{bail, Result};
 use radiosity::formfactor::{FormFactorMethod, Params};
 use radiosity::io::FileFormat;
@@ -8,7 +8,9 @@ use radiosity::mesh::MeshParams;
 use radiosity::observe::{Event, Stage};
 use radiosity::pipeline::{Enclosure, ThermalSettings};
 use radiosity::scene::vs3;
-use radiosity::thermal::{self, read_boundary_csv, Boundary, Condition, LinearSolver};
+use radiosity::thermal::{
+    self, read_boundary_csv, Boundary, Condition, LinearSolver, MatrixFreeParams, ThermalSolver,
+};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -81,6 +83,48 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         );
     }
     crate::settings::form_factor_numbers(a.resolution, a.samples, a.rays)?;
+    crate::settings::accuracy(a.accuracy)?;
+    let matrix_free = MatrixFreeParams {
+        flux_rays: a.flux_rays,
+        temperature_rays: a.temperature_rays,
+        sweep_rays: a.sweep_rays,
+        batches: a.batches,
+        seed: a.seed,
+        ..MatrixFreeParams::default()
+    };
+    for (flag, value, lo, hi) in [
+        (
+            "--flux-rays",
+            a.flux_rays,
+            1,
+            thermal::matrix_free::MAX_RAYS,
+        ),
+        (
+            "--temperature-rays",
+            a.temperature_rays,
+            1,
+            thermal::matrix_free::MAX_RAYS,
+        ),
+        (
+            "--sweep-rays",
+            a.sweep_rays,
+            1,
+            thermal::matrix_free::MAX_RAYS,
+        ),
+        ("--batches", a.batches, 2, 4096),
+    ] {
+        if !(lo..=hi).contains(&value) {
+            bail!("{flag} {value}: give {lo} to {hi}");
+        }
+    }
+    let solver = match a.solver {
+        ThermalSolverArg::Auto => ThermalSolver::Auto,
+        ThermalSolverArg::Stored => ThermalSolver::Stored,
+        ThermalSolverArg::MatrixFree => ThermalSolver::MatrixFree,
+    };
+    if solver == ThermalSolver::MatrixFree && crate::ranks::current().is_some() {
+        bail!("--solver matrix-free: does not run over ranks (mpirun); use --solver stored");
+    }
     // Engineers' default: one patch per face.
     let mesh_params = crate::settings::mesh_params(a.patches, a.max_edge, MeshParams::Faces)?;
 
@@ -150,6 +194,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             samples: a.samples,
             seed: a.seed,
             rays: a.rays.unwrap_or(10_000),
+            accuracy: a.accuracy,
             ..Params::default()
         },
         default_rays: a.rays.is_none(),
@@ -171,25 +216,29 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             LinearSolverArg::Jacobi => LinearSolver::Jacobi,
         },
         memory_limit: radiosity::pipeline::MemoryLimit::Available,
+        solver,
+        matrix_free,
     };
     let bar = indicatif::ProgressBar::new(0);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
-            "{spinner} form factors {pos}/{len} rows [{bar:30}] {elapsed_precise} (eta {eta})",
+            "{spinner} {msg} {pos}/{len} [{bar:30}] {elapsed_precise} (eta {eta})",
         )
         .expect("valid template")
         .progress_chars("=> "),
     );
-    let progress = |e: Event<'_>| {
-        if let Event::Progress {
-            stage: Stage::FormFactors,
+    let progress = |e: Event<'_>| match e {
+        Event::Stage(Stage::FormFactors) => bar.set_message("form factors, rows"),
+        Event::Stage(Stage::Solve) => bar.set_message("solve, sweeps"),
+        Event::Progress {
+            stage: Stage::FormFactors | Stage::Solve,
             done,
             total,
-        } = e
-        {
+        } => {
             bar.set_length(total);
             bar.set_position(done)
         }
+        _ => {}
     };
     let outcome = radiosity::pipeline::thermal_over(
         &scene,
@@ -231,26 +280,39 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         outcome.closed,
     );
     let n = mesh.len();
+    // The matrix-free solve's standard errors: one more column in each table.
+    let errors = !solution.flux_std_error.is_empty();
 
     // Outputs.
-    let mut out = String::from("name,area,emissivity,temperature,flux,power\n");
+    let mut out = String::from("name,area,emissivity,temperature,flux,power");
+    out += if errors { ",flux_std_error\n" } else { "\n" };
     for (k, r) in rows.iter().enumerate() {
         let (ar, power, t) = per[k];
         let flux = if ar > 0.0 { power / ar } else { 0.0 };
-        let _ = writeln!(
+        let _ = write!(
             out,
             "{},{ar},{},{t},{flux},{power}",
             csv_name(&r.name),
             boundaries[k].emissivity
         );
+        if errors {
+            let e = solution.boundary_power_std_error[k];
+            let _ = write!(out, ",{}", if ar > 0.0 { e / ar } else { 0.0 });
+        }
+        out.push('\n');
     }
     let mut patches_csv = None;
     if let Some(p) = &a.patches_out {
-        let mut s = String::from("patch,name,x,y,z,area,emissivity,temperature,flux,power\n");
+        let mut s = String::from("patch,name,x,y,z,area,emissivity,temperature,flux,power");
+        s += if errors {
+            ",flux_std_error,temperature_std_error\n"
+        } else {
+            "\n"
+        };
         for (i, patch) in mesh.patches.iter().enumerate() {
             let k = system.group[i] as usize;
             let c = patch.centre;
-            let _ = writeln!(
+            let _ = write!(
                 s,
                 "{i},{},{},{},{},{},{},{},{},{}",
                 csv_name(&rows[k].name),
@@ -263,6 +325,14 @@ pub fn run(a: ThermalArgs) -> Result<()> {
                 solution.flux[i],
                 system.area[i] * solution.flux[i]
             );
+            if errors {
+                let _ = write!(
+                    s,
+                    ",{},{}",
+                    solution.flux_std_error[i], solution.temperature_std_error[i]
+                );
+            }
+            s.push('\n');
         }
         patches_csv = Some((p, s));
     }
@@ -325,7 +395,12 @@ pub fn run(a: ThermalArgs) -> Result<()> {
     };
     if let Some(k) = (0..rows.len()).find(|&k| {
         let (ar, power, t) = per[k];
-        ![ar, power, t, boundaries[k].emissivity]
+        let e = solution
+            .boundary_power_std_error
+            .get(k)
+            .copied()
+            .unwrap_or(0.0);
+        ![ar, power, t, boundaries[k].emissivity, e]
             .iter()
             .all(|v| v.is_finite())
     }) {
@@ -338,6 +413,12 @@ pub fn run(a: ThermalArgs) -> Result<()> {
                 solution.temperature[i],
                 solution.flux[i],
                 system.area[i] * solution.flux[i],
+                solution.flux_std_error.get(i).copied().unwrap_or(0.0),
+                solution
+                    .temperature_std_error
+                    .get(i)
+                    .copied()
+                    .unwrap_or(0.0),
             ]
             .iter()
             .all(|v| v.is_finite())
@@ -373,54 +454,106 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         n,
         a.unit.metres()
     );
-    let accuracy = match method {
-        FormFactorMethod::MonteCarlo => format!(
-            "{} rays per row: each irradiation within ~{:.2} % (1/√rays) of the spread of what it sees",
-            params.rays,
-            100.0 / (params.rays as f64).sqrt()
-        ),
-        FormFactorMethod::Analytic => "exact for unoccluded pairs, occlusion ignored".into(),
-        _ => format!(
-            "resolution {}, {} points per patch",
-            params.resolution, params.samples
-        ),
-    };
-    println!("view factors {method} in {ff_seconds:.2} s; {accuracy}");
-    println!(
-        "            row sums {:.6} … {:.6} before, {:.6} … {:.6} after {}reciprocity (worst |A_i F_ij − A_j F_ji| / mean area {:.1e} → {:.1e})",
-        before.min_row_sum,
-        before.max_row_sum,
-        after.min_row_sum,
-        after.max_row_sum,
-        if closed { "closure and " } else { "" },
-        before.worst_reciprocity,
-        after.worst_reciprocity
-    );
-    println!(
-        "enclosure   {}; {:.4} % of the area-weighted view reaches the surroundings at {} K",
-        if closed { "closed" } else { "open" },
-        100.0 * info.opening,
-        a.environment
-    );
-    println!(
-        "solve       {} in {:.3} s{}, relative residual {:.1e}",
-        info.method,
-        info.seconds,
-        if info.iterations > 0 {
-            format!(" ({} iterations)", info.iterations)
-        } else {
-            String::new()
-        },
-        info.residual
-    );
+    if let Some(mf) = &info.matrix_free {
+        println!("view factors none stored: the irradiation gathered by rays from every patch");
+        println!(
+            "enclosure   {}; {:.4} % of the area-weighted view reaches the surroundings at {} K",
+            if closed { "closed" } else { "open" },
+            100.0 * info.opening,
+            a.environment
+        );
+        println!(
+            "solve       matrix-free in {:.2} s: {} sweeps of {} rays a patch (contraction {:.3}, remaining bias {:.1e}), then {} batches of {} sweeps, the last of {} rays a patch at a prescribed temperature and {} a patch elsewhere; {:.3e} rays",
+            info.seconds,
+            mf.sweeps,
+            mf.sweep_rays,
+            mf.contraction,
+            mf.remaining_bias,
+            mf.batches,
+            mf.batch_sweeps,
+            mf.flux_rays,
+            mf.temperature_rays,
+            mf.rays_cast as f64
+        );
+        matrix_free_errors(system, solution);
+    } else {
+        let accuracy = match method {
+            FormFactorMethod::MonteCarlo => format!(
+                "{} rays per row: each irradiation within ~{:.2} % (1/√rays) of the spread of what it sees",
+                params.rays,
+                100.0 / (params.rays as f64).sqrt()
+            ),
+            FormFactorMethod::Analytic => "exact for unoccluded pairs, occlusion ignored".into(),
+            FormFactorMethod::Adaptive => format!("accuracy {:e} an entry", params.accuracy),
+            _ => format!(
+                "resolution {}, {} points per patch",
+                params.resolution, params.samples
+            ),
+        };
+        println!("view factors {method} in {ff_seconds:.2} s; {accuracy}");
+        if let Some(st) = &outcome.adaptive {
+            println!(
+                "            {} facing pairs: {} by the product rule, {} by the contour integral, {} occluded ({} found clear, {} hidden, {} at the cell cap, {} sampled by {} rays); {} visibility points",
+                st.facing,
+                st.product_rule,
+                st.contour,
+                st.occluded,
+                st.occluded_clear,
+                st.occluded_hidden,
+                st.capped,
+                st.sampled,
+                st.rays,
+                st.points
+            );
+        }
+        println!(
+            "            row sums {:.6} … {:.6} before, {:.6} … {:.6} after {}reciprocity (worst |A_i F_ij − A_j F_ji| / mean area {:.1e} → {:.1e})",
+            before.min_row_sum,
+            before.max_row_sum,
+            after.min_row_sum,
+            after.max_row_sum,
+            if closed { "closure and " } else { "" },
+            before.worst_reciprocity,
+            after.worst_reciprocity
+        );
+        println!(
+            "enclosure   {}; {:.4} % of the area-weighted view reaches the surroundings at {} K",
+            if closed { "closed" } else { "open" },
+            100.0 * info.opening,
+            a.environment
+        );
+        println!(
+            "solve       {} in {:.3} s{}, relative residual {:.1e}",
+            info.method,
+            info.seconds,
+            if info.iterations > 0 {
+                format!(" ({} iterations)", info.iterations)
+            } else {
+                String::new()
+            },
+            info.residual
+        );
+    }
     println!(
         "balance     Σ power {:.6e} W, net loss to the surroundings {:.6e} W, relative difference {:.1e}",
         info.total_power, info.environment_loss, info.balance_error
     );
+    if let Some(mf) = &info.matrix_free {
+        println!(
+            "            standard errors: Σ power {:.3e} W, the difference {:.3e} W (the books close in expectation; the difference is the Monte Carlo error of the sums)",
+            mf.total_power_std_error, mf.balance_std_error
+        );
+    }
     let width = rows.iter().map(|r| r.name.len()).max().unwrap_or(4).max(7);
     println!(
-        "{:width$}  {:>14}  {:>5}  {:>10}  {:>13}  {:>13}",
-        "surface", "area m²", "ε", "T K", "flux W/m²", "power W"
+        "{:width$}  {:>14}  {:>5}  {:>10}  {:>13}  {:>13}{}",
+        "surface",
+        "area m²",
+        "ε",
+        "T K",
+        "flux W/m²",
+        "power W",
+        if errors { "   ± flux W/m²" } else { "" }
     );
     for (k, r) in rows.iter().enumerate().take(40) {
         let (ar, power, t) = per[k];
@@ -430,14 +563,19 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             Condition::Adiabatic => "0",
         };
         println!(
-            "{:width$}  {:>14.4}  {:>5.3}  {:>9.2}{}  {:>13.5e}  {:>13.5e}",
+            "{:width$}  {:>14.4}  {:>5.3}  {:>9.2}{}  {:>13.5e}  {:>13.5e}{}",
             r.name,
             ar,
             boundaries[k].emissivity,
             t,
             if given == "T" { "*" } else { " " },
             if ar > 0.0 { power / ar } else { 0.0 },
-            power
+            power,
+            match solution.boundary_power_std_error.get(k) {
+                Some(e) if ar > 0.0 => format!("  {:>12.3e}", e / ar),
+                Some(_) => format!("  {:>12.3e}", 0.0),
+                None => String::new(),
+            }
         );
     }
     if rows.len() > 40 {
@@ -475,4 +613,52 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         println!("wrote       {}", p.display());
     }
     Ok(())
+}
+
+/// The matrix-free solve's error line: each patch's flux standard error against the mean
+/// absolute flux of the patches whose flux it computes (those at a prescribed temperature),
+/// and the temperatures' standard errors where it computes those.
+fn matrix_free_errors(system: &thermal::ThermalSystem, solution: &thermal::ThermalSolution) {
+    let (mut n_t, mut abs_flux, mut se_sum, mut se_max) = (0usize, 0.0, 0.0, 0.0f64);
+    let (mut n_q, mut te_sum, mut te_max) = (0usize, 0.0, 0.0f64);
+    for i in 0..system.area.len() {
+        match system.boundaries[system.group[i] as usize].condition {
+            Condition::Temperature(_) => {
+                n_t += 1;
+                abs_flux += solution.flux[i].abs();
+                se_sum += solution.flux_std_error[i];
+                se_max = se_max.max(solution.flux_std_error[i]);
+            }
+            _ => {
+                n_q += 1;
+                te_sum += solution.temperature_std_error[i];
+                te_max = te_max.max(solution.temperature_std_error[i]);
+            }
+        }
+    }
+    if n_t > 0 {
+        let mean_abs = abs_flux / n_t as f64;
+        let pct = |x: f64| {
+            if mean_abs > 0.0 {
+                100.0 * x / mean_abs
+            } else {
+                0.0
+            }
+        };
+        println!(
+            "error       flux (one standard error) over the {n_t} patches at a prescribed temperature: mean {:.3e}, worst {:.3e} W/m², {:.2} % and {:.2} % of their mean |flux| {:.4e} W/m²",
+            se_sum / n_t as f64,
+            se_max,
+            pct(se_sum / n_t as f64),
+            pct(se_max),
+            mean_abs
+        );
+    }
+    if n_q > 0 {
+        println!(
+            "            temperature over the {n_q} other patches: mean {:.3e}, worst {:.3e} K",
+            te_sum / n_q as f64,
+            te_max
+        );
+    }
 }

@@ -141,6 +141,9 @@ pub(crate) fn thermal<'py>(
             }
         },
         memory_limit: radiosity::pipeline::MemoryLimit::Available,
+        // The stored solve, as before the matrix-free one existed.
+        solver: radiosity::thermal::ThermalSolver::Stored,
+        matrix_free: radiosity::thermal::MatrixFreeParams::default(),
     };
     settings.form_factors.validate().map_err(value_error)?;
     let ts: Vec<Boundary> = named.iter().map(|n| n.1).collect();

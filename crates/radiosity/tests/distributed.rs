@@ -227,6 +227,8 @@ fn thermal_over_ranks_is_the_same_bytes_and_agrees_with_another_solver() {
             form_factors: Params::monte_carlo(rays, 9),
             default_rays: false,
             linear,
+            // Over ranks `auto` stores F; alone it would go matrix-free past 20,000 patches.
+            solver: radiosity::thermal::ThermalSolver::Stored,
             ..ThermalSettings::default()
         };
         let serial = |linear| {

@@ -651,3 +651,81 @@ fn thermal_reads_repeated_view3d_names() {
     assert!((got[0] - 2.0).abs() < 1e-9, "both sides count: {}", got[0]);
     assert!((got[3] - q).abs() < 1e-3 * q, "{} vs {q}", got[3]);
 }
+
+/// `--solver matrix-free` on the hot-plate room (examples/, 4 × 4 patches a face at
+/// `--patches 200`): every surface's flux within 4 of its reported standard error of the
+/// stored solve's (adaptive factors), the `flux_std_error` columns written, the books' line,
+/// and the adaptive method's counts and accuracy on the stored run's summary; bad counts
+/// refused naming the flag.
+#[test]
+fn thermal_matrix_free_matches_the_stored_solve() {
+    let dir = scratch("thermal-matrix-free");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let scene = root.join("hot-plate.obj");
+    let bc = root.join("hot-plate-bc.csv");
+    let common = [
+        scene.to_str().unwrap(),
+        "--boundary",
+        bc.to_str().unwrap(),
+        "--patches",
+        "200",
+    ];
+    let mut stored_args = common.to_vec();
+    stored_args.extend(["--out", "s.csv", "--solver", "stored", "--accuracy", "1e-6"]);
+    let stored_out = thermal(&dir, &stored_args);
+    assert!(
+        stored_out.contains("accuracy 1e-6 an entry") && stored_out.contains("facing pairs"),
+        "{stored_out}"
+    );
+    let mut free_args = common.to_vec();
+    free_args.extend([
+        "--out",
+        "m.csv",
+        "--patches-out",
+        "mp.csv",
+        "--solver",
+        "matrix-free",
+    ]);
+    let free_out = thermal(&dir, &free_args);
+    assert!(free_out.contains("matrix-free in"), "{free_out}");
+    assert!(free_out.contains("standard errors: Σ power"), "{free_out}");
+    let stored = read_surfaces(&dir.join("s.csv"));
+    let (header, rows) = read_csv(&dir.join("m.csv"));
+    assert_eq!(
+        header.join(","),
+        "name,area,emissivity,temperature,flux,power,flux_std_error"
+    );
+    for r in &rows {
+        let (flux, se): (f64, f64) = (r[4].parse().unwrap(), r[6].parse().unwrap());
+        let reference = stored[&r[0]][3];
+        if r[0] == "floor" {
+            assert_eq!((flux, se), (0.0, 0.0), "a prescribed flux has no error");
+        } else {
+            assert!(se > 0.0 && se < 0.02 * reference.abs(), "{r:?}");
+            assert!(
+                (flux - reference).abs() < 4.0 * se + 1e-4 * reference.abs(),
+                "{}: {flux} ± {se} against {reference}",
+                r[0]
+            );
+        }
+    }
+    let (header, rows) = read_csv(&dir.join("mp.csv"));
+    let (q, t) = (
+        column(&header, "flux_std_error"),
+        column(&header, "temperature_std_error"),
+    );
+    assert!(rows.iter().all(|r| {
+        let (q, t): (f64, f64) = (r[q].parse().unwrap(), r[t].parse().unwrap());
+        q.is_finite() && t.is_finite() && q >= 0.0 && t >= 0.0
+    }));
+    for (flag, value) in [
+        ("--batches", "1"),
+        ("--flux-rays", "0"),
+        ("--temperature-rays", "0"),
+    ] {
+        let mut args = vec!["thermal"];
+        args.extend_from_slice(&common);
+        args.extend(["--out", "x.csv", flag, value]);
+        fails(&args, &dir, &[flag, value], &["s.csv", "m.csv", "mp.csv"]);
+    }
+}

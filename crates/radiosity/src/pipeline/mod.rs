@@ -17,6 +17,7 @@ mod reference;
 mod solve;
 mod system;
 mod thermal;
+mod thermal_matrix_free;
 mod view_factors;
 
 /// The bridge from a meshed scene to its linear system (it lives with the mesh).

@@ -46,6 +46,10 @@ pub struct ThermalSettings {
     pub linear: crate::thermal::LinearSolver,
     /// Refuse jobs whose estimated memory exceeds this.
     pub memory_limit: MemoryLimit,
+    /// Stored F or matrix-free ([`crate::thermal::matrix_free`]).
+    pub solver: crate::thermal::ThermalSolver,
+    /// The matrix-free solve's rays, batches and seed.
+    pub matrix_free: crate::thermal::MatrixFreeParams,
 }
 
 impl Default for ThermalSettings {
@@ -60,6 +64,8 @@ impl Default for ThermalSettings {
             enclosure_hint: None,
             linear: crate::thermal::LinearSolver::Auto,
             memory_limit: MemoryLimit::Available,
+            solver: crate::thermal::ThermalSolver::Auto,
+            matrix_free: crate::thermal::MatrixFreeParams::default(),
         }
     }
 }
@@ -87,10 +93,16 @@ pub struct ThermalOutcome {
     pub form_factors: crate::formfactor::Params,
     /// Seconds computing F.
     pub form_factor_seconds: f64,
-    /// F's row sums and reciprocity before and after enforcement.
+    /// F's row sums and reciprocity before and after enforcement (the default, all zero,
+    /// for the matrix-free solve, which has no F).
     pub before: crate::formfactor::Summary,
     /// See `before`.
     pub after: crate::formfactor::Summary,
+    /// What the adaptive method did (pairs by kind, points, rays), when it computed F (over
+    /// ranks: this rank's rows).
+    pub adaptive: Option<crate::formfactor::adaptive::Stats>,
+    /// Which solve ran: [`crate::thermal::ThermalSolver::Stored`] or `MatrixFree`.
+    pub solver: crate::thermal::ThermalSolver,
     /// Whether the enclosure was treated as closed.
     pub closed: bool,
 }
@@ -280,18 +292,59 @@ pub fn thermal_over(
 ) -> Result<(ThermalOutcome, Option<Report>), Error> {
     scene.validate_geometry()?;
     settings.mesh.validate()?;
+    use crate::thermal::ThermalSolver;
     let start = ranks.map(Ranks::traffic);
     let limit = settings.memory_limit.bytes();
     let mut params = settings.form_factors;
     let check = |p: &crate::formfactor::Params| MemoryCheck::stored_matrix(p, limit);
+    let unstored = MemoryCheck {
+        limit,
+        stored_rows: false,
+        rays: 0,
+    };
     if settings.default_rays {
         params.rays = 10_000;
     }
-    check(&params).before_meshing(scene, settings.mesh)?;
+    // Over ranks only the stored solve splits.
+    let solver = match (settings.solver, ranks) {
+        (ThermalSolver::MatrixFree, Some(_)) => {
+            return Err(Error::Thermal(crate::thermal::ThermalError::Malformed(
+                "the matrix-free solve does not run over ranks".into(),
+            )))
+        }
+        (ThermalSolver::Auto, Some(_)) => ThermalSolver::Stored,
+        (s, _) => s,
+    };
+    match solver {
+        ThermalSolver::Stored => check(&params).before_meshing(scene, settings.mesh)?,
+        _ => unstored.before_meshing(scene, settings.mesh)?,
+    }
     observer.event(Event::Stage(Stage::Mesh));
     let mesh = Mesh::build(scene, settings.mesh)?;
     if settings.default_rays {
         params.rays = thermal_default_rays(mesh.len());
+    }
+    let solver = match solver {
+        ThermalSolver::Auto
+            if mesh.len() <= crate::thermal::STORED_MAX
+                && check(&params).check(mesh.len() as u64).is_ok() =>
+        {
+            ThermalSolver::Stored
+        }
+        ThermalSolver::Auto => ThermalSolver::MatrixFree,
+        s => s,
+    };
+    if solver == ThermalSolver::MatrixFree {
+        unstored.check(mesh.len() as u64)?;
+        return super::thermal_matrix_free::thermal_matrix_free(
+            mesh,
+            boundary_of,
+            boundaries,
+            settings,
+            params,
+            observer,
+        )
+        .map(|o| (o, None));
     }
     check(&params).check(mesh.len() as u64)?;
     let t = Instant::now();
@@ -315,6 +368,7 @@ pub fn thermal_over(
         ),
     };
     let form_factor_seconds = t.elapsed().as_secs_f64();
+    let adaptive = estimator.adaptive().map(|p| p.stats());
     drop(estimator);
     drop(bvh);
     let area: Vec<f64> = mesh.patches.iter().map(|p| p.area as f64).collect();
@@ -350,6 +404,8 @@ pub fn thermal_over(
             form_factor_seconds,
             before,
             after,
+            adaptive,
+            solver: ThermalSolver::Stored,
             closed,
         },
         report,

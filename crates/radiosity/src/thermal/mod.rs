@@ -29,8 +29,15 @@
 //! in parallel over the stored columns of F. The iterative solve stops at a relative residual of
 //! 1e-12. A closed enclosure with no prescribed temperature is refused: its temperatures are
 //! undetermined.
+//!
+//! **Without F.** [`matrix_free`] solves the same equations by stochastic Jacobi sweeps of
+//! rays gathered from every patch, for scenes whose F would not fit (10⁶ patches), with each
+//! patch's Monte Carlo standard error; [`ThermalSolver`] chooses.
 
 pub mod boundary;
+pub mod matrix_free;
+#[cfg(test)]
+mod matrix_free_tests;
 
 use crate::comm::{Ranks, Serial};
 use crate::system::SparseMatrix;
@@ -38,6 +45,7 @@ use faer::linalg::solvers::Solve;
 use rayon::prelude::*;
 
 pub use boundary::{read_boundary_csv, BoundaryRow};
+pub use matrix_free::{open_share, solve_matrix_free, MatrixFreeInfo, MatrixFreeParams};
 
 /// Stefan–Boltzmann constant σ, W m⁻² K⁻⁴ (CODATA 2018, exact in the SI since 2019).
 pub const STEFAN_BOLTZMANN: f64 = 5.670_374_419e-8;
@@ -130,6 +138,42 @@ impl LinearSolver {
     }
 }
 
+/// Whether the view factors are stored.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ThermalSolver {
+    /// Stored up to [`STORED_MAX`] patches when the matrix fits in memory, else matrix-free.
+    #[default]
+    Auto,
+    /// F computed and stored, the system solved by a [`LinearSolver`]: exact to F's accuracy.
+    Stored,
+    /// No F: stochastic Jacobi sweeps of gathering rays ([`matrix_free`]), with each patch's
+    /// Monte Carlo error.
+    MatrixFree,
+}
+
+impl ThermalSolver {
+    /// Every choice.
+    pub const ALL: [ThermalSolver; 3] = [
+        ThermalSolver::Auto,
+        ThermalSolver::Stored,
+        ThermalSolver::MatrixFree,
+    ];
+
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            ThermalSolver::Auto => "auto",
+            ThermalSolver::Stored => "stored",
+            ThermalSolver::MatrixFree => "matrix-free",
+        }
+    }
+}
+
+/// Most patches [`ThermalSolver::Auto`] stores F for: the adaptive factors of 20,265 facets
+/// take about a minute and 2.5 GB (docs/heat-transfer.md); beyond, their N² pairs grow past
+/// what the matrix-free solve needs for the same per-patch accuracy.
+pub const STORED_MAX: usize = 20_000;
+
 /// Largest system [`LinearSolver::Auto`] solves by dense LU.
 pub const DIRECT_MAX: usize = 3000;
 
@@ -213,6 +257,9 @@ pub struct ThermalInfo {
     pub opening: f64,
     /// Seconds in the linear solve.
     pub seconds: f64,
+    /// The matrix-free solve's schedule and errors ([`matrix_free`]); `None` for the solves
+    /// of a stored F.
+    pub matrix_free: Option<MatrixFreeInfo>,
 }
 
 /// The solved state of every patch.
@@ -226,6 +273,13 @@ pub struct ThermalSolution {
     pub temperature: Vec<f64>,
     /// Net radiative flux leaving, W/m².
     pub flux: Vec<f64>,
+    /// Monte Carlo standard error of each patch's flux, W/m² (0 where the flux is
+    /// prescribed): the matrix-free solve's; empty for the solves of a stored F.
+    pub flux_std_error: Vec<f64>,
+    /// Standard error of each patch's temperature, K (0 where prescribed); empty as above.
+    pub temperature_std_error: Vec<f64>,
+    /// Standard error of each boundary's net power, W; empty as above.
+    pub boundary_power_std_error: Vec<f64>,
     /// The solve and its balance.
     pub info: ThermalInfo,
 }
@@ -259,14 +313,26 @@ impl ThermalSystem {
     /// Check lengths, indices and physical ranges.
     pub fn validate(&self, f: &SparseMatrix) -> Result<(), ThermalError> {
         let n = self.area.len();
-        let bad = |m: String| Err(ThermalError::Malformed(m));
-        if self.group.len() != n || f.n() != n {
-            return bad(format!(
-                "{} areas, {} groups, a {}×{} matrix",
+        if f.n() != n {
+            return Err(ThermalError::Malformed(format!(
+                "{} areas, a {}×{} matrix",
                 n,
-                self.group.len(),
                 f.n(),
                 f.n()
+            )));
+        }
+        self.validate_patches(n)
+    }
+
+    /// [`Self::validate`] without a matrix: `n` patches.
+    pub fn validate_patches(&self, n: usize) -> Result<(), ThermalError> {
+        let bad = |m: String| Err(ThermalError::Malformed(m));
+        if self.group.len() != n || self.area.len() != n {
+            return bad(format!(
+                "{} areas, {} groups, {} patches",
+                self.area.len(),
+                self.group.len(),
+                n
             ));
         }
         if let Some(i) = (0..n).find(|&i| !(self.area[i].is_finite() && self.area[i] > 0.0)) {
@@ -541,6 +607,9 @@ pub fn solve_ranks(
         irradiation: g,
         temperature,
         flux,
+        flux_std_error: Vec::new(),
+        temperature_std_error: Vec::new(),
+        boundary_power_std_error: Vec::new(),
         info: ThermalInfo {
             method: if direct {
                 "direct"
@@ -556,6 +625,7 @@ pub fn solve_ranks(
             balance_error,
             opening,
             seconds: start.elapsed().as_secs_f64(),
+            matrix_free: None,
         },
     })
 }
