@@ -375,6 +375,7 @@ pub enum UpArg {
 
 /// `radiosity lighting`.
 #[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("daylight").args(["sky", "weather"]).multiple(true)))]
 pub struct LightingArgs {
     /// The scene: an OBJ, MGF, glTF, PLY or View3D file, or a built-in name. Its emitting
     /// surfaces' emission is luminous exitance in lm/m²; its reflectances are the materials'.
@@ -418,8 +419,8 @@ pub struct LightingArgs {
     pub seed: u64,
     /// One row per point: `x,y,z,nx,ny,nz,illuminance` (lux, direct and interreflected),
     /// then `illuminance_<group>` per light group when there is more than one.
-    #[arg(long, short, value_name = "grid.csv", help_heading = OUTPUT)]
-    pub out: PathBuf,
+    #[arg(long, short, value_name = "grid.csv", required_unless_present = "annual", help_heading = OUTPUT)]
+    pub out: Option<PathBuf>,
     /// One row per material name: `name,area,reflectance,illuminance,exitance,luminance`
     /// (m², the luminance-weighted reflectance, mean illuminance in lux, mean luminous exitance
     /// in lm/m², mean luminance in cd/m²).
@@ -453,10 +454,10 @@ pub struct LightingArgs {
     pub sun_illuminance: f64,
     /// True north, degrees counter-clockwise (seen from above) from the scene's north (+y in a
     /// z-up scene, −z in a y-up one).
-    #[arg(long, value_name = "DEG", default_value_t = 0.0, requires = "sky", allow_hyphen_values = true, help_heading = DAYLIGHT)]
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, requires = "daylight", allow_hyphen_values = true, help_heading = DAYLIGHT)]
     pub north: f64,
     /// Reflectance of the ground plane outside, lit by the sky and the sun.
-    #[arg(long, value_name = "R", default_value_t = 0.2, requires = "sky", help_heading = DAYLIGHT)]
+    #[arg(long, value_name = "R", default_value_t = 0.2, requires = "daylight", help_heading = DAYLIGHT)]
     pub ground_reflectance: f64,
     /// A material that is a clear pane of this normal transmittance (Fresnel at n = 1.52 with
     /// the pane's interreflections; at most 0.918); more than once for several. Materials
@@ -465,8 +466,25 @@ pub struct LightingArgs {
     pub glazing: Vec<String>,
     /// Sky rays at each calculation point (stratified; the error at an opening's edge falls
     /// as N^(−3/4)).
-    #[arg(long, value_name = "N", default_value_t = 16_384, requires = "sky", help_heading = DAYLIGHT)]
+    #[arg(long, value_name = "N", default_value_t = 16_384, requires = "daylight", help_heading = DAYLIGHT)]
     pub sky_rays: u32,
+    /// Annual daylight: the weather file (EnergyPlus EPW) whose hourly direct normal and
+    /// diffuse horizontal irradiance give the year's skies (Perez all-weather model); needs
+    /// --annual.
+    #[arg(long, value_name = "FILE.epw", help_heading = DAYLIGHT)]
+    pub weather: Option<PathBuf>,
+    /// Annual daylight: per point `point,x,y,z,daylight_autonomy,sun_hours,udi_fell_short,
+    /// udi_supplementary,udi_autonomous,udi_exceeded,in_sda,in_ase` over the occupied hours
+    /// (8:00–18:00); replaces --out. Needs --weather.
+    #[arg(long, value_name = "OUT.csv", help_heading = DAYLIGHT)]
+    pub annual: Option<PathBuf>,
+    /// Annual daylight: every hour's illuminance too, `month,day,hour,p0,p1,…` (lx).
+    #[arg(long, value_name = "hourly.csv", help_heading = DAYLIGHT)]
+    pub hourly: Option<PathBuf>,
+    /// Annual daylight: the sky's patches, Reinhart's MF:N (1 = Tregenza's 145, 2 = 577,
+    /// 144 N² + 1; at most 16); one daylight coefficient a patch and point.
+    #[arg(long, value_name = "N", default_value_t = 1, help_heading = DAYLIGHT)]
+    pub sky_patches: usize,
 }
 
 /// `radiosity thermal`.

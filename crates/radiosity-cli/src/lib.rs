@@ -5,6 +5,7 @@
 //! [`main`]. Nothing here is physics: that is the `radiosity` crate's.
 
 pub mod alloc;
+mod annual;
 pub mod args;
 mod daylight;
 mod experiment;

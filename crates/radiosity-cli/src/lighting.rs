@@ -5,7 +5,8 @@ use crate::args::{LightingArgs, UpArg};
 use anyhow::{bail, Context, Result};
 use radiosity::io::{write_atomic, FileFormat, OutputError};
 use radiosity::lighting::{
-    gltf_luminaires, read_points, read_schedule, workplane, write_points, Luminaire, Up,
+    gltf_luminaires, read_points, read_schedule, workplane, write_points, Luminaire, SensorPoint,
+    Up,
 };
 use radiosity::mesh::MeshParams;
 use radiosity::pipeline::{lighting, EnergyBooks, LightingSettings};
@@ -122,17 +123,113 @@ pub(crate) fn books_json(groups: &[String], books: &[EnergyBooks]) -> serde_json
     })
 }
 
+/// The scene's up axis from `--up` and its format (glTF is always y-up), and whether it is
+/// glTF. Errors: `--up z` on a glTF scene.
+pub(crate) fn scene_up(a: &LightingArgs) -> Result<(Up, bool)> {
+    let is_gltf = matches!(
+        FileFormat::from_path(std::path::Path::new(&a.scene)),
+        Some(FileFormat::Gltf | FileFormat::Glb)
+    );
+    let up = match (a.up, is_gltf) {
+        (Some(UpArg::Z), true) => {
+            bail!("--up z: {} is glTF, whose scenes are always y-up", a.scene)
+        }
+        (Some(UpArg::Y), _) | (None, true) => Up::Y,
+        (Some(UpArg::Z), false) | (None, false) => Up::Z,
+    };
+    Ok((up, is_gltf))
+}
+
+/// A named grid and its points' range in the concatenated points.
+pub(crate) type Grids = Vec<(String, std::ops::Range<usize>)>;
+
+/// The `--grid` files' points, concatenated, and each grid's range. Errors: a file that
+/// cannot be read or has no points.
+pub(crate) fn read_grids(a: &LightingArgs) -> Result<(Vec<SensorPoint>, Grids)> {
+    let mut points = Vec::new();
+    let mut grids = Vec::new();
+    for g in &a.grid {
+        let p = read_points(g)?;
+        if p.is_empty() {
+            bail!("{}: no calculation points", g.display());
+        }
+        grids.push((
+            g.display().to_string(),
+            points.len()..points.len() + p.len(),
+        ));
+        points.extend(p);
+    }
+    Ok((points, grids))
+}
+
+/// `--workplane MATERIAL[:HEIGHT]`: its grid appended to `points` and `grids` (and written
+/// to `--grid-out`).
+pub(crate) fn add_workplane(
+    a: &LightingArgs,
+    scene: &radiosity::scene::Scene,
+    up: Up,
+    points: &mut Vec<SensorPoint>,
+    grids: &mut Grids,
+) -> Result<()> {
+    if let Some(spec) = &a.workplane {
+        let (material, height) = match spec.rsplit_once(':') {
+            Some((m, h)) => match h.parse::<f64>() {
+                Ok(h) if h.is_finite() => (m, h),
+                _ => bail!("--workplane {spec}: the height after ':' must be a number of metres"),
+            },
+            None => (spec.as_str(), 0.8),
+        };
+        let grid = workplane(scene, material, height, a.unit.metres(), up)?;
+        if let Some(p) = &a.grid_out {
+            write_points(p, &grid)?;
+            println!("wrote       {} ({} points)", p.display(), grid.len());
+        }
+        grids.push((
+            format!("workplane {material}"),
+            points.len()..points.len() + grid.len(),
+        ));
+        points.extend(grid);
+    }
+    Ok(())
+}
+
+/// Mesh, solver and gather settings from the flags.
+pub(crate) fn lighting_settings(a: &LightingArgs) -> LightingSettings {
+    let mut settings = LightingSettings {
+        mesh: MeshParams::Patches(a.patches),
+        params: SolverParams {
+            tolerance: a.tolerance,
+            seed: a.seed,
+            ..LightingSettings::default().params
+        },
+        unit_metres: a.unit.metres(),
+        ..LightingSettings::default()
+    };
+    settings.form_factors.seed = a.seed;
+    settings.gather.indirect = a.indirect_samples;
+    settings
+}
+
 /// Run the command.
 pub fn run(a: LightingArgs) -> Result<()> {
-    if FileFormat::from_path(&a.out) != Some(FileFormat::Csv) {
-        bail!("{}: unsupported output format (use .csv)", a.out.display());
+    if a.weather.is_some() || a.annual.is_some() || a.hourly.is_some() {
+        return crate::annual::run(a);
     }
-    crate::settings::check_output(&a.out)?;
+    let Some(out_path) = a.out.clone() else {
+        bail!("lighting needs --out grid.csv (or --weather FILE.epw --annual OUT.csv)");
+    };
+    if FileFormat::from_path(&out_path) != Some(FileFormat::Csv) {
+        bail!(
+            "{}: unsupported output format (use .csv)",
+            out_path.display()
+        );
+    }
+    crate::settings::check_output(&out_path)?;
     if let Some(p) = &a.surfaces_out {
         if FileFormat::from_path(p) != Some(FileFormat::Csv) {
             bail!("{}: unsupported output format (use .csv)", p.display());
         }
-        if p == &a.out || a.grid.contains(p) || a.summary.as_ref() == Some(p) {
+        if p == &out_path || a.grid.contains(p) || a.summary.as_ref() == Some(p) {
             bail!(
                 "--surfaces-out {}: the same file as another input or output",
                 p.display()
@@ -141,7 +238,7 @@ pub fn run(a: LightingArgs) -> Result<()> {
         crate::settings::check_output(p)?;
     }
     if let Some(p) = &a.grid_out {
-        if p == &a.out
+        if p == &out_path
             || a.surfaces_out.as_ref() == Some(p)
             || a.grid.contains(p)
             || a.summary.as_ref() == Some(p)
@@ -157,30 +254,20 @@ pub fn run(a: LightingArgs) -> Result<()> {
         if p.extension().and_then(|e| e.to_str()) != Some("json") {
             bail!("{}: unsupported output format (use .json)", p.display());
         }
-        if p == &a.out {
+        if p == &out_path {
             bail!("--summary {}: the same file as --out", p.display());
         }
         crate::settings::check_output(p)?;
     }
     for g in &a.grid {
-        if g == &a.out || a.summary.as_ref() == Some(g) {
+        if g == &out_path || a.summary.as_ref() == Some(g) {
             bail!("--grid {}: an output would overwrite it", g.display());
         }
     }
     if let Some(dir) = &a.pictures {
         crate::false_colour::grid::check_dir(dir)?;
     }
-    let is_gltf = matches!(
-        FileFormat::from_path(std::path::Path::new(&a.scene)),
-        Some(FileFormat::Gltf | FileFormat::Glb)
-    );
-    let up = match (a.up, is_gltf) {
-        (Some(UpArg::Z), true) => {
-            bail!("--up z: {} is glTF, whose scenes are always y-up", a.scene)
-        }
-        (Some(UpArg::Y), _) | (None, true) => Up::Y,
-        (Some(UpArg::Z), false) | (None, false) => Up::Z,
-    };
+    let (up, is_gltf) = scene_up(&a)?;
     let mut luminaires = match &a.luminaires {
         Some(p) => read_schedule(p, up)?,
         None => Vec::new(),
@@ -196,40 +283,10 @@ pub fn run(a: LightingArgs) -> Result<()> {
         luminaires.extend(own);
     }
     warn_photometry(&luminaires);
-    let mut points = Vec::new();
-    let mut grids = Vec::new();
-    for g in &a.grid {
-        let p = read_points(g)?;
-        if p.is_empty() {
-            bail!("{}: no calculation points", g.display());
-        }
-        grids.push((
-            g.display().to_string(),
-            points.len()..points.len() + p.len(),
-        ));
-        points.extend(p);
-    }
+    let (mut points, mut grids) = read_grids(&a)?;
     let mut scene = crate::load_scene(&a.scene, false)?;
     crate::daylight::glaze(&mut scene, &a.glazing)?;
-    if let Some(spec) = &a.workplane {
-        let (material, height) = match spec.rsplit_once(':') {
-            Some((m, h)) => match h.parse::<f64>() {
-                Ok(h) if h.is_finite() => (m, h),
-                _ => bail!("--workplane {spec}: the height after ':' must be a number of metres"),
-            },
-            None => (spec.as_str(), 0.8),
-        };
-        let grid = workplane(&scene, material, height, a.unit.metres(), up)?;
-        if let Some(p) = &a.grid_out {
-            write_points(p, &grid)?;
-            println!("wrote       {} ({} points)", p.display(), grid.len());
-        }
-        grids.push((
-            format!("workplane {material}"),
-            points.len()..points.len() + grid.len(),
-        ));
-        points.extend(grid);
-    }
+    add_workplane(&a, &scene, up, &mut points, &mut grids)?;
     let pictures = match &a.pictures {
         Some(dir) => {
             let unit = clap::ValueEnum::to_possible_value(&a.unit)
@@ -241,18 +298,7 @@ pub fn run(a: LightingArgs) -> Result<()> {
         }
         None => None,
     };
-    let mut settings = LightingSettings {
-        mesh: MeshParams::Patches(a.patches),
-        params: SolverParams {
-            tolerance: a.tolerance,
-            seed: a.seed,
-            ..LightingSettings::default().params
-        },
-        unit_metres: a.unit.metres(),
-        ..LightingSettings::default()
-    };
-    settings.form_factors.seed = a.seed;
-    settings.gather.indirect = a.indirect_samples;
+    let settings = lighting_settings(&a);
     let day = crate::daylight::prepare(&a, up, settings)?;
     let progress = crate::report::Progress::new(a.tolerance.max(1e-12));
     let t = std::time::Instant::now();
@@ -294,7 +340,7 @@ pub fn run(a: LightingArgs) -> Result<()> {
 
     // grid.csv: the fixed columns, then a column a group when there are several.
     let several = r.groups.len() > 1;
-    write_atomic::<OutputError>(&a.out, |out| {
+    write_atomic::<OutputError>(&out_path, |out| {
         write!(out, "x,y,z,nx,ny,nz,illuminance")?;
         if several {
             for g in &r.groups {
@@ -441,7 +487,11 @@ pub fn run(a: LightingArgs) -> Result<()> {
     if let Some((cpu, _)) = crate::report::resources() {
         println!("cpu         {cpu:.2} s (user and system, all threads)");
     }
-    println!("wrote       {} ({} points)", a.out.display(), points.len());
+    println!(
+        "wrote       {} ({} points)",
+        out_path.display(),
+        points.len()
+    );
     if let Some(p) = &a.surfaces_out {
         println!(
             "wrote       {} ({} surfaces)",

@@ -14,6 +14,7 @@ mod common;
 mod validator;
 
 mod adaptive;
+mod annual;
 mod coincident;
 mod daylight;
 mod errors;

@@ -39,7 +39,6 @@ use super::solar::{solar_position, Site};
 use super::DaylightError;
 use rayon::prelude::*;
 use std::f64::consts::PI;
-use std::io::Write as _;
 
 /// Daylight coefficients: illuminance (lx) at each point per unit luminance (cd/m²) of each
 /// patch, points × patches, row-major; the patches are a [`SkyPatches`]' (the sky's, then the
@@ -544,6 +543,33 @@ pub fn write_metrics_csv(
     Ok(())
 }
 
+/// The hourly CSV's header: `month,day,hour,p0,p1,…` for `points` points.
+pub fn write_hourly_header(w: &mut dyn std::io::Write, points: usize) -> std::io::Result<()> {
+    write!(w, "month,day,hour")?;
+    for i in 0..points {
+        write!(w, ",p{i}")?;
+    }
+    writeln!(w)
+}
+
+/// The hourly CSV's rows of a block: an hour a row, its stamp from `skies`, then each
+/// point's illuminance in lx to 0.1 lx.
+pub fn write_hourly_rows(
+    w: &mut dyn std::io::Write,
+    skies: &dyn SkySource,
+    b: &HourBlock,
+) -> std::io::Result<()> {
+    for h in 0..b.hours {
+        let [m, d, hr] = skies.stamp(b.first + h);
+        write!(w, "{m},{d},{hr}")?;
+        for i in 0..b.points {
+            write!(w, ",{:.1}", b.total[i * b.hours + h])?;
+        }
+        writeln!(w)?;
+    }
+    Ok(())
+}
+
 /// Run [`annual`] writing every hour's illuminance to `path` as CSV, whole or not at all
 /// ([`crate::io::write_atomic`]): a header `month,day,hour,p0,p1,…` and one row an hour, the
 /// illuminance of each point in lx to 0.1 lx.
@@ -556,24 +582,10 @@ pub fn annual_with_hourly_csv(
 ) -> Result<Annual, DaylightError> {
     let mut outcome: Option<Result<Annual, DaylightError>> = None;
     let written = crate::io::write_atomic::<DaylightError>(path, |w| {
-        write!(w, "month,day,hour")?;
-        for i in 0..coefficients.points() {
-            write!(w, ",p{i}")?;
-        }
-        writeln!(w)?;
+        write_hourly_header(w, coefficients.points())?;
         let mut failed: Option<std::io::Error> = None;
         let mut sink = |b: &HourBlock| -> Result<(), DaylightError> {
-            let result = (|| -> std::io::Result<()> {
-                for h in 0..b.hours {
-                    let [m, d, hr] = skies.stamp(b.first + h);
-                    write!(w, "{m},{d},{hr}")?;
-                    for i in 0..b.points {
-                        write!(w, ",{:.1}", b.total[i * b.hours + h])?;
-                    }
-                    writeln!(w)?;
-                }
-                Ok(())
-            })();
+            let result = write_hourly_rows(w, skies, b);
             result.map_err(|e| {
                 failed = Some(e);
                 DaylightError::Parameter("the hourly output could not be written".into())

@@ -1,0 +1,253 @@
+//! `radiosity lighting --weather --annual`: a year of daylight over an open floor, and bad
+//! annual input.
+
+use crate::common::*;
+use radiosity::daylight::perez::Condition;
+use radiosity::daylight::solar::{solar_position, Site};
+use std::path::Path;
+
+/// A synthetic EPW year at latitude, longitude 0 (time zone 0): no direct sun, a constant
+/// diffuse horizontal irradiance `dhi` W/m² in the hours ending 7…18 (the sun is up through
+/// all of them on the equator) and none otherwise; dew point 8 °C.
+fn year_epw(dhi: f64) -> String {
+    let mut s = String::from(
+        "LOCATION,Equator,,,test,0,0,0,0,10\nDESIGN CONDITIONS,0\nTYPICAL/EXTREME PERIODS,0\n\
+         GROUND TEMPERATURES,0\nHOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0\nCOMMENTS 1,\nCOMMENTS 2,\n\
+         DATA PERIODS,1,1,Data,Sunday, 1/ 1,12/31\n",
+    );
+    let days = [31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31];
+    for month in 1..=12u32 {
+        for day in 1..=days[month as usize - 1] {
+            for hour in 1..=24 {
+                let d = if (7..=18).contains(&hour) { dhi } else { 0.0 };
+                s.push_str(&format!(
+                    "2005,{month},{day},{hour},60,x,20,8,50,100000,0,0,0,{d},0,{d}\n"
+                ));
+            }
+        }
+    }
+    s
+}
+
+/// A 10 × 10 m floor facing up with nothing above it, and five points 0.5 m over it facing up.
+fn open_floor(dir: &Path) {
+    write(
+        dir,
+        "floor.obj",
+        "mtllib floor.mtl\nusemtl grey\nv 0 0 0\nv 10 0 0\nv 10 10 0\nv 0 10 0\nf 1 2 3 4\n",
+    );
+    write(dir, "floor.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n");
+    write(
+        dir,
+        "points.pts",
+        "5 5 0.5 0 0 1\n1 1 0.5 0 0 1\n9 9 0.5 0 0 1\n2 8 0.5 0 0 1\n7 3 0.5 0 0 1\n",
+    );
+}
+
+/// The Perez diffuse illuminance of each hour of `year_epw(dhi)`, lx (0 for the dark hours):
+/// the model's E_d = DHI × the diffuse efficacy at the sun's mid-hour altitude.
+fn expected(dhi: f64) -> Vec<f64> {
+    let site = Site {
+        latitude: 0.0,
+        longitude: 0.0,
+        time_zone: 0.0,
+    };
+    let days = [31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31];
+    let mut out = Vec::new();
+    let mut doy = 0;
+    for month in 1..=12u32 {
+        for day in 1..=days[month as usize - 1] {
+            doy += 1;
+            for hour in 1..=24u32 {
+                if !(7..=18).contains(&hour) {
+                    out.push(0.0);
+                    continue;
+                }
+                let pos = solar_position(&site, 2005, month, day, hour as f64 - 0.5);
+                let c = Condition::new(0.0, dhi, pos.altitude, doy, 8.0);
+                out.push(dhi * c.diffuse_efficacy());
+            }
+        }
+    }
+    out
+}
+
+/// Runs the year for `dhi` and checks every hour at every point against the Perez diffuse
+/// illuminance; returns the metrics CSV's rows and the largest relative error.
+fn year(dir: &Path, dhi: f64) -> (Vec<String>, Vec<Vec<String>>, f64, String) {
+    write(dir, "year.epw", &year_epw(dhi));
+    let stdout = run_ok(
+        &[
+            "lighting",
+            "floor.obj",
+            "--weather",
+            "year.epw",
+            "--grid",
+            "points.pts",
+            "--annual",
+            "annual.csv",
+            "--hourly",
+            "hourly.csv",
+            "--summary",
+            "summary.json",
+            "--patches",
+            "4",
+        ],
+        dir,
+    );
+    let want = expected(dhi);
+    let (header, rows) = read_csv(&dir.join("hourly.csv"));
+    assert_eq!(header.len(), 3 + 5);
+    assert_eq!(rows.len(), 8760);
+    let mut worst = 0.0f64;
+    for (h, row) in rows.iter().enumerate() {
+        for v in &row[3..] {
+            let e: f64 = v.parse().unwrap();
+            if want[h] == 0.0 {
+                assert_eq!(e, 0.0, "hour {h}: a dark hour gives {e} lx");
+            } else {
+                // The hourly file has 0.1 lx steps.
+                worst = worst.max(((e - want[h]).abs() - 0.05).max(0.0) / want[h]);
+            }
+        }
+    }
+    let (mh, mrows) = read_csv(&dir.join("annual.csv"));
+    (mh, mrows, worst, stdout)
+}
+
+#[test]
+fn an_open_floor_gets_the_weather_files_diffuse_illuminance_every_hour() {
+    let dir = scratch("annual-open-floor");
+    open_floor(&dir);
+    // Every hour sees the whole sky and no ground (the points face up): the patches'
+    // luminances are normalised so that an unobstructed horizontal surface gets exactly
+    // E_d, and the coefficients are each patch's cosine-weighted solid angle integrated by
+    // 16,384 stratified rays; patch edges cut strata, an error of order N^(−3/4) ≈ 7·10⁻⁴
+    // relative per edge, averaging down over 145 patches: 0.5 % bounds it.
+    for (dhi, bright) in [(100.0, true), (1.0, false)] {
+        let (h, rows, worst, stdout) = year(&dir, dhi);
+        eprintln!("DHI {dhi} W/m²: largest relative error {worst:.2e}");
+        assert!(worst < 5e-3, "DHI {dhi}: {worst}");
+        let e = expected(dhi);
+        let lit: Vec<f64> = e.iter().copied().filter(|&v| v > 0.0).collect();
+        let (lo, hi) = lit
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+        let (da, sun, short, supp, auto, exc, in_sda, in_ase) = (
+            column(&h, "daylight_autonomy"),
+            column(&h, "sun_hours"),
+            column(&h, "udi_fell_short"),
+            column(&h, "udi_supplementary"),
+            column(&h, "udi_autonomous"),
+            column(&h, "udi_exceeded"),
+            column(&h, "in_sda"),
+            column(&h, "in_ase"),
+        );
+        assert_eq!(rows.len(), 5);
+        for r in &rows {
+            assert_eq!(r[sun], "0", "no direct sun");
+            assert_eq!(r[in_ase], "0");
+            if bright {
+                // 100 W/m² of diffuse light is far above 3000 lx in every hour.
+                assert!(lo > 3000.0 * 1.01, "{lo}");
+                assert_eq!((&*r[da], &*r[in_sda], &*r[exc]), ("1.0000", "1", "1.0000"));
+            } else {
+                // 1 W/m² is supplementary (100–300 lx) in every hour: sDA 0.
+                assert!(lo > 100.0 * 1.01 && hi < 300.0 * 0.99, "{lo}…{hi}");
+                assert_eq!((&*r[da], &*r[in_sda], &*r[supp]), ("0.0000", "0", "1.0000"));
+                assert_eq!((&*r[short], &*r[auto]), ("0.0000", "0.0000"));
+            }
+        }
+        let sda = if bright {
+            "sDA300/50% 100.0 %"
+        } else {
+            "sDA300/50% 0.0 %"
+        };
+        assert!(stdout.contains(sda), "{stdout}");
+        assert!(stdout.contains("ASE1000,250 0.0 %"), "{stdout}");
+        let summary: serde_json::Value = serde_json::from_str(&read(&dir, "summary.json")).unwrap();
+        let g = &summary["annual"]["grids"][0];
+        assert_eq!(g["points"], 5);
+        assert_eq!(g["sda"], if bright { 1.0 } else { 0.0 });
+        assert_eq!(g["ase"], 0.0);
+        // Occupied 8:00–18:00: ten hours a day, all lit.
+        assert_eq!(summary["annual"]["occupied_hours"], 3650);
+        assert_eq!(summary["annual"]["lit_hours"], 12 * 365);
+    }
+}
+
+#[test]
+fn bad_annual_input_is_refused_on_one_line() {
+    let dir = scratch("annual-bad");
+    open_floor(&dir);
+    let keep = ["floor.obj", "floor.mtl", "points.pts", "year.epw"];
+    let base = ["lighting", "floor.obj", "--grid", "points.pts"];
+    let with = |extra: &[&'static str]| -> Vec<&'static str> {
+        base.iter().chain(extra).copied().collect()
+    };
+    fails(
+        &with(&["--annual", "annual.csv"]),
+        &dir,
+        &["--annual", "--weather"],
+        &keep,
+    );
+    fails(
+        &with(&["--weather", "missing.epw", "--annual", "annual.csv"]),
+        &dir,
+        &["missing.epw"],
+        &keep,
+    );
+    write(&dir, "year.epw", &year_epw(100.0));
+    fails(
+        &with(&["--weather", "year.epw", "--annual", "annual.txt"]),
+        &dir,
+        &["annual.txt", "csv"],
+        &keep,
+    );
+    fails(
+        &with(&[
+            "--weather",
+            "year.epw",
+            "--annual",
+            "a.csv",
+            "--sky-patches",
+            "0",
+        ]),
+        &dir,
+        &["--sky-patches"],
+        &keep,
+    );
+    fails(
+        &with(&[
+            "--weather",
+            "year.epw",
+            "--annual",
+            "a.csv",
+            "--sky",
+            "uniform",
+        ]),
+        &dir,
+        &["--sky"],
+        &keep,
+    );
+    // A malformed weather file: its line named, nothing written.
+    let bad = year_epw(100.0).replacen(
+        "2005,1,1,12,60,x,20,8,50,100000,0,0,0,100,0,100",
+        "2005,1,1,12,60,x,20,8,50,100000,0,0,0,100,0,abc",
+        1,
+    );
+    write(&dir, "year.epw", &bad);
+    fails(
+        &with(&[
+            "--weather",
+            "year.epw",
+            "--annual",
+            "a.csv",
+            "--hourly",
+            "h.csv",
+        ]),
+        &dir,
+        &["year.epw:20"],
+        &keep,
+    );
+}
