@@ -240,6 +240,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         }
         _ => {}
     };
+    warn_coincident_boundaries(&scene);
     let outcome = radiosity::pipeline::thermal_over(
         &scene,
         &boundary_of,
@@ -661,4 +662,41 @@ fn matrix_free_errors(system: &thermal::ThermalSystem, solution: &thermal::Therm
             te_max
         );
     }
+}
+
+/// Coincident surfaces are one surface (`radiosity::mesh::Coincidence`): a surface lying
+/// wholly on another of another name is solved as that one, so its own boundary row is not
+/// used (its results show area 0). Say so, naming the first few pairs.
+fn warn_coincident_boundaries(scene: &radiosity::scene::Scene) {
+    let c = radiosity::mesh::Coincidence::find(scene);
+    let mut pairs: Vec<(&str, &str)> = Vec::new();
+    for i in 0..scene.polygons.len() {
+        let r = c.representative(i);
+        if r == i {
+            continue;
+        }
+        let name = |k: usize| scene.materials[scene.polygons[k].material].name.as_str();
+        let pair = (name(i), name(r));
+        if pair.0 != pair.1 && !pairs.contains(&pair) {
+            pairs.push(pair);
+        }
+    }
+    if pairs.is_empty() {
+        return;
+    }
+    const SHOWN: usize = 5;
+    let list: Vec<String> = pairs
+        .iter()
+        .take(SHOWN)
+        .map(|(a, b)| format!("'{a}' on '{b}'"))
+        .collect();
+    let more = match pairs.len().saturating_sub(SHOWN) {
+        0 => String::new(),
+        n => format!(" and {n} more"),
+    };
+    eprintln!(
+        "radiosity: warning: {}: surfaces lying exactly on a surface of another name are solved as it, and their own boundary conditions are not used (their rows show area 0): {}{more}",
+        scene.place(),
+        radiosity::loc::shorten(list.join(", "))
+    );
 }

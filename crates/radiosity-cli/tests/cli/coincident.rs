@@ -54,3 +54,54 @@ fn a_thousand_copies_of_a_floor_are_one_surface() {
     };
     assert_eq!(body(read("one.mtx")), body(read("many.mtx")));
 }
+
+/// A View3D box whose floor is given twice under another name: the copy is solved as the
+/// floor, the warning names the pair, and the copy's row shows area 0; the box's books still
+/// close (the floor's power is the top's, negated).
+#[test]
+fn thermal_names_a_surface_solved_as_the_one_it_lies_on() {
+    let dir = scratch("coincident-thermal");
+    write(
+        &dir,
+        "box.vs3",
+        "T box\nC encl=1 list=0 eps=1.e-4\nF 3\nV 1 0. 0. 0.\nV 2 1. 0. 0.\nV 3 1. 1. 0.\nV 4 0. 1. 0.\n\
+         V 5 0. 0. 1.\nV 6 1. 0. 1.\nV 7 1. 1. 1.\nV 8 0. 1. 1.\nS 1 1 2 3 4 0 0 0.50 floor\n\
+         S 2 1 4 8 5 0 0 0.50 w1\nS 3 1 5 6 2 0 0 0.50 w2\nS 4 7 6 5 8 0 0 0.90 top\n\
+         S 5 7 3 2 6 0 0 0.50 w3\nS 6 7 8 4 3 0 0 0.50 w4\nS 7 1 2 3 4 0 0 0.50 copy\nEnd of data\n",
+    );
+    write(
+        &dir,
+        "bc.csv",
+        "name,emissivity,temperature,flux\nfloor,0.5,400,\nw1,0.5,,\nw2,0.5,,\ntop,0.9,300,\nw3,0.5,,\nw4,0.5,,\ncopy,0.5,350,\n",
+    );
+    let out = run(
+        &[
+            "thermal",
+            "box.vs3",
+            "--boundary",
+            "bc.csv",
+            "--out",
+            "s.csv",
+        ],
+        &dir,
+    );
+    succeed(&out);
+    let err = stderr(&out);
+    assert!(err.contains("'copy' on 'floor'"), "{err}");
+    let csv = std::fs::read_to_string(dir.join("s.csv")).unwrap();
+    let row = |name: &str| -> Vec<f64> {
+        csv.lines()
+            .find(|l| l.starts_with(&format!("{name},")))
+            .unwrap()
+            .split(',')
+            .skip(1)
+            .map(|v| v.parse().unwrap())
+            .collect()
+    };
+    assert_eq!(row("copy")[0], 0.0);
+    let (floor, top) = (row("floor")[4], row("top")[4]);
+    assert!(
+        floor > 0.0 && (floor + top).abs() < 1e-9 * floor,
+        "{floor} {top}"
+    );
+}
