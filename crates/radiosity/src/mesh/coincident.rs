@@ -65,16 +65,42 @@ impl Coincidence {
                 .is_some_and(|m| m.emission.max_channel() > 0.0)
         };
         // The group of each polygon: the first polygon with its key.
-        let mut first: HashMap<Vec<i64>, u32> = HashMap::with_capacity(n);
+        // The map holds a 64-bit hash of each key and the first polygon with it (16 bytes a
+        // polygon, not the key itself); a hit is confirmed by comparing the keys, and a
+        // collision of different keys probes on.
+        let key = |i: usize| {
+            let v = &scene.polygons[i].vertices;
+            let normal: Vec3 = vector_area(v).normalize_or_zero();
+            (normal != Vec3::ZERO && normal.is_finite())
+                .then(|| coincidence_key(v.iter().copied(), normal, step))
+        };
+        let hash = |k: &[i64]| {
+            use std::hash::{Hash, Hasher};
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            k.hash(&mut h);
+            h.finish()
+        };
+        let mut first: HashMap<u64, u32> = HashMap::with_capacity(n);
         let mut group: Vec<u32> = (0..n as u32).collect();
         let mut any = false;
-        for (i, p) in scene.polygons.iter().enumerate() {
-            let normal: Vec3 = vector_area(&p.vertices).normalize_or_zero();
-            if normal == Vec3::ZERO || !normal.is_finite() {
-                continue;
-            }
-            let key = coincidence_key(p.vertices.iter().copied(), normal, step);
-            let g = *first.entry(key).or_insert(i as u32);
+        for i in 0..n {
+            let Some(k) = key(i) else { continue };
+            let mut h = hash(&k);
+            let g = loop {
+                match first.entry(h) {
+                    std::collections::hash_map::Entry::Vacant(e) => {
+                        e.insert(i as u32);
+                        break i as u32;
+                    }
+                    std::collections::hash_map::Entry::Occupied(e) => {
+                        let g = *e.get();
+                        if key(g as usize).as_deref() == Some(&k[..]) {
+                            break g;
+                        }
+                        h = h.wrapping_add(0x9E37_79B9_7F4A_7C15);
+                    }
+                }
+            };
             any |= g as usize != i;
             group[i] = g;
         }
