@@ -197,3 +197,28 @@ pub fn mpirun(k: usize, args: &[&str], dir: &Path) -> Output {
         .output()
         .expect("mpirun (Open MPI's openmpi-bin) on the PATH")
 }
+
+/// A Matrix Market file the command wrote: (size, 1-based entries).
+pub fn read_mtx(path: &Path) -> (usize, Vec<(usize, usize, f64)>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('%'));
+    let n: usize = lines
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let entries = lines
+        .map(|l| {
+            let t: Vec<&str> = l.split_whitespace().collect();
+            (
+                t[0].parse().unwrap(),
+                t[1].parse().unwrap(),
+                t[2].parse().unwrap(),
+            )
+        })
+        .collect();
+    (n, entries)
+}

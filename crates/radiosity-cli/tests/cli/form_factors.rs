@@ -2,34 +2,8 @@
 //! closed forms and View3D's own output, reciprocity, and located errors.
 
 use crate::common::*;
-use std::path::Path;
 
 const SQUARES: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 0 1 1\nv 1 1 1\nv 1 0 1\nf 1 2 3 4\nf 5 6 7 8\n";
-
-/// A Matrix Market file the command wrote: (size, 1-based entries).
-fn read_mtx(path: &Path) -> (usize, Vec<(usize, usize, f64)>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines().filter(|l| !l.starts_with('%'));
-    let n: usize = lines
-        .next()
-        .unwrap()
-        .split_whitespace()
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
-    let entries = lines
-        .map(|l| {
-            let t: Vec<&str> = l.split_whitespace().collect();
-            (
-                t[0].parse().unwrap(),
-                t[1].parse().unwrap(),
-                t[2].parse().unwrap(),
-            )
-        })
-        .collect();
-    (n, entries)
-}
 
 #[test]
 fn form_factors_face_to_face() {

@@ -15,25 +15,12 @@ fn form_factors(dir: &Path, args: &[&str]) -> String {
 }
 
 /// A Matrix Market file's entries, 0-based.
-fn read_mtx(dir: &Path, name: &str) -> (usize, HashMap<(usize, usize), f64>) {
-    let text = read(dir, name);
-    let mut lines = text.lines().filter(|l| !l.starts_with('%'));
-    let n: usize = lines
-        .next()
-        .unwrap()
-        .split_whitespace()
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
-    let entries = lines
-        .map(|l| {
-            let w: Vec<&str> = l.split_whitespace().collect();
-            let (i, j): (usize, usize) = (w[0].parse().unwrap(), w[1].parse().unwrap());
-            ((i - 1, j - 1), w[2].parse::<f64>().unwrap())
-        })
-        .collect();
-    (n, entries)
+fn read_mtx0(dir: &Path, name: &str) -> (usize, HashMap<(usize, usize), f64>) {
+    let (n, e) = read_mtx(&dir.join(name));
+    (
+        n,
+        e.into_iter().map(|(i, j, v)| ((i - 1, j - 1), v)).collect(),
+    )
 }
 
 fn row_sums(n: usize, f: &HashMap<(usize, usize), f64>) -> Vec<f64> {
@@ -99,8 +86,8 @@ fn truncated_factors_keep_rows_and_reciprocity() {
     let rebalanced = text.lines().find(|l| l.starts_with("rebalanced")).unwrap();
     assert!(rebalanced.contains("worst row-sum error"), "{rebalanced}");
 
-    let (n, f) = read_mtx(&dir, "F.mtx");
-    let (m, t) = read_mtx(&dir, "T.mtx");
+    let (n, f) = read_mtx0(&dir, "F.mtx");
+    let (m, t) = read_mtx0(&dir, "T.mtx");
     assert_eq!(n, m);
     assert!(t.len() < f.len(), "{} of {}", t.len(), f.len());
     let (header, rows) = read_csv(&dir.join("p.csv"));

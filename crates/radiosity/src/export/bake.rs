@@ -227,14 +227,7 @@ pub fn write_gltf(path: &Path, bake: &Bake, binary: bool) -> Result<(), ExportEr
     let (mut voff, mut ioff) = (0usize, 0usize);
     for g in &groups {
         let n = g.vertices.len();
-        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
-        for &v in &g.vertices {
-            let p = mesh.vertices[v as usize].to_array();
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = position_bounds(mesh, &g.vertices);
         let base = accessors.len();
         accessors.push(
             json!({"bufferView": 0, "byteOffset": voff * 12, "componentType": 5126,
@@ -508,14 +501,7 @@ pub fn write_lightmap_gltf(
     let (mut voff, mut ioff) = (0usize, 0usize);
     for g in &groups {
         let n = g.vertices.len();
-        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
-        for &v in &g.vertices {
-            let p = mesh.vertices[v as usize].to_array();
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = position_bounds(mesh, &g.vertices);
         let base = accessors.len();
         accessors.push(
             json!({"bufferView": 0, "byteOffset": voff * 12, "componentType": 5126,
@@ -609,4 +595,17 @@ pub fn write_lightmap_exr(
             .to_buffered(out)
             .map_err(std::io::Error::other)
     })
+}
+
+/// The bounds of `vertices` of `mesh`, as glTF's POSITION accessor must state them.
+fn position_bounds(mesh: &Mesh, vertices: &[u32]) -> ([f32; 3], [f32; 3]) {
+    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for &v in vertices {
+        let p = mesh.vertices[v as usize].to_array();
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
 }
