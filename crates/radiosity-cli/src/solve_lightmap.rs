@@ -72,6 +72,7 @@ pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
         indirect: a.lightmap_indirect,
         spacing: a.lightmap_spacing,
         seed: a.solve.seed,
+        memory_limit: radiosity::pipeline::MemoryLimit::Available.bytes(),
         ..Default::default()
     }))
 }

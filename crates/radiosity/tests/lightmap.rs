@@ -399,3 +399,40 @@ fn seams_agree() {
         assert!(jump <= var, "seam {a}|{b}: {jump} > {var}");
     }
 }
+
+/// An atlas whose texels would need more than the memory limit is refused before any is
+/// allocated, naming its size and what it needs; at the limit it bakes.
+#[test]
+fn an_atlas_past_the_memory_limit_is_refused() {
+    use radiosity::bake::lightmap::{bytes_per_texel, LightmapError};
+    let scene = radiosity::scene::builtin::cornell();
+    let s = solved(&scene, 300);
+    let vertex = radiosity::render::vertex_radiosity(&s.mesh, &s.radiosity);
+    let params = |limit: u64| LightmapParams {
+        density: Density::AtlasSize(64),
+        direct: 1,
+        indirect: 4,
+        memory_limit: limit,
+        ..Default::default()
+    };
+    let err = bake(&scene, s.surfaces(), &vertex, &params(1 << 10)).unwrap_err();
+    let LightmapError::TooLarge {
+        width,
+        height,
+        needed,
+        ..
+    } = err
+    else {
+        panic!("{err}")
+    };
+    assert_eq!(needed, width as u64 * height as u64 * bytes_per_texel());
+    assert!(err_text(&params(1 << 10), &scene, &s).contains("lightmap needs about"));
+    assert!(bake(&scene, s.surfaces(), &vertex, &params(needed)).is_ok());
+}
+
+fn err_text(p: &LightmapParams, scene: &Scene, s: &Solution) -> String {
+    let vertex = radiosity::render::vertex_radiosity(&s.mesh, &s.radiosity);
+    bake(scene, s.surfaces(), &vertex, p)
+        .unwrap_err()
+        .to_string()
+}

@@ -65,6 +65,22 @@ pub struct LightmapParams {
     pub near: f32,
     /// Seed of the texels' streams.
     pub seed: u64,
+    /// Most bytes the bake may hold for its texels ([`bytes_per_texel`] each); an atlas that
+    /// needs more is refused before any is allocated.
+    pub memory_limit: u64,
+}
+
+/// The bytes the bake holds for each texel of the atlas, at most: its sample and probe, its
+/// slot, value, kind and surface point.
+pub fn bytes_per_texel() -> u64 {
+    use std::mem::size_of;
+    (size_of::<Sample>()
+        + size_of::<Probe>()
+        + size_of::<u32>()
+        + size_of::<Rgb>()
+        + size_of::<Texel>()
+        + size_of::<Option<TexelPoint>>()
+        + size_of::<(f32, [f32; 2], u32)>()) as u64
 }
 
 impl Default for LightmapParams {
@@ -76,6 +92,7 @@ impl Default for LightmapParams {
             spacing: 4,
             near: 3.0,
             seed: 1,
+            memory_limit: u64::MAX,
         }
     }
 }
@@ -91,6 +108,18 @@ pub enum LightmapError {
     NoSamples {
         /// Which count.
         what: &'static str,
+    },
+    /// The atlas's texels would need more memory than the limit.
+    #[error("a {width} × {height} lightmap needs about {} MiB for its texels but only {} MiB are available; use a larger --texel-size or a smaller --lightmap-size", needed >> 20, limit >> 20)]
+    TooLarge {
+        /// Atlas width, texels.
+        width: u32,
+        /// Atlas height, texels.
+        height: u32,
+        /// Bytes needed.
+        needed: u64,
+        /// Bytes allowed.
+        limit: u64,
     },
 }
 
@@ -373,6 +402,15 @@ pub fn bake(
     );
     let spacing = params.spacing.max(1);
     let n_texels = u.width as usize * u.height as usize;
+    let needed = (n_texels as u64).saturating_mul(bytes_per_texel());
+    if needed > params.memory_limit {
+        return Err(LightmapError::TooLarge {
+            width: u.width,
+            height: u.height,
+            needed,
+            limit: params.memory_limit,
+        });
+    }
     let mut samples: Vec<Sample> = (0..u.charts.len() as u32)
         .into_par_iter()
         .flat_map_iter(|c| chart_samples(&u, c))
