@@ -18,10 +18,25 @@ use std::sync::Arc;
 /// A type C IES file (absolute photometry, lumens −1, metres) of `f(C, γ)` candela on the
 /// given angles. One horizontal angle (0) is rotational symmetry; 0..=360 the full circle.
 pub(super) fn ies(horizontal: &[f64], vertical: &[f64], f: impl Fn(f64, f64) -> f64) -> String {
-    let mut s = String::from("IESNA:LM-63-2002\n[TEST] lighting unit test\nTILT=NONE\n");
+    ies_with(1, "TILT=NONE\n", horizontal, vertical, [0.0; 3], f)
+}
+
+/// An IES file (absolute photometry, metres, photometric type `kind`: 1 C, 2 B, 3 A) with the
+/// tilt section `tilt` (a `TILT=` line and what follows), of `f(h, v)` candela on the given
+/// angles, with a luminous opening `dims` (width, length, height).
+pub(super) fn ies_with(
+    kind: u8,
+    tilt: &str,
+    horizontal: &[f64],
+    vertical: &[f64],
+    dims: [f64; 3],
+    f: impl Fn(f64, f64) -> f64,
+) -> String {
+    let mut s = format!("IESNA:LM-63-2002\n[TEST] lighting unit test\n{tilt}");
+    let [w, l, h] = dims;
     writeln!(
         s,
-        "1 -1 1 {} {} 1 2 0 0 0\n1 1 40",
+        "1 -1 1 {} {} {kind} 2 {w} {l} {h}\n1 1 40",
         vertical.len(),
         horizontal.len()
     )
@@ -32,8 +47,8 @@ pub(super) fn ies(horizontal: &[f64], vertical: &[f64], f: impl Fn(f64, f64) -> 
     };
     line(&mut s, vertical);
     line(&mut s, horizontal);
-    for &h in horizontal {
-        let row: Vec<f64> = vertical.iter().map(|&v| f(h, v)).collect();
+    for &hh in horizontal {
+        let row: Vec<f64> = vertical.iter().map(|&v| f(hh, v)).collect();
         line(&mut s, &row);
     }
     s

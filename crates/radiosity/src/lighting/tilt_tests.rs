@@ -5,40 +5,8 @@ use super::*;
 use crate::lighting::schedule::parse_schedule;
 use crate::lighting::{direct_illuminance, SensorPoint, Up};
 use crate::photometry::{parse_bytes, Photometry};
-use std::fmt::Write as _;
 
-/// An IES file (absolute photometry, metres, photometric type `kind`: 1 C, 2 B, 3 A) with the
-/// tilt section `tilt` (a `TILT=` line and what follows), of `f(h, v)` candela on the given
-/// angles, with a luminous opening `dims` (width, length, height).
-fn ies(
-    kind: u8,
-    tilt: &str,
-    horizontal: &[f64],
-    vertical: &[f64],
-    dims: [f64; 3],
-    f: impl Fn(f64, f64) -> f64,
-) -> String {
-    let mut s = format!("IESNA:LM-63-2002\n[TEST] tilt unit test\n{tilt}");
-    let [w, l, h] = dims;
-    writeln!(
-        s,
-        "1 -1 1 {} {} {kind} 2 {w} {l} {h}\n1 1 40",
-        vertical.len(),
-        horizontal.len()
-    )
-    .unwrap();
-    let line = |s: &mut String, v: &[f64]| {
-        let words: Vec<String> = v.iter().map(|x| format!("{x:?}")).collect();
-        writeln!(s, "{}", words.join(" ")).unwrap();
-    };
-    line(&mut s, vertical);
-    line(&mut s, horizontal);
-    for &hh in horizontal {
-        let row: Vec<f64> = vertical.iter().map(|&v| f(hh, v)).collect();
-        line(&mut s, &row);
-    }
-    s
-}
+use crate::lighting::tests::ies_with as ies;
 
 fn steps(from: f64, to: f64, step: f64) -> Vec<f64> {
     let n = ((to - from) / step).round() as usize;
