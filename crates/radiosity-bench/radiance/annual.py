@@ -30,7 +30,9 @@ RMSE relative to the reference's mean, and the mean bias. Time: every setting ru
 interleaved in a seeded random order a round, CPU seconds (user + system of the children) and
 wall; the load average is printed before and after.
 
-Writes DIR/annual.json and DIR/annual.md. Usage: annual.py --dir DIR --epw FILE [--reps 2]
+`--sky-check` instead compares the skies alone at an open point (`sky_check`), writing
+DIR/sky-check.md. Writes DIR/annual.json and DIR/annual.md.
+Usage: annual.py --dir DIR --epw FILE [--reps 2] [--hours 48] [--sky-check]
 """
 
 import argparse
@@ -89,8 +91,7 @@ def write_inputs(d, epw):
                                 float(fields[14]), float(fields[15])))
                 line = ",".join(fields)
             f.write(line + "\n")
-    with open(os.path.join(d, "year.wea"), "w") as f:
-        run(["epw2wea", "year.epw", "-"], d, stdout=f)
+    run(["epw2wea", "year.epw", "year.wea"], d)
     with open(os.path.join(d, "skyrf.rad"), "w") as f:
         f.write(SKYRF)
     root = os.path.dirname(radiance_env()["RAYPATH"].split(os.pathsep)[1] + "/")
@@ -204,7 +205,7 @@ def reference(d, site, records, hours, ref_idx, pts, noise_hours, nproc):
     """rtrace per sampled hour (cached in DIR/ref/): (hours, ref points) lux, the noise."""
     os.makedirs(os.path.join(d, "ref"), exist_ok=True)
     sub = pts[ref_idx]
-    out, noise, cpu = [], [], 0.0
+    out, noise, cpu, skipped = [], [], 0.0, []
     for n, h in enumerate(hours):
         m, day, hr, dni, dhi = records[h]
         path = os.path.join(d, "ref", f"h{h}.npz")
@@ -218,6 +219,10 @@ def reference(d, site, records, hours, ref_idx, pts, noise_hours, nproc):
         sky = run(["gendaylit", str(m), str(day), f"{hr - 0.5:g}", "-a", f"{site['lat']}",
                    "-o", f"{-site['lon']}", "-m", f"{-15 * site['zone']:g}", "-W", f"{dni:g}",
                    f"{dhi:g}", "-g", "0.2"], d).stdout.decode()
+        if "epsilon" not in sky:  # the sun below the horizon at mid-hour: an error sky
+            print(f"reference: {m}/{day} {hr}:00 left out: gendaylit's sun is below the horizon")
+            skipped.append(n)
+            continue
         sky = renormalised(sky, dhi).replace("perezlum.cal", "perezsharp.cal")
         with open(os.path.join(d, "ref", f"h{h}.rad"), "w") as f:
             f.write(sky + SOURCES)
@@ -248,7 +253,62 @@ def reference(d, site, records, hours, ref_idx, pts, noise_hours, nproc):
             noise.append(b / np.maximum(a, 1e-9))
         print(f"reference hour {n + 1}/{len(hours)}: {m}/{day} {hr}:00, DNI {dni:g}, DHI "
               f"{dhi:g}: mean {out[-1].mean():.1f} lx", flush=True)
-    return np.array(out), noise, cpu
+    return np.array(out), noise, cpu, skipped
+
+
+def sky_check(d, site, records, hours):
+    """The skies at an open point (sensors facing up, south, north, east, 1 cm above a tiny
+    black polygon 100 m away): ours (`--sky-rays 262144`) against rtrace -ab 1 under the
+    renormalised reference sky, for the sampled hours with DNI < SUNLESS (their weak sun
+    included: ours in its patch, rtrace's at its position)."""
+    root = os.path.join(d, "sky-check")
+    os.makedirs(root, exist_ok=True)
+    quad = "v 100 100 -100\nv 100.001 100 -100\nv 100.001 100.001 -100\nv 100 100.001 -100\n"
+    with open(os.path.join(root, "far.obj"), "w") as f:
+        f.write("mtllib far.mtl\nusemtl black\n" + quad + "f 1 2 3 4\n")
+    with open(os.path.join(root, "far.mtl"), "w") as f:
+        f.write("newmtl black\nKd 0 0 0\n")
+    with open(os.path.join(root, "far.rad"), "w") as f:
+        f.write("void plastic black 0 0 5 0 0 0 0 0\nblack polygon tiny 0 0 9 "
+                "100 100 -100 100.001 100 -100 100 100.001 -100\n")
+    sensors = "0 0 0.01 0 0 1\n0 0 0.01 0 -1 0\n0 0 0.01 0 1 0\n0 0 0.01 1 0 0\n"
+    with open(os.path.join(root, "p.pts"), "w") as f:
+        f.write(sensors)
+    run([radiosity_binary(), "lighting", "far.obj", "--weather", "../year.epw", "--grid",
+         "p.pts", "--annual", "a.csv", "--hourly", "h.csv", "--sky-rays", "262144"], root)
+    with open(os.path.join(root, "h.csv")) as f:
+        f.readline()
+        ours = [np.array(line.split(",")[3:], dtype=float) for line in f]
+    env = radiance_env()
+    env["RAYPATH"] += os.pathsep + d  # perezsharp.cal
+    lines = ["| hour | DHI W/m² | rtrace: up, south, north, east (lx) | ours / rtrace |",
+             "|---|---|---|---|"]
+    worst = 0.0
+    for h in hours:
+        m, day, hr, dni, dhi = records[h]
+        if dni >= SUNLESS:
+            continue
+        sky = run(["gendaylit", str(m), str(day), f"{hr - 0.5:g}", "-a", f"{site['lat']}",
+                   "-o", f"{-site['lon']}", "-m", f"{-15 * site['zone']:g}", "-W", f"{dni:g}",
+                   f"{dhi:g}", "-g", "0.2"], d).stdout.decode()
+        if "epsilon" not in sky:
+            continue
+        sky = renormalised(sky, dhi).replace("perezlum.cal", "perezsharp.cal")
+        with open(os.path.join(root, "s.rad"), "w") as f:
+            f.write(sky + SOURCES)
+        with open(os.path.join(root, "s.oct"), "wb") as f:
+            subprocess.run(["oconv", "far.rad", "s.rad"], cwd=root, stdout=f, check=True, env=env)
+        res = subprocess.run(["rtrace", "-I+", "-h", "-ab", "1", "-aa", "0", "-ad", "65536",
+                              "-lw", "1e-7", "s.oct"], input=sensors.encode(),
+                             capture_output=True, cwd=root, env=env, check=True)
+        rad = EFFICACY * np.array(res.stdout.split(), dtype=float).reshape(-1, 3) @ WEIGHTS
+        ratio = ours[h] / rad
+        worst = max(worst, float(np.max(np.abs(ratio - 1))))
+        lines.append(f"| {m}/{day} {hr}:00 (DNI {dni:g}) | {dhi:g} | "
+                     + ", ".join(f"{v:.0f}" for v in rad) + " | "
+                     + ", ".join(f"{v:.3f}" for v in ratio) + " |")
+    lines.append(f"\nworst |ours/rtrace − 1| {100 * worst:.2f} %")
+    return "\n".join(lines)
 
 
 def agreement(year, ref, hours, ref_idx, records):
@@ -279,6 +339,8 @@ def main():
     ap.add_argument("--noise-hours", type=int, default=4)
     ap.add_argument("--reps", type=int, default=2)
     ap.add_argument("--nproc", type=int, default=2)
+    ap.add_argument("--sky-check", action="store_true",
+                    help="only the skies at an open point, ours against the reference sky")
     args = ap.parse_args()
     d = os.path.abspath(args.dir)
     pts = read_pts(os.path.join(d, "annual.pts"))
@@ -295,8 +357,15 @@ def main():
                  for ab, ad, lw in TWO_PHASE]
     times = {name: [] for name, _, _ in settings}
     commands, errs = {}, {}
-    ref, noise, ref_cpu = reference(d, site, records, hours, ref_idx, pts, args.noise_hours,
-                                    args.nproc)
+    if args.sky_check:
+        text = sky_check(d, site, records, hours)
+        with open(os.path.join(d, "sky-check.md"), "w") as f:
+            f.write(text + "\n")
+        print(text)
+        return
+    ref, noise, ref_cpu, skipped = reference(d, site, records, hours, ref_idx, pts,
+                                             args.noise_hours, args.nproc)
+    hours = np.delete(hours, skipped)
     load0 = load()
     for rep in range(1, args.reps + 1):
         for k in np.random.default_rng(rep).permutation(len(settings)):
