@@ -311,6 +311,70 @@ def sky_check(d, site, records, hours):
     return "\n".join(lines)
 
 
+def tregenza_solid_angles():
+    """The solid angle of each of the 146 rows of `gendaymtx -m 1`: the ground (2π), then
+    Tregenza's bands of 12° (30, 30, 24, 24, 18, 12, 6 patches) and the 6° cap."""
+    out = [2 * np.pi]
+    for band, n in enumerate((30, 30, 24, 24, 18, 12, 6)):
+        lo, hi = np.radians(12 * band), np.radians(12 * (band + 1))
+        out += [2 * np.pi * (np.sin(hi) - np.sin(lo)) / n] * n
+    out.append(2 * np.pi * (1 - np.sin(np.radians(84))))
+    return np.array(out)
+
+
+def tregenza_horizontal():
+    """∫ sin θ dω over each row of `gendaymtx -m 1` (θ the altitude): what an unobstructed
+    horizontal surface receives from the patch at unit luminance (the ground: 0)."""
+    out = [0.0]
+    for band, n in enumerate((30, 30, 24, 24, 18, 12, 6)):
+        lo, hi = np.radians(12 * band), np.radians(12 * (band + 1))
+        out += [np.pi * (np.sin(hi) ** 2 - np.sin(lo) ** 2) / n] * n
+    out.append(np.pi * np.cos(np.radians(84)) ** 2)
+    return np.array(out)
+
+
+def sun_study(d, records, hours, ref, ref_idx):
+    """The sun's share of the error on the sunny hours: one daylight matrix (rfluxmtx at
+    TWO_PHASE[-1]) under two skies, gendaymtx's own (the sun over its 4 nearest patches) and
+    the same with the sun put whole into its nearest patch (`gendaymtx -d`'s sun moved there,
+    its normal illuminance kept, as `gendaymtx -5` places it), and the same patch with its
+    horizontal illuminance kept instead, E_n sin α / ∫_p sin θ dω (ours' rule; α from the
+    reference's gendaylit sun). Returns the RMSE (lx) of each against the reference over the
+    hours with DNI ≥ SUNLESS."""
+    ab, ad, lw = TWO_PHASE[-1]
+    two_phase_year(d, ab, ad, lw, 1000)
+    dc = read_mtx(os.path.join(d, "dc.mtx"))[ref_idx] / EFFICACY  # lux per (W/m²/sr)
+    skies = {}
+    for name, flag in (("sky", "-s"), ("sun", "-d")):
+        with open(os.path.join(d, f"sky{flag}.mtx"), "wb") as f:
+            run(["gendaymtx", "-m", "1", flag, "-of", "year.wea"], d, stdout=f)
+        skies[name] = read_mtx(os.path.join(d, f"sky{flag}.mtx")) / EFFICACY
+    omega = tregenza_solid_angles()
+    spread = skies["sun"][:, hours]
+    energy = spread * omega[:, None]
+    one = np.zeros_like(spread)
+    cols = np.arange(len(hours))
+    near = np.argmax(energy, axis=0)
+    one[near, cols] = energy.sum(axis=0) / omega[near]  # 0 where there is no sun
+    sin_alt = np.empty(len(hours))
+    for k, h in enumerate(hours):
+        with open(os.path.join(d, "ref", f"h{h}.rad")) as f:
+            arg = next(line for line in f if line.startswith("10 "))
+        sin_alt[k] = max(float(arg.split()[10]), 0.0)
+    ours_rule = np.zeros_like(spread)
+    lit = energy.sum(axis=0) > 0
+    ours_rule[near[lit], cols[lit]] = (energy.sum(axis=0) * sin_alt)[lit] \
+        / tregenza_horizontal()[near[lit]]
+    sunny = np.array([records[h][3] >= SUNLESS for h in hours])
+    out = {}
+    for name, sun in (("4 nearest patches (gendaymtx)", spread), ("its nearest patch", one),
+                      ("its nearest patch, horizontal kept", ours_rule)):
+        year = EFFICACY * (dc @ (skies["sky"][:, hours] + sun)).T
+        diff = (year - ref)[sunny]
+        out[name] = float(np.sqrt(np.mean(diff**2)))
+    return out
+
+
 def agreement(year, ref, hours, ref_idx, records):
     """RMSE (lx), relative RMSE (of the reference's mean), mean bias over hours × points: all
     sampled hours, those with DNI < SUNLESS (the sky alone, nearly) and the others."""
@@ -381,6 +445,7 @@ def main():
                 year = read_ours(d) if side == "ours" else read_mtx(os.path.join(d, "ill.mtx")).T
                 errs[name] = agreement(year, ref, hours, ref_idx, records)
     load1 = load()
+    study = sun_study(d, records, hours, ref, ref_idx)
     noise_rel = float(np.sqrt(np.mean([np.mean((n - 1) ** 2) for n in noise])) / np.sqrt(2)) \
         if noise else None
 
@@ -406,12 +471,16 @@ def main():
                                                                 ("all", "sunless", "sun")))
         lines.append(f"| {name} | {cpu:.2f} | {wall:.2f} |" + cells)
     lines.append("")
+    lines.append(f"The sun's share (one daylight matrix, rfluxmtx -ab {TWO_PHASE[-1][0]} -ad "
+                 f"{TWO_PHASE[-1][1]}; RMSE over the hours with DNI ≥ {SUNLESS:g} W/m²): "
+                 + "; ".join(f"the sun in {k}: {v:.0f} lx" for k, v in study.items()))
+    lines.append("")
     lines += [f"- {name}: `{cmd}`" for name, cmd in commands.items()]
     text = "\n".join(lines)
     with open(os.path.join(d, "annual.md"), "w") as f:
         f.write(text + "\n")
     with open(os.path.join(d, "annual.json"), "w") as f:
-        json.dump({"times": times, "errors": errs, "commands": commands, "load": [load0, load1],
+        json.dump({"times": times, "errors": errs, "sun_study": study, "commands": commands, "load": [load0, load1],
                    "hours": hours.tolist(), "ref_points": ref_idx.tolist(),
                    "reference_noise": noise_rel}, f, indent=1)
     print(text)
