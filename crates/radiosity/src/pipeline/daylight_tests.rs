@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::lighting::sky::SkyModel;
+use crate::mesh::MeshParams;
 use crate::scene::Material;
 use std::f64::consts::PI;
 

@@ -12,6 +12,7 @@
 mod daylight;
 mod lighting;
 mod memory;
+mod panes;
 mod radiant;
 mod reference;
 mod solve;
