@@ -468,7 +468,7 @@ struct Columns {
 /// What light from outside meets: the opaque geometry and the panes.
 struct Outside<'a> {
     bvh: &'a Bvh,
-    glass: Option<Panes>,
+    glass: Option<&'a Panes>,
     frame: SkyFrame,
 }
 
@@ -567,36 +567,112 @@ impl Outside<'_> {
         for (c, o) in out[..nsky].iter_mut().enumerate() {
             *o += ground * sky.ground(c);
         }
-        // The sun: stratified points over its disc (concentric rings, equal areas).
-        let radius = (0.5 * SUN_DIAMETER_DEG).to_radians().tan() as f32;
-        let m = ((sun_rays as f64).sqrt().ceil() as usize).max(1);
         for (s, col) in suns.iter().zip(&mut out[nsky..]) {
             *col += ground * s.ground;
-            let centre = self.frame.to_scene(s.direction);
-            let c = Vec3::new(centre[0] as f32, centre[1] as f32, centre[2] as f32);
-            if n.dot(c) <= 0.0 {
-                continue;
-            }
-            let (st, sb) = orthonormal_basis(c);
-            // E_n is the disc's normal illuminance: E = E_n cos θ_c × the disc's mean
-            // visibility and transmittance (cos θ over the disc averages to cos θ_c within
-            // (0.27°)² / 4 ≈ 5e-6).
-            let cos_c = n.dot(c) as f64;
-            let mut e = 0.0;
-            let mut count = 0usize;
-            for a in 0..m {
-                for q in 0..m {
-                    let r = radius * ((a as f32 + uniform(rng)) / m as f32).sqrt();
-                    let phi = std::f32::consts::TAU * (q as f32 + uniform(rng)) / m as f32;
-                    let d = (c + st * (r * phi.cos()) + sb * (r * phi.sin())).normalize();
-                    count += 1;
-                    if n.dot(d) <= 0.0 || self.bvh.occluded(&Ray::new(origin, d), f32::INFINITY) {
-                        continue;
-                    }
-                    e += cos_c * self.through_glass(origin, d);
+            *col += s.scale * self.sun(origin, n, s.direction, sun_rays, rng);
+        }
+    }
+
+    /// The illuminance at `origin` (already lifted off its surface) facing `n` from a sun of
+    /// unit direct normal illuminance in sky-frame direction `to_sun`: stratified points over
+    /// its disc (concentric rings, equal areas, `sun_rays` rounded up to a square), each a
+    /// shadow ray through the panes.
+    fn sun(
+        &self,
+        origin: Vec3,
+        n: Vec3,
+        to_sun: [f64; 3],
+        sun_rays: usize,
+        rng: &mut crate::sampling::Rng64,
+    ) -> f64 {
+        let radius = (0.5 * SUN_DIAMETER_DEG).to_radians().tan() as f32;
+        let m = ((sun_rays as f64).sqrt().ceil() as usize).max(1);
+        let centre = self.frame.to_scene(to_sun);
+        let c = Vec3::new(centre[0] as f32, centre[1] as f32, centre[2] as f32);
+        if n.dot(c) <= 0.0 {
+            return 0.0;
+        }
+        let (st, sb) = orthonormal_basis(c);
+        // E_n is the disc's normal illuminance: E = E_n cos θ_c × the disc's mean visibility
+        // and transmittance (cos θ over the disc averages to cos θ_c within (0.27°)² / 4 ≈
+        // 5e-6).
+        let cos_c = n.dot(c) as f64;
+        let mut e = 0.0;
+        let mut count = 0usize;
+        for a in 0..m {
+            for q in 0..m {
+                let r = radius * ((a as f32 + uniform(rng)) / m as f32).sqrt();
+                let phi = std::f32::consts::TAU * (q as f32 + uniform(rng)) / m as f32;
+                let d = (c + st * (r * phi.cos()) + sb * (r * phi.sin())).normalize();
+                count += 1;
+                if n.dot(d) <= 0.0 || self.bvh.occluded(&Ray::new(origin, d), f32::INFINITY) {
+                    continue;
                 }
+                e += cos_c * self.through_glass(origin, d);
             }
-            *col += s.scale * e / count as f64;
+        }
+        e / count as f64
+    }
+}
+
+/// The sun's direct light at sensor points for any sun position (the 5-phase method's and
+/// DAYSIM's direct-sun coefficients): shadow rays to the disc through the opaque geometry,
+/// × τ(θ) of every pane crossed, as [`daylight`]'s sun column computes it, but with no
+/// interreflection, for positions given one at a time (an annual run's hours).
+pub struct DirectSun {
+    bvh: Bvh,
+    glass: Option<Panes>,
+    frame: SkyFrame,
+    points: Vec<SensorPoint>,
+    sun_rays: usize,
+    seed: u64,
+}
+
+impl DirectSun {
+    /// The opaque scene's hierarchy (one patch a polygon) and its panes, for `points`, with
+    /// the settings' sky frame, sun rays and seed. Errors: bad settings, glazing, meshing.
+    pub fn new(
+        scene: &Scene,
+        points: &[SensorPoint],
+        settings: &DaylightSettings,
+    ) -> Result<DirectSun, Error> {
+        settings.validate()?;
+        scene.validate_geometry()?;
+        let (opaque, glass) = split_panes(scene)?;
+        let mesh = Mesh::build(&opaque, crate::mesh::MeshParams::Faces)?;
+        Ok(DirectSun {
+            bvh: Bvh::build(&mesh),
+            glass,
+            frame: settings.frame,
+            points: points.to_vec(),
+            sun_rays: settings.sun_rays as usize,
+            seed: settings.lighting.params.seed,
+        })
+    }
+
+    /// The illuminance at every point (lx) from a sun of 1 lx direct normal illuminance in
+    /// sky-frame direction `to_sun` (x east, y north, z up), into `out`. The random streams
+    /// are keyed by the point and the direction, so a value does not depend on the order or
+    /// the threads of the calls.
+    pub fn illuminance(&self, to_sun: [f64; 3], out: &mut [f64]) {
+        let outside = Outside {
+            bvh: &self.bvh,
+            glass: self.glass.as_ref(),
+            frame: self.frame,
+        };
+        let key = to_sun
+            .iter()
+            .fold(0u64, |h, v| h.rotate_left(21) ^ v.to_bits());
+        for (i, (p, o)) in self.points.iter().zip(out.iter_mut()).enumerate() {
+            let mut rng = stream(self.seed, 0x0053_554E, i as u64, key);
+            let v = |a: [f64; 3]| Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32);
+            let n = v(p.normal).normalize_or_zero();
+            *o = if n == Vec3::ZERO {
+                0.0
+            } else {
+                let origin = v(p.position) + n * self.bvh.ray_offset();
+                outside.sun(origin, n, to_sun, self.sun_rays, &mut rng)
+            };
         }
     }
 }
@@ -623,6 +699,26 @@ fn concentric_cosine(n: Vec3, t: Vec3, b: Vec3, u1: f32, u2: f32) -> Vec3 {
     t * (r * co) + b * (r * s) + n * z
 }
 
+/// The scene without its panes (materials with a transmittance), and the panes. Errors: a
+/// pane of an impossible transmittance (its material named), meshing the panes.
+fn split_panes(scene: &Scene) -> Result<(Scene, Option<Panes>), Error> {
+    let mut panes = Vec::with_capacity(scene.materials.len());
+    for m in &scene.materials {
+        panes.push(if m.transmittance > 0.0 {
+            let g = Glazing::new(m.transmittance, m.ior.unwrap_or(GLASS_INDEX))
+                .map_err(|e| LightingError::Parameter(format!("material '{}': {e}", m.name)))?;
+            Some(g)
+        } else {
+            None
+        });
+    }
+    let mut opaque = scene.clone();
+    opaque.polygons.retain(|p| panes[p.material].is_none());
+    opaque.origins.clear();
+    let glass = Panes::new(scene, panes)?;
+    Ok((opaque, glass))
+}
+
 /// The columns' direct light at the patches and points, their interreflections and the
 /// gathers: lux at the points per column.
 fn solve_columns(
@@ -639,22 +735,7 @@ fn solve_columns(
     ls.mesh.validate()?;
     ls.form_factors.validate()?;
     ls.params.validate()?;
-    // The panes, and the opaque scene without them.
-    let mut panes = Vec::with_capacity(scene.materials.len());
-    for m in &scene.materials {
-        panes.push(if m.transmittance > 0.0 {
-            let g = Glazing::new(m.transmittance, m.ior.unwrap_or(GLASS_INDEX))
-                .map_err(|e| LightingError::Parameter(format!("material '{}': {e}", m.name)))?;
-            Some(g)
-        } else {
-            None
-        });
-    }
-    let is_glass = |p: &crate::scene::Polygon| panes[p.material].is_some();
-    let mut opaque = scene.clone();
-    opaque.polygons.retain(|p| !is_glass(p));
-    opaque.origins.clear();
-    let glass = Panes::new(scene, panes)?;
+    let (opaque, glass) = split_panes(scene)?;
     let limit = ls.memory_limit.bytes();
     let memory = MemoryCheck {
         limit,
@@ -670,7 +751,7 @@ fn solve_columns(
     let base = patch_system(&opaque, &mesh);
     let outside = Outside {
         bvh: &bvh,
-        glass,
+        glass: glass.as_ref(),
         frame: settings.frame,
     };
     let nc = sky.columns() + suns.len();
@@ -750,7 +831,7 @@ fn solve_columns(
     });
     let mut f = if !any {
         None
-    } else if let Some(panes) = &outside.glass {
+    } else if let Some(panes) = outside.glass {
         // Through the panes: weighted Monte Carlo rows (`panes::Panes::rows`).
         let (rows, _absorbed) = panes.rows(
             &mesh,
