@@ -3,19 +3,21 @@
 //! Perez skies through them (`daylight::annual`), the per-point metrics CSV, the hourly CSV
 //! and per grid sDA₃₀₀/₅₀%, ASE₁₀₀₀,₂₅₀ and UDI.
 
-use crate::args::LightingArgs;
+use crate::args::{LightingArgs, SunMethod};
 use anyhow::{bail, Context, Result};
 use radiosity::daylight::annual::{
     annual, write_hourly_header, write_hourly_rows, write_metrics_csv, AnnualParams,
-    DaylightMatrix, EpwSkies, HourBlock, Sun,
+    DaylightMatrix, EpwSkies, HourBlock, Sun, SunCoefficients,
 };
 use radiosity::daylight::epw::read_epw;
-use radiosity::daylight::metrics::PointMetrics;
+use radiosity::daylight::metrics::{MetricParams, Occupancy, PointMetrics};
 use radiosity::daylight::patches::{SkyPatches, MAX_SUBDIVISION};
 use radiosity::io::{FileFormat, OutputError, Staged};
 use radiosity::lighting::sky::SkyFrame;
 use radiosity::lighting::Up;
-use radiosity::pipeline::{daylight_coefficients, DaylightSettings, DaylightSource};
+use radiosity::pipeline::{
+    daylight_coefficients, DaylightCoefficients, DaylightSettings, DaylightSource, DirectSun,
+};
 use std::path::Path;
 
 /// A grid's annual metrics: sDA (share of points with daylight autonomy ≥ 50 %), ASE (share
@@ -46,6 +48,45 @@ impl GridMetrics {
     }
 }
 
+/// `--sun-method exact`: the sun's direct light at its true position (shadow rays,
+/// [`DirectSun`]) plus its interreflection taken from the patch that holds it, the patch's
+/// column less its direct part scaled to the sun (E_n sin α / ∫_p sin θ dω, the patch
+/// luminance of the 2-phase method): the 5-phase method's E = 3-phase − direct 3-phase +
+/// direct sun (Subramaniam & Mistrick; Radiance's 5-phase tutorial).
+struct ExactSun<'a> {
+    direct: &'a DirectSun,
+    patches: &'a SkyPatches,
+    coefficients: &'a DaylightCoefficients,
+}
+
+impl SunCoefficients for ExactSun<'_> {
+    fn sun(&self, to_sun: [f64; 3], out: &mut [f64]) {
+        let mut direct = vec![0.0; out.len()];
+        self.sun_parts(to_sun, out, &mut direct);
+    }
+
+    fn sun_parts(&self, to_sun: [f64; 3], total: &mut [f64], direct: &mut [f64]) {
+        self.direct.illuminance(to_sun, direct);
+        let p = self.patches.find(to_sun);
+        let c = self.coefficients;
+        let ns = c.sources;
+        let scale = if p < self.patches.sky_count() {
+            to_sun[2].max(0.0) / self.patches.cosine_solid_angle(p)
+        } else {
+            0.0
+        };
+        for (i, (t, d)) in total.iter_mut().zip(direct.iter()).enumerate() {
+            let k = i * ns + p;
+            let inter = if scale > 0.0 {
+                (c.total[k] - c.direct[k]).max(0.0)
+            } else {
+                0.0
+            };
+            *t = d + scale * inter;
+        }
+    }
+}
+
 /// An output path: `.csv`, writable, not another input or output.
 fn check_csv(flag: &str, p: &Path, a: &LightingArgs) -> Result<()> {
     if FileFormat::from_path(p) != Some(FileFormat::Csv) {
@@ -60,6 +101,71 @@ fn check_csv(flag: &str, p: &Path, a: &LightingArgs) -> Result<()> {
     crate::settings::check_output(p)
 }
 
+/// `--occupancy START-END`: the occupied hours. Errors name the flag and the value.
+fn occupancy(spec: &str) -> Result<Occupancy> {
+    let parsed = spec.split_once('-').and_then(|(a, b)| {
+        let (a, b): (f64, f64) = (a.trim().parse().ok()?, b.trim().parse().ok()?);
+        Some(Occupancy { start: a, end: b })
+    });
+    let Some(o) = parsed else {
+        bail!("--occupancy {spec}: expected START-END in hours, e.g. 8-18");
+    };
+    if o.validate().is_err() {
+        bail!("--occupancy {spec}: need 0 ≤ START < END ≤ 24");
+    }
+    Ok(o)
+}
+
+/// The metric flags over the library's defaults (`--sda-threshold` also starts UDI's
+/// autonomous bin). Errors name the flag.
+fn metric_params(a: &LightingArgs) -> Result<MetricParams> {
+    let mut m = MetricParams::default();
+    let positive = |flag: &str, v: f64| -> Result<f64> {
+        if !(v.is_finite() && v > 0.0) {
+            bail!("{flag} {v}: must be a positive number of lux");
+        }
+        Ok(v)
+    };
+    if let Some(v) = a.sda_threshold {
+        m.sda_illuminance = positive("--sda-threshold", v)?;
+        m.udi_autonomous = v;
+    }
+    if let Some(f) = a.sda_fraction {
+        if !(f > 0.0 && f <= 1.0) {
+            bail!("--sda-fraction {f}: must be in (0, 1]");
+        }
+        m.sda_fraction = f;
+    }
+    if let Some(v) = a.ase_threshold {
+        m.ase_illuminance = positive("--ase-threshold", v)?;
+    }
+    if let Some(h) = a.ase_hours {
+        m.ase_hours = h;
+    }
+    if let Some(spec) = &a.udi_range {
+        let parsed = spec.split_once(',').and_then(|(l, h)| {
+            Some((l.trim().parse::<f64>().ok()?, h.trim().parse::<f64>().ok()?))
+        });
+        let Some((low, high)) = parsed else {
+            bail!("--udi-range {spec}: expected LOW,HIGH in lux, e.g. 100,3000");
+        };
+        if !(low.is_finite() && high.is_finite() && low > 0.0 && low < high) {
+            bail!("--udi-range {spec}: need 0 < LOW < HIGH");
+        }
+        (m.udi_low, m.udi_high) = (low, high);
+    }
+    if !(m.udi_low..=m.udi_high).contains(&m.udi_autonomous) {
+        bail!(
+            "--udi-range {},{}: UDI's autonomous bin starts at the sDA threshold {} lx, which must lie within it",
+            m.udi_low,
+            m.udi_high,
+            m.udi_autonomous
+        );
+    }
+    m.validate()?;
+    Ok(m)
+}
+
 /// Run the annual daylight command.
 pub(crate) fn run(a: LightingArgs) -> Result<()> {
     let (Some(weather), Some(out)) = (&a.weather, &a.annual) else {
@@ -68,6 +174,19 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
         }
         if a.annual.is_some() {
             bail!("--annual needs --weather FILE.epw (the year's weather)");
+        }
+        for (set, flag) in [
+            (a.occupancy.is_some(), "--occupancy"),
+            (a.sda_threshold.is_some(), "--sda-threshold"),
+            (a.sda_fraction.is_some(), "--sda-fraction"),
+            (a.ase_threshold.is_some(), "--ase-threshold"),
+            (a.ase_hours.is_some(), "--ase-hours"),
+            (a.udi_range.is_some(), "--udi-range"),
+            (a.sun_method.is_some(), "--sun-method"),
+        ] {
+            if set {
+                bail!("{flag} is part of an annual run: it needs --weather FILE.epw and --annual OUT.csv");
+            }
         }
         bail!("--hourly needs --weather FILE.epw and --annual OUT.csv");
     };
@@ -88,6 +207,11 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
             a.sky_patches
         );
     }
+    let occupancy = match &a.occupancy {
+        Some(spec) => occupancy(spec)?,
+        None => Occupancy::default(),
+    };
+    let metrics = metric_params(&a)?;
     check_csv("--annual", out, &a)?;
     if let Some(h) = &a.hourly {
         check_csv("--hourly", h, &a)?;
@@ -139,6 +263,8 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     settings.validate()?;
     let params = AnnualParams {
         ground_reflectance: a.ground_reflectance,
+        occupancy,
+        metrics,
         ..AnnualParams::default()
     };
     let progress = crate::report::Progress::new(a.tolerance.max(1e-12));
@@ -155,6 +281,19 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     let d = DaylightMatrix::new(n, np, values)?;
 
     // The year, its outputs staged: all land or none.
+    let exact = match a.sun_method {
+        Some(SunMethod::Exact) => Some(DirectSun::new(&scene, &points, &settings)?),
+        _ => None,
+    };
+    let exact_sun = exact.as_ref().map(|direct| ExactSun {
+        direct,
+        patches: &patches,
+        coefficients: &c,
+    });
+    let sun = match &exact_sun {
+        Some(x) => Sun::Exact(x),
+        None => Sun::InPatch,
+    };
     let t = std::time::Instant::now();
     let skies = EpwSkies::new(&epw, &patches, &params);
     let mut staged = Staged::default();
@@ -174,7 +313,7 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
                             ))
                         })
                     };
-                    let r = annual(&skies, &d, Sun::InPatch, &params, Some(&mut sink));
+                    let r = annual(&skies, &d, sun, &params, Some(&mut sink));
                     if let Some(e) = failed {
                         return Err(e);
                     }
@@ -192,7 +331,7 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
                 })?;
             outcome.expect("the body runs the year")?
         }
-        None => annual(&skies, &d, Sun::InPatch, &params, None)?,
+        None => annual(&skies, &d, sun, &params, None)?,
     };
     let t_year = t.elapsed().as_secs_f64();
     let positions: Vec<[f64; 3]> = points.iter().map(|p| p.position).collect();
@@ -236,9 +375,16 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
                 "lit_hours": year.lit_hours,
                 "occupied_hours": m.occupied_hours,
                 "occupancy": [params.occupancy.start, params.occupancy.end],
+                "thresholds": {
+                    "sda_illuminance": params.metrics.sda_illuminance,
+                    "sda_fraction": params.metrics.sda_fraction,
+                    "ase_illuminance": params.metrics.ase_illuminance,
+                    "ase_hours": params.metrics.ase_hours,
+                    "udi": [params.metrics.udi_low, params.metrics.udi_autonomous, params.metrics.udi_high],
+                },
                 "ground_reflectance": a.ground_reflectance,
                 "north": a.north,
-                "sun": "patch",
+                "sun": if exact.is_some() { "exact" } else { "patch" },
                 "grids": grids_json,
             },
             "seconds": {"coefficients": t_coefficients, "year": t_year},
@@ -264,15 +410,24 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
         params.occupancy.end
     );
     println!(
-        "sky         {} patches (MF:{}), ground reflectance {}, sun in its patch",
+        "sky         {} patches (MF:{}), ground reflectance {}, {}",
         patches.sky_count(),
         a.sky_patches,
-        a.ground_reflectance
+        a.ground_reflectance,
+        if exact.is_some() {
+            "sun exact (direct at its position, interreflection from its patch)"
+        } else {
+            "sun in its patch"
+        }
     );
     for (name, count, g) in &grid_metrics {
         println!(
-            "annual      {name}: {count} points, sDA300/50% {:.1} %, ASE1000,250 {:.1} %, UDI fell short {:.1} %, useful {:.1} % (supplementary {:.1} %, autonomous {:.1} %), exceeded {:.1} %",
+            "annual      {name}: {count} points, sDA{}/{}% {:.1} %, ASE{},{} {:.1} %, UDI fell short {:.1} %, useful {:.1} % (supplementary {:.1} %, autonomous {:.1} %), exceeded {:.1} %",
+            params.metrics.sda_illuminance,
+            100.0 * params.metrics.sda_fraction,
             100.0 * g.sda,
+            params.metrics.ase_illuminance,
+            params.metrics.ase_hours,
             100.0 * g.ase,
             100.0 * g.udi[0],
             100.0 * (g.udi[1] + g.udi[2]),

@@ -485,6 +485,43 @@ pub struct LightingArgs {
     /// 144 N² + 1; at most 16); one daylight coefficient a patch and point.
     #[arg(long, value_name = "N", default_value_t = 1, help_heading = DAYLIGHT)]
     pub sky_patches: usize,
+    /// Annual daylight: the occupied hours of every day, local standard time, START-END
+    /// (hours 0…24; an hour counts when its middle lies inside). Default 8-18 (IES LM-83-12).
+    #[arg(long, value_name = "START-END", help_heading = DAYLIGHT)]
+    pub occupancy: Option<String>,
+    /// Annual daylight: daylight autonomy's illuminance (lx) for sDA, and where UDI's
+    /// autonomous bin starts. Default 300.
+    #[arg(long, value_name = "LX", help_heading = DAYLIGHT)]
+    pub sda_threshold: Option<f64>,
+    /// Annual daylight: the share of occupied hours (0…1] a point must reach the sDA
+    /// illuminance to count in sDA. Default 0.5.
+    #[arg(long, value_name = "F", help_heading = DAYLIGHT)]
+    pub sda_fraction: Option<f64>,
+    /// Annual daylight: ASE's direct-sun illuminance, lx. Default 1000.
+    #[arg(long, value_name = "LX", help_heading = DAYLIGHT)]
+    pub ase_threshold: Option<f64>,
+    /// Annual daylight: a point counts in ASE when more than these occupied hours reach the
+    /// ASE illuminance. Default 250.
+    #[arg(long, value_name = "H", help_heading = DAYLIGHT)]
+    pub ase_hours: Option<u32>,
+    /// Annual daylight: UDI's useful range LOW,HIGH in lx (fell short below LOW, exceeded
+    /// above HIGH). Default 100,3000.
+    #[arg(long, value_name = "LOW,HIGH", help_heading = DAYLIGHT)]
+    pub udi_range: Option<String>,
+    /// Annual daylight: where the sun goes. `patch` (default): into the sky patch holding it
+    /// (2-phase). `exact`: its direct light at its true position every hour (shadow rays,
+    /// what ASE counts), its interreflection from its patch (the 5-phase method).
+    #[arg(long, value_enum, value_name = "METHOD", help_heading = DAYLIGHT)]
+    pub sun_method: Option<SunMethod>,
+}
+
+/// `--sun-method`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SunMethod {
+    /// Into the sky patch that holds it.
+    Patch,
+    /// Direct sun at its true position, interreflection from its patch.
+    Exact,
 }
 
 /// `radiosity thermal`.

@@ -212,7 +212,14 @@ pub(crate) fn lighting_settings(a: &LightingArgs) -> LightingSettings {
 
 /// Run the command.
 pub fn run(a: LightingArgs) -> Result<()> {
-    if a.weather.is_some() || a.annual.is_some() || a.hourly.is_some() {
+    let annual_only = a.occupancy.is_some()
+        || a.sda_threshold.is_some()
+        || a.sda_fraction.is_some()
+        || a.ase_threshold.is_some()
+        || a.ase_hours.is_some()
+        || a.udi_range.is_some()
+        || a.sun_method.is_some();
+    if a.weather.is_some() || a.annual.is_some() || a.hourly.is_some() || annual_only {
         return crate::annual::run(a);
     }
     let Some(out_path) = a.out.clone() else {

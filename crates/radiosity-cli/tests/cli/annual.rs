@@ -251,3 +251,222 @@ fn bad_annual_input_is_refused_on_one_line() {
         &keep,
     );
 }
+
+/// `year_epw(100)` with direct sun too: a direct normal irradiance of 300 W/m² in the hours
+/// ending 12 and 13 of the first 200 days (400 hours, the sun at 66°–90° on the equator),
+/// none otherwise.
+fn sunny_epw() -> String {
+    let mut doy = 0;
+    let mut last = (0, 0);
+    year_epw(100.0)
+        .lines()
+        .map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            if f.len() < 16 || f[0] != "2005" {
+                return format!("{line}\n");
+            }
+            let (m, d, h): (u32, u32, u32) = (
+                f[1].parse().unwrap(),
+                f[2].parse().unwrap(),
+                f[3].parse().unwrap(),
+            );
+            if (m, d) != last {
+                doy += 1;
+                last = (m, d);
+            }
+            if doy <= 200 && (h == 12 || h == 13) {
+                let mut g = f.clone();
+                g[14] = "300";
+                format!("{}\n", g.join(","))
+            } else {
+                format!("{line}\n")
+            }
+        })
+        .collect()
+}
+
+/// Runs the open floor's year of `sunny_epw` with `extra` flags; the metrics CSV's header,
+/// rows, and the summary.
+fn sunny_year(dir: &Path, extra: &[&str]) -> (Vec<String>, Vec<Vec<String>>, serde_json::Value) {
+    let mut args = vec![
+        "lighting",
+        "floor.obj",
+        "--weather",
+        "sunny.epw",
+        "--grid",
+        "points.pts",
+        "--annual",
+        "annual.csv",
+        "--summary",
+        "summary.json",
+        "--patches",
+        "4",
+    ];
+    args.extend_from_slice(extra);
+    run_ok(&args, dir);
+    let (h, rows) = read_csv(&dir.join("annual.csv"));
+    let summary = serde_json::from_str(&read(dir, "summary.json")).unwrap();
+    (h, rows, summary)
+}
+
+/// The annual flags against hand counts on the open floor (points facing up, nothing above:
+/// every lit hour has E_d ≈ 12 klx of sky, the sunny hours E_n sin α ≈ 25–35 klx more):
+/// - ASE: the sun's patch term exceeds 1000 lx in exactly the 400 sunny hours (all occupied
+///   8–18), so `--ase-hours 399` puts every point in ASE and `--ase-hours 400` none ("more
+///   than"); `--ase-threshold 100000` (above any hour) leaves no sun hour;
+/// - `--occupancy 12-13`: only the hour ending 13 counts, 365 hours, 200 of them sunny;
+/// - `--occupancy 6-20`: the hours ending 7…20, 14 a day, 5,110, of which the 12 lit ones
+///   reach 300 lx: daylight autonomy 12/14 = 0.8571, in sDA with `--sda-fraction 0.85`, out
+///   of it with 0.9;
+/// - `--sda-threshold 100000 --udi-range 50,200000`: no hour reaches 100 klx (autonomy 0),
+///   every occupied hour lies in 50 lx…100 klx (UDI supplementary 1).
+#[test]
+fn the_annual_flags_change_the_metrics_as_counted_by_hand() {
+    let dir = scratch("annual-flags");
+    open_floor(&dir);
+    write(&dir, "sunny.epw", &sunny_epw());
+    let every = |h: &[String], rows: &[Vec<String>], col: &str, want: &str| {
+        let c = column(h, col);
+        for r in rows {
+            assert_eq!(r[c], want, "{col}");
+        }
+    };
+    let (h, rows, s) = sunny_year(&dir, &["--ase-hours", "399"]);
+    every(&h, &rows, "sun_hours", "400");
+    every(&h, &rows, "in_ase", "1");
+    assert_eq!(s["annual"]["grids"][0]["ase"], 1.0);
+    assert_eq!(s["annual"]["thresholds"]["ase_hours"], 399);
+    let (h, rows, s) = sunny_year(&dir, &["--ase-hours", "400"]);
+    every(&h, &rows, "sun_hours", "400");
+    every(&h, &rows, "in_ase", "0");
+    assert_eq!(s["annual"]["grids"][0]["ase"], 0.0);
+    let (h, rows, _) = sunny_year(&dir, &["--ase-threshold", "100000"]);
+    every(&h, &rows, "sun_hours", "0");
+
+    let (h, rows, s) = sunny_year(&dir, &["--occupancy", "12-13"]);
+    assert_eq!(s["annual"]["occupied_hours"], 365);
+    every(&h, &rows, "sun_hours", "200");
+    every(&h, &rows, "daylight_autonomy", "1.0000");
+
+    for (fraction, inside) in [("0.85", "1"), ("0.9", "0")] {
+        let (h, rows, s) = sunny_year(&dir, &["--occupancy", "6-20", "--sda-fraction", fraction]);
+        assert_eq!(s["annual"]["occupied_hours"], 5110);
+        every(&h, &rows, "daylight_autonomy", "0.8571");
+        every(&h, &rows, "udi_fell_short", "0.1429");
+        every(&h, &rows, "in_sda", inside);
+    }
+
+    let (h, rows, s) = sunny_year(
+        &dir,
+        &["--sda-threshold", "100000", "--udi-range", "50,200000"],
+    );
+    every(&h, &rows, "daylight_autonomy", "0.0000");
+    every(&h, &rows, "udi_supplementary", "1.0000");
+    every(&h, &rows, "udi_exceeded", "0.0000");
+    assert_eq!(s["annual"]["grids"][0]["sda"], 0.0);
+    assert_eq!(s["annual"]["thresholds"]["udi"][2], 200000.0);
+}
+
+#[test]
+fn bad_annual_flags_are_refused_on_one_line() {
+    let dir = scratch("annual-bad-flags");
+    open_floor(&dir);
+    write(&dir, "year.epw", &year_epw(1.0));
+    let keep = ["floor.obj", "floor.mtl", "points.pts", "year.epw"];
+    let annual = [
+        "lighting",
+        "floor.obj",
+        "--grid",
+        "points.pts",
+        "--weather",
+        "year.epw",
+        "--annual",
+        "a.csv",
+    ];
+    let with = |extra: &[&'static str]| -> Vec<&'static str> {
+        annual.iter().chain(extra).copied().collect()
+    };
+    for (extra, words) in [
+        (&["--occupancy", "18-8"][..], &["--occupancy 18-8"][..]),
+        (&["--occupancy", "eight"], &["--occupancy", "START-END"]),
+        (&["--udi-range", "300"], &["--udi-range", "LOW,HIGH"]),
+        (&["--udi-range", "3000,100"], &["--udi-range", "LOW < HIGH"]),
+        (
+            &["--udi-range", "400,3000"],
+            &["--udi-range", "sDA threshold"],
+        ),
+        (&["--sda-fraction", "0"], &["--sda-fraction"]),
+        (&["--sda-threshold", "0"], &["--sda-threshold"]),
+        (&["--ase-threshold", "nan"], &["--ase-threshold"]),
+    ] {
+        fails(&with(extra), &dir, words, &keep);
+    }
+    // Without a year they mean nothing.
+    fails(
+        &[
+            "lighting",
+            "floor.obj",
+            "--grid",
+            "points.pts",
+            "--sky",
+            "uniform",
+            "--out",
+            "g.csv",
+            "--occupancy",
+            "8-18",
+        ],
+        &dir,
+        &["--occupancy", "--weather"],
+        &keep,
+    );
+}
+
+/// `--sun-method exact` on the open floor (points facing up, nothing above, so the sun's
+/// interreflection is nil): every sunny hour is the Perez diffuse illuminance plus the sun's
+/// E_n sin α exactly (E_n = DNI × the Perez direct efficacy, computed here from
+/// `daylight::perez` and `daylight::solar`), within the sky patches' 5e-3 of the diffuse
+/// part (see the first test; the sun's part is shadow rays, exact here); the 400 sunny hours
+/// are ASE's sun hours. The printed sky line and the summary name the method.
+#[test]
+fn the_exact_sun_adds_e_n_sin_alpha_at_an_unobstructed_point() {
+    let dir = scratch("annual-exact-sun");
+    open_floor(&dir);
+    write(&dir, "sunny.epw", &sunny_epw());
+    let (h, rows, s) = sunny_year(&dir, &["--sun-method", "exact", "--hourly", "hourly.csv"]);
+    assert_eq!(s["annual"]["sun"], "exact");
+    let c = column(&h, "sun_hours");
+    for r in &rows {
+        assert_eq!(r[c], "400");
+    }
+    let site = Site {
+        latitude: 0.0,
+        longitude: 0.0,
+        time_zone: 0.0,
+    };
+    let (_, hourly) = read_csv(&dir.join("hourly.csv"));
+    let days = [31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31];
+    let (mut doy, mut row, mut worst, mut sunny) = (0, 0, 0.0f64, 0);
+    for month in 1..=12u32 {
+        for day in 1..=days[month as usize - 1] {
+            doy += 1;
+            for hour in 1..=24u32 {
+                let r = &hourly[row];
+                row += 1;
+                if !(doy <= 200 && (hour == 12 || hour == 13)) {
+                    continue;
+                }
+                sunny += 1;
+                let pos = solar_position(&site, 2005, month, day, hour as f64 - 0.5);
+                let c = Condition::new(300.0, 100.0, pos.altitude, doy, 8.0);
+                let want =
+                    100.0 * c.diffuse_efficacy() + 300.0 * c.direct_efficacy() * pos.altitude.sin();
+                for v in &r[3..] {
+                    let e: f64 = v.parse().unwrap();
+                    worst = worst.max((e - want).abs() / want);
+                }
+            }
+        }
+    }
+    assert_eq!(sunny, 400);
+    assert!(worst < 5e-3, "{worst}");
+}

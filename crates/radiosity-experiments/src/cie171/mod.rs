@@ -13,6 +13,7 @@
 //! | 5.7 | the same from a wall, an obstruction hiding part of it | the same over the part of the wall each point sees (found exactly) |
 //! | 5.8 | interreflection in a 4 m cube of one reflectance | the radiosity equation solved by collocation with exact configuration factors on the cube's symmetry, extrapolated; the mean by the integrating sphere |
 //! | 5.9–5.12 | the sky component through a roof and a façade opening, unglazed and glazed, 17 skies | Gauss–Legendre quadrature of the sky's luminance over the opening (`cie171/daylight.rs`) |
+//! | 5.13–5.14 | the same façade opening, unglazed and glazed, behind an external obstruction, 17 skies | the same quadrature over the part of the opening above the obstruction's shadow |
 //!
 //! Where CIE 171's text gives the geometry (rooms 4 × 4 × 3 m, 4 m cube, the measurement
 //! lines) it is followed; what was chosen here is said in each case's module and in
@@ -66,11 +67,16 @@ pub enum Case {
     SkyFacade,
     /// 5.12: the same through a glazed façade opening.
     SkyFacadeGlazed,
+    /// 5.13: the sky component through the unglazed façade opening behind an external
+    /// obstruction (an opposite building), every sky.
+    SkyFacadeObstructed,
+    /// 5.14: the same through the glazed façade opening.
+    SkyFacadeGlazedObstructed,
 }
 
 impl Case {
     /// Every case, in order.
-    pub const ALL: [Case; 10] = [
+    pub const ALL: [Case; 12] = [
         Case::PointSource,
         Case::AreaSource,
         Case::Flux,
@@ -81,6 +87,8 @@ impl Case {
         Case::SkyRoofGlazed,
         Case::SkyFacade,
         Case::SkyFacadeGlazed,
+        Case::SkyFacadeObstructed,
+        Case::SkyFacadeGlazedObstructed,
     ];
 
     /// CIE 171's number: "5.2" … "5.8".
@@ -96,6 +104,8 @@ impl Case {
             Case::SkyRoofGlazed => "5.10",
             Case::SkyFacade => "5.11",
             Case::SkyFacadeGlazed => "5.12",
+            Case::SkyFacadeObstructed => "5.13",
+            Case::SkyFacadeGlazedObstructed => "5.14",
         }
     }
 
@@ -121,6 +131,12 @@ impl Case {
             Case::SkyFacadeGlazed => {
                 "sky component, glazed 2 × 1 m façade opening (τ 0.8), 17 skies"
             }
+            Case::SkyFacadeObstructed => {
+                "sky component, unglazed façade opening, 4 m obstruction 4 m away, 17 skies"
+            }
+            Case::SkyFacadeGlazedObstructed => {
+                "sky component, glazed façade opening (τ 0.8), 4 m obstruction 4 m away, 17 skies"
+            }
         }
     }
 
@@ -145,6 +161,9 @@ impl Case {
             }
             Case::SkyRoof | Case::SkyRoofGlazed | Case::SkyFacade | Case::SkyFacadeGlazed => {
                 "SC = 100/E_h Int_opening L tau cos cos / r^2 dA, ISO 15469 luminance, Gauss-Legendre 24^2 panels x 6^2; E_h by quadrature"
+            }
+            Case::SkyFacadeObstructed | Case::SkyFacadeGlazedObstructed => {
+                "SC as 5.11/5.12 over the opening's part above the obstruction's shadow, z > H p_y / (p_y + D), Gauss-Legendre"
             }
         }
     }
@@ -237,9 +256,12 @@ pub fn run(case: Case) -> Result<CaseResult, radiosity::Error> {
         Case::Reflection => reflection::floor(),
         Case::Obstruction => reflection::obstructed_wall(),
         Case::Interreflection => interreflection::cube(),
-        Case::SkyRoof | Case::SkyRoofGlazed | Case::SkyFacade | Case::SkyFacadeGlazed => {
-            daylight::run(case)
-        }
+        Case::SkyRoof
+        | Case::SkyRoofGlazed
+        | Case::SkyFacade
+        | Case::SkyFacadeGlazed
+        | Case::SkyFacadeObstructed
+        | Case::SkyFacadeGlazedObstructed => daylight::run(case),
     }
 }
 

@@ -23,7 +23,8 @@
 //! illuminance (the 5-phase method's and DAYSIM's direct-sun coefficients). Annual sunlight
 //! exposure needs the direct sun apart: with the sun in its patch, it is that patch's term
 //! D_ip L_sun (which includes the sunlight interreflected, so it over-counts ASE's direct-only
-//! definition); with [`Sun::Exact`] it is the callback's value times E_n.
+//! definition); with [`Sun::Exact`] it is the direct part the callback gives
+//! ([`SunCoefficients::sun_parts`]) times E_n, the illuminance its whole.
 //!
 //! The product streams: hours go in blocks of [`AnnualParams::block_hours`], the sky vectors
 //! of a block (hours × patches) are built in parallel, then each thread takes points in
@@ -123,6 +124,13 @@ pub trait SunCoefficients: Sync {
     /// Write into `out` (one value a point) the illuminance from a sun in unit direction
     /// `to_sun` (x east, y north, z up) of 1 lx direct normal illuminance.
     fn sun(&self, to_sun: [f64; 3], out: &mut [f64]);
+
+    /// The same into `total`, and into `direct` its part straight from the sun's disc (what
+    /// ASE counts, IES LM-83-12's direct sunlight). By default the whole is taken as direct.
+    fn sun_parts(&self, to_sun: [f64; 3], total: &mut [f64], direct: &mut [f64]) {
+        self.sun(to_sun, total);
+        direct.copy_from_slice(total);
+    }
 }
 
 impl<F: Fn([f64; 3], &mut [f64]) + Sync> SunCoefficients for F {
@@ -423,6 +431,8 @@ pub fn annual(
     let mut light = vec![HourLight::default(); block];
     let mut total = vec![0.0; points * block];
     let mut direct = vec![0.0; block * points];
+    // The exact sun's whole contribution (`direct` holds its direct part for ASE).
+    let mut sun_total = vec![0.0; block * points];
     let mut occupied = vec![false; block];
     let mut acc = Accumulator::new(points, params.metrics);
     let mut lit_hours = 0;
@@ -434,20 +444,23 @@ pub fn annual(
             .par_chunks_mut(patches)
             .zip(light[..nb].par_iter_mut())
             .zip(direct[..nb * points].par_chunks_mut(points))
+            .zip(sun_total[..nb * points].par_chunks_mut(points))
             .enumerate()
-            .try_for_each(|(h, ((sky, l), d))| -> Result<(), DaylightError> {
+            .try_for_each(|(h, (((sky, l), d), t))| -> Result<(), DaylightError> {
                 *l = skies.sky(first + h, in_patch, sky)?;
                 d.iter_mut().for_each(|v| *v = 0.0);
+                t.iter_mut().for_each(|v| *v = 0.0);
                 if let Sun::Exact(c) = sun {
                     if l.lit && l.direct_normal > 0.0 {
-                        c.sun(l.sun, d);
+                        c.sun_parts(l.sun, t, d);
                         d.iter_mut().for_each(|v| *v *= l.direct_normal);
+                        t.iter_mut().for_each(|v| *v *= l.direct_normal);
                     }
                 }
                 Ok(())
             })?;
         // E = D S for the block's lit hours, points in chunks.
-        let (s_ref, l_ref, d_ref) = (&s, &light[..nb], &direct);
+        let (s_ref, l_ref, d_ref) = (&s, &light[..nb], &sun_total);
         total[..points * nb]
             .par_chunks_mut(POINT_CHUNK * nb)
             .enumerate()

@@ -22,6 +22,17 @@
 //! normal transmittance τ_n is given; the absorption a₀ is the root of
 //! r₀² τ_n a₀² + (1 − r₀)² a₀ − τ_n = 0 (r₀ = ((n − 1)/(n + 1))²), so τ(0) = τ_n exactly.
 //! A pane cannot pass more than its non-absorbing value (1 − r₀)/(1 + r₀) (0.9183 at 1.52).
+//!
+//! The same series gives the pane's (specular) reflectance, the first face's reflection plus
+//! what comes back out through it after bouncing inside,
+//!
+//! ```text
+//! R_j = r_j + (1 − r_j)² r_j a² / (1 − r_j² a²),
+//! ```
+//!
+//! and the pane absorbs 1 − τ − R. The diffuse (hemispherical, cosine-weighted) averages
+//! τ_d = 2 ∫ τ cos θ sin θ dθ and ρ_d likewise are what a pane passes and returns of diffuse
+//! light.
 
 use super::LightingError;
 
@@ -87,6 +98,33 @@ impl Glazing {
         0.5 * (t(rs) + t(rp))
     }
 
+    /// The (specular) reflectance at incidence angle θ given by its cosine, either side:
+    /// ½ Σ_j r_j + (1 − r_j)² r_j a² / (1 − r_j² a²) (the module's series).
+    pub fn reflectance(&self, cos_theta: f64) -> f64 {
+        let ci = cos_theta.abs().min(1.0);
+        if ci <= 1e-9 {
+            return 1.0;
+        }
+        let n = self.index;
+        let si = (1.0 - ci * ci).max(0.0).sqrt();
+        let st = si / n;
+        let ct = (1.0 - st * st).max(0.0).sqrt();
+        let rs = ((ci - n * ct) / (ci + n * ct)).powi(2);
+        let rp = ((n * ci - ct) / (n * ci + ct)).powi(2);
+        let a = self.absorption_pass.powf(1.0 / ct);
+        let r = |r: f64| r + (1.0 - r) * (1.0 - r) * r * a * a / (1.0 - r * r * a * a);
+        0.5 * (r(rs) + r(rp))
+    }
+
+    /// The reflectance averaged over a diffuse (cosine-weighted) hemisphere of incidence, ρ_d
+    /// (the rule of [`Glazing::diffuse`]).
+    pub fn diffuse_reflectance(&self) -> f64 {
+        super::sky::gauss_legendre(64)
+            .iter()
+            .map(|&(x, w)| 0.5 * w * self.reflectance((0.5 * (x + 1.0)).sqrt()))
+            .sum()
+    }
+
     /// The transmittance averaged over a diffuse (cosine-weighted) hemisphere of incidence,
     /// 2 ∫ τ(θ) cos θ sin θ dθ (Gauss–Legendre, 64 points in cos² θ).
     pub fn diffuse(&self) -> f64 {
@@ -118,6 +156,51 @@ mod tests {
                 .sum::<f64>()
         };
         0.5 * (sum(rs) + sum(rp))
+    }
+
+    /// The pane's reflection summed term by term: r, then (1 − r) a (r a)^{2k} r a (1 − r).
+    fn reflected_series(n: f64, a0: f64, theta: f64) -> f64 {
+        let tt = (theta.sin() / n).asin();
+        let rs = ((theta - tt).sin() / (theta + tt).sin()).powi(2);
+        let rp = ((theta - tt).tan() / (theta + tt).tan()).powi(2);
+        let a = a0.powf(1.0 / tt.cos());
+        let sum = |r: f64| {
+            r + (0..2000)
+                .map(|k| (1.0 - r) * (1.0 - r) * r * a * a * (r * a).powi(2 * k))
+                .sum::<f64>()
+        };
+        0.5 * (sum(rs) + sum(rp))
+    }
+
+    /// The reflectance against its series, and the books of a pane: what is not passed or
+    /// returned is absorbed, the absorption of each polarisation being the light lost inside,
+    /// (1 − r)(1 − a) Σ_k (r a)^k = (1 − r)(1 − a)/(1 − r a) (a third route); a clear pane absorbs nothing.
+    #[test]
+    fn the_reflectance_is_the_pane_series_and_the_books_close() {
+        for tau in [0.918, 0.88, 0.6] {
+            let g = Glazing::new(tau, GLASS_INDEX).unwrap();
+            for deg in 1..90 {
+                let th = (deg as f64).to_radians();
+                let (c, n, a0) = (th.cos(), GLASS_INDEX, g.absorption_pass);
+                let got = g.reflectance(c);
+                let want = reflected_series(n, a0, th);
+                assert!((got - want).abs() < 1e-12, "{tau} at {deg}°: {got} {want}");
+                let tt = (th.sin() / n).asin();
+                let rs = ((th - tt).sin() / (th + tt).sin()).powi(2);
+                let rp = ((th - tt).tan() / (th + tt).tan()).powi(2);
+                let a = a0.powf(1.0 / tt.cos());
+                let lost = |r: f64| (1.0 - r) * (1.0 - a) / (1.0 - r * a);
+                let absorbed = 0.5 * (lost(rs) + lost(rp));
+                let books = g.transmittance(c) + got + absorbed;
+                assert!((books - 1.0).abs() < 1e-12, "{tau} at {deg}°: {books}");
+            }
+        }
+        // Normal incidence of a clear pane: R = 2 r₀/(1 + r₀) = 0.0817.
+        let r0: f64 = (0.52f64 / 2.52).powi(2);
+        let clear = Glazing::new((1.0 - r0) / (1.0 + r0), GLASS_INDEX).unwrap();
+        assert!((clear.reflectance(1.0) - 2.0 * r0 / (1.0 + r0)).abs() < 1e-5);
+        let (td, rd) = (clear.diffuse(), clear.diffuse_reflectance());
+        assert!((td + rd - 1.0).abs() < 1e-9, "{td} + {rd}");
     }
 
     /// Against the series (the sin/tan forms of Fresnel's equations, a different route to the

@@ -22,13 +22,16 @@
 //!    a linear map from the solution to the points, traced once and applied to every
 //!    column (so daylight coefficients add up exactly, and 145 columns cost 145 sums).
 //!
-//! Glazing (materials with a transmittance) is left out of the interreflection's mesh: the
-//! sky and sun rays are attenuated by its angular transmittance, while the diffuse light
-//! passes it both ways unattenuated in the interreflection (from a room through a window
-//! into the open it escapes; between outside obstructions and the room it is overestimated
-//! by 1/τ_diffuse, about 20 % of that part).
+//! Glazing (materials with a transmittance) is left out of the interreflection's mesh and
+//! every ray that meets a pane branches, passed with τ(θ) and mirrored with R(θ)
+//! ([`super::panes`]): the sky rays at patches and points, the points' gather of the
+//! surfaces, and the form factors, which with panes are Monte Carlo rows of weighted rays
+//! (whatever the settings' method), so that diffuse light crosses a pane both ways with its
+//! hemispherical transmittance τ_d and the pane absorbs the rest. The sun's shadow rays are
+//! attenuated by τ(θ) (its mirrored branches are not followed).
 
 use super::lighting::{luminance, LightingSettings};
+use super::panes::{End, Panes};
 use super::{patch_system, MemoryCheck};
 use crate::accel::Bvh;
 use crate::color::Rgb;
@@ -36,7 +39,7 @@ use crate::geom::{orthonormal_basis, Ray, Vec3};
 use crate::lighting::glazing::{Glazing, GLASS_INDEX};
 use crate::lighting::sky::{direction, Sky, SkyFrame, SunPosition, SUN_DIAMETER_DEG};
 use crate::lighting::{LightingError, SensorPoint};
-use crate::mesh::{Mesh, MeshParams};
+use crate::mesh::Mesh;
 use crate::observe::{Event, Observer, Stage};
 use crate::sampling::{stream, uniform};
 use crate::scene::Scene;
@@ -45,11 +48,9 @@ use crate::Error;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
-/// A point's patches hit by its sky rays, each with its count of rays.
-type PatchCounts = Vec<(u32, u32)>;
-
-/// Most panes a sky ray is followed through.
-const MAX_PANES: usize = 16;
+/// A point's patches hit by its sky rays, each with its rays' summed weight (1 a ray, less
+/// through panes).
+type PatchCounts = Vec<(u32, f64)>;
 
 /// What decides a daylight calculation beyond [`LightingSettings`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -467,9 +468,7 @@ struct Columns {
 /// What light from outside meets: the opaque geometry and the panes.
 struct Outside<'a> {
     bvh: &'a Bvh,
-    glass: Option<(Mesh, Bvh)>,
-    /// Per scene material, its pane (None: not glazing).
-    panes: Vec<Option<Glazing>>,
+    glass: Option<&'a Panes>,
     frame: SkyFrame,
 }
 
@@ -477,22 +476,10 @@ impl Outside<'_> {
     /// The transmittance along a ray that the opaque geometry does not block: the product
     /// of every pane it crosses.
     fn through_glass(&self, origin: Vec3, d: Vec3) -> f64 {
-        let Some((mesh, bvh)) = &self.glass else {
-            return 1.0;
-        };
-        let mut tau = 1.0;
-        let mut o = origin;
-        for _ in 0..MAX_PANES {
-            let Some(h) = bvh.closest_hit(&Ray::new(o, d), f32::INFINITY) else {
-                return tau;
-            };
-            let p = &mesh.patches[h.patch as usize];
-            if let Some(g) = self.panes[p.material as usize] {
-                tau *= g.transmittance(p.normal.dot(d) as f64);
-            }
-            o = o + d * h.t + d * bvh.ray_offset();
+        match &self.glass {
+            Some(p) => p.transmittance(origin, d),
+            None => 1.0,
         }
-        tau
     }
 
     /// The light from outside arriving at `x` facing `n` (scene frame), added into `out`
@@ -509,7 +496,7 @@ impl Outside<'_> {
         suns: &[SunColumn],
         rng: &mut crate::sampling::Rng64,
         out: &mut [f64],
-        mut hits: Option<&mut Vec<u32>>,
+        mut hits: Option<&mut Vec<(u32, f64)>>,
     ) {
         let n = n.normalize_or_zero();
         if n == Vec3::ZERO {
@@ -524,12 +511,38 @@ impl Outside<'_> {
                 let u1 = (i as f32 + uniform(rng)) / k as f32;
                 let u2 = (j as f32 + uniform(rng)) / k as f32;
                 let d = concentric_cosine(n, t, b, u1, u2);
+                if let Some(panes) = &self.glass {
+                    // Every branch through and off the panes to its end.
+                    let frame = &self.frame;
+                    let hits = &mut hits;
+                    let out = &mut *out;
+                    let ground = &mut ground;
+                    panes.follow(self.bvh, origin, d, &mut |end, tau| match end {
+                        End::Front(p) => {
+                            if let Some(list) = hits.as_deref_mut() {
+                                list.push((p, tau));
+                            }
+                        }
+                        End::Back => {}
+                        End::Escape(e) => {
+                            let ds = frame.to_sky(e.as_dvec3().to_array());
+                            if ds[2] > 0.0 {
+                                if let Some((c, l)) = sky.bin(ds) {
+                                    out[c] += w * tau * l;
+                                }
+                            } else {
+                                *ground += w * tau;
+                            }
+                        }
+                    });
+                    continue;
+                }
                 let ray = Ray::new(origin, d);
                 match hits.as_deref_mut() {
                     Some(list) => {
                         if let Some(h) = self.bvh.closest_hit(&ray, f32::INFINITY) {
                             if h.front {
-                                list.push(h.patch);
+                                list.push((h.patch, 1.0));
                             }
                             continue;
                         }
@@ -540,17 +553,13 @@ impl Outside<'_> {
                         }
                     }
                 }
-                let tau = self.through_glass(origin, d);
-                if tau <= 0.0 {
-                    continue;
-                }
                 let ds = self.frame.to_sky(d.as_dvec3().to_array());
                 if ds[2] > 0.0 {
                     if let Some((c, l)) = sky.bin(ds) {
-                        out[c] += w * tau * l;
+                        out[c] += w * l;
                     }
                 } else {
-                    ground += w * tau;
+                    ground += w;
                 }
             }
         }
@@ -558,36 +567,112 @@ impl Outside<'_> {
         for (c, o) in out[..nsky].iter_mut().enumerate() {
             *o += ground * sky.ground(c);
         }
-        // The sun: stratified points over its disc (concentric rings, equal areas).
-        let radius = (0.5 * SUN_DIAMETER_DEG).to_radians().tan() as f32;
-        let m = ((sun_rays as f64).sqrt().ceil() as usize).max(1);
         for (s, col) in suns.iter().zip(&mut out[nsky..]) {
             *col += ground * s.ground;
-            let centre = self.frame.to_scene(s.direction);
-            let c = Vec3::new(centre[0] as f32, centre[1] as f32, centre[2] as f32);
-            if n.dot(c) <= 0.0 {
-                continue;
-            }
-            let (st, sb) = orthonormal_basis(c);
-            // E_n is the disc's normal illuminance: E = E_n cos θ_c × the disc's mean
-            // visibility and transmittance (cos θ over the disc averages to cos θ_c within
-            // (0.27°)² / 4 ≈ 5e-6).
-            let cos_c = n.dot(c) as f64;
-            let mut e = 0.0;
-            let mut count = 0usize;
-            for a in 0..m {
-                for q in 0..m {
-                    let r = radius * ((a as f32 + uniform(rng)) / m as f32).sqrt();
-                    let phi = std::f32::consts::TAU * (q as f32 + uniform(rng)) / m as f32;
-                    let d = (c + st * (r * phi.cos()) + sb * (r * phi.sin())).normalize();
-                    count += 1;
-                    if n.dot(d) <= 0.0 || self.bvh.occluded(&Ray::new(origin, d), f32::INFINITY) {
-                        continue;
-                    }
-                    e += cos_c * self.through_glass(origin, d);
+            *col += s.scale * self.sun(origin, n, s.direction, sun_rays, rng);
+        }
+    }
+
+    /// The illuminance at `origin` (already lifted off its surface) facing `n` from a sun of
+    /// unit direct normal illuminance in sky-frame direction `to_sun`: stratified points over
+    /// its disc (concentric rings, equal areas, `sun_rays` rounded up to a square), each a
+    /// shadow ray through the panes.
+    fn sun(
+        &self,
+        origin: Vec3,
+        n: Vec3,
+        to_sun: [f64; 3],
+        sun_rays: usize,
+        rng: &mut crate::sampling::Rng64,
+    ) -> f64 {
+        let radius = (0.5 * SUN_DIAMETER_DEG).to_radians().tan() as f32;
+        let m = ((sun_rays as f64).sqrt().ceil() as usize).max(1);
+        let centre = self.frame.to_scene(to_sun);
+        let c = Vec3::new(centre[0] as f32, centre[1] as f32, centre[2] as f32);
+        if n.dot(c) <= 0.0 {
+            return 0.0;
+        }
+        let (st, sb) = orthonormal_basis(c);
+        // E_n is the disc's normal illuminance: E = E_n cos θ_c × the disc's mean visibility
+        // and transmittance (cos θ over the disc averages to cos θ_c within (0.27°)² / 4 ≈
+        // 5e-6).
+        let cos_c = n.dot(c) as f64;
+        let mut e = 0.0;
+        let mut count = 0usize;
+        for a in 0..m {
+            for q in 0..m {
+                let r = radius * ((a as f32 + uniform(rng)) / m as f32).sqrt();
+                let phi = std::f32::consts::TAU * (q as f32 + uniform(rng)) / m as f32;
+                let d = (c + st * (r * phi.cos()) + sb * (r * phi.sin())).normalize();
+                count += 1;
+                if n.dot(d) <= 0.0 || self.bvh.occluded(&Ray::new(origin, d), f32::INFINITY) {
+                    continue;
                 }
+                e += cos_c * self.through_glass(origin, d);
             }
-            *col += s.scale * e / count as f64;
+        }
+        e / count as f64
+    }
+}
+
+/// The sun's direct light at sensor points for any sun position (the 5-phase method's and
+/// DAYSIM's direct-sun coefficients): shadow rays to the disc through the opaque geometry,
+/// × τ(θ) of every pane crossed, as [`daylight`]'s sun column computes it, but with no
+/// interreflection, for positions given one at a time (an annual run's hours).
+pub struct DirectSun {
+    bvh: Bvh,
+    glass: Option<Panes>,
+    frame: SkyFrame,
+    points: Vec<SensorPoint>,
+    sun_rays: usize,
+    seed: u64,
+}
+
+impl DirectSun {
+    /// The opaque scene's hierarchy (one patch a polygon) and its panes, for `points`, with
+    /// the settings' sky frame, sun rays and seed. Errors: bad settings, glazing, meshing.
+    pub fn new(
+        scene: &Scene,
+        points: &[SensorPoint],
+        settings: &DaylightSettings,
+    ) -> Result<DirectSun, Error> {
+        settings.validate()?;
+        scene.validate_geometry()?;
+        let (opaque, glass) = split_panes(scene)?;
+        let mesh = Mesh::build(&opaque, crate::mesh::MeshParams::Faces)?;
+        Ok(DirectSun {
+            bvh: Bvh::build(&mesh),
+            glass,
+            frame: settings.frame,
+            points: points.to_vec(),
+            sun_rays: settings.sun_rays as usize,
+            seed: settings.lighting.params.seed,
+        })
+    }
+
+    /// The illuminance at every point (lx) from a sun of 1 lx direct normal illuminance in
+    /// sky-frame direction `to_sun` (x east, y north, z up), into `out`. The random streams
+    /// are keyed by the point and the direction, so a value does not depend on the order or
+    /// the threads of the calls.
+    pub fn illuminance(&self, to_sun: [f64; 3], out: &mut [f64]) {
+        let outside = Outside {
+            bvh: &self.bvh,
+            glass: self.glass.as_ref(),
+            frame: self.frame,
+        };
+        let key = to_sun
+            .iter()
+            .fold(0u64, |h, v| h.rotate_left(21) ^ v.to_bits());
+        for (i, (p, o)) in self.points.iter().zip(out.iter_mut()).enumerate() {
+            let mut rng = stream(self.seed, 0x0053_554E, i as u64, key);
+            let v = |a: [f64; 3]| Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32);
+            let n = v(p.normal).normalize_or_zero();
+            *o = if n == Vec3::ZERO {
+                0.0
+            } else {
+                let origin = v(p.position) + n * self.bvh.ray_offset();
+                outside.sun(origin, n, to_sun, self.sun_rays, &mut rng)
+            };
         }
     }
 }
@@ -614,6 +699,26 @@ fn concentric_cosine(n: Vec3, t: Vec3, b: Vec3, u1: f32, u2: f32) -> Vec3 {
     t * (r * co) + b * (r * s) + n * z
 }
 
+/// The scene without its panes (materials with a transmittance), and the panes. Errors: a
+/// pane of an impossible transmittance (its material named), meshing the panes.
+fn split_panes(scene: &Scene) -> Result<(Scene, Option<Panes>), Error> {
+    let mut panes = Vec::with_capacity(scene.materials.len());
+    for m in &scene.materials {
+        panes.push(if m.transmittance > 0.0 {
+            let g = Glazing::new(m.transmittance, m.ior.unwrap_or(GLASS_INDEX))
+                .map_err(|e| LightingError::Parameter(format!("material '{}': {e}", m.name)))?;
+            Some(g)
+        } else {
+            None
+        });
+    }
+    let mut opaque = scene.clone();
+    opaque.polygons.retain(|p| panes[p.material].is_none());
+    opaque.origins.clear();
+    let glass = Panes::new(scene, panes)?;
+    Ok((opaque, glass))
+}
+
 /// The columns' direct light at the patches and points, their interreflections and the
 /// gathers: lux at the points per column.
 fn solve_columns(
@@ -630,31 +735,7 @@ fn solve_columns(
     ls.mesh.validate()?;
     ls.form_factors.validate()?;
     ls.params.validate()?;
-    // The panes, and the opaque scene without them.
-    let mut panes = Vec::with_capacity(scene.materials.len());
-    for m in &scene.materials {
-        panes.push(if m.transmittance > 0.0 {
-            let g = Glazing::new(m.transmittance, m.ior.unwrap_or(GLASS_INDEX))
-                .map_err(|e| LightingError::Parameter(format!("material '{}': {e}", m.name)))?;
-            Some(g)
-        } else {
-            None
-        });
-    }
-    let is_glass = |p: &crate::scene::Polygon| panes[p.material].is_some();
-    let mut opaque = scene.clone();
-    opaque.polygons.retain(|p| !is_glass(p));
-    opaque.origins.clear();
-    let glass = if opaque.polygons.len() < scene.polygons.len() {
-        let mut g = scene.clone();
-        g.polygons.retain(is_glass);
-        g.origins.clear();
-        let mesh = Mesh::build(&g, MeshParams::Faces)?;
-        let bvh = Bvh::build(&mesh);
-        Some((mesh, bvh))
-    } else {
-        None
-    };
+    let (opaque, glass) = split_panes(scene)?;
     let limit = ls.memory_limit.bytes();
     let memory = MemoryCheck {
         limit,
@@ -670,8 +751,7 @@ fn solve_columns(
     let base = patch_system(&opaque, &mesh);
     let outside = Outside {
         bvh: &bvh,
-        glass,
-        panes,
+        glass: glass.as_ref(),
         frame: settings.frame,
     };
     let nc = sky.columns() + suns.len();
@@ -724,12 +804,12 @@ fn solve_columns(
                 &mut out,
                 Some(&mut hits),
             );
-            hits.sort_unstable();
-            let mut counted: Vec<(u32, u32)> = Vec::new();
-            for h in hits {
+            hits.sort_unstable_by_key(|&(p, _)| p);
+            let mut counted: PatchCounts = Vec::new();
+            for (h, w) in hits {
                 match counted.last_mut() {
-                    Some((q, c)) if *q == h => *c += 1,
-                    _ => counted.push((h, 1)),
+                    Some((q, c)) if *q == h => *c += w,
+                    _ => counted.push((h, w)),
                 }
             }
             (out, counted)
@@ -749,15 +829,26 @@ fn solve_columns(
         (0..mesh.len())
             .any(|p| at_patches[p * nc + c] > 0.0 && base.reflectance[p].max_channel() > 0.0)
     });
-    let mut f = if any {
+    let mut f = if !any {
+        None
+    } else if let Some(panes) = outside.glass {
+        // Through the panes: weighted Monte Carlo rows (`panes::Panes::rows`).
+        let (rows, _absorbed) = panes.rows(
+            &mesh,
+            &bvh,
+            ls.form_factors.rays,
+            ls.form_factors.seed,
+            &memory,
+            observer,
+        )?;
+        Some(rows)
+    } else {
         observer.event(Event::Stage(Stage::FormFactors));
         let est = crate::formfactor::Estimator::new(&mesh, &bvh, ls.form_factors)?;
         Some(
             est.matrix(crate::formfactor::Storage::Sparse, observer)
                 .into_sparse(),
         )
-    } else {
-        None
     };
     for c in 0..nc {
         let emission: Vec<Rgb> = (0..mesh.len())
@@ -791,11 +882,7 @@ fn solve_columns(
         let from_surfaces: Vec<f64> = at_points
             .par_iter()
             .map(|(_, hits)| {
-                gather_weight
-                    * hits
-                        .iter()
-                        .map(|&(p, n)| n as f64 * y[p as usize])
-                        .sum::<f64>()
+                gather_weight * hits.iter().map(|&(p, n)| n * y[p as usize]).sum::<f64>()
             })
             .collect();
         for (i, e) in from_surfaces.into_iter().enumerate() {

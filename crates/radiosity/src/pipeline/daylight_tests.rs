@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::lighting::sky::SkyModel;
+use crate::mesh::MeshParams;
 use crate::scene::Material;
 use std::f64::consts::PI;
 
@@ -364,4 +365,33 @@ fn a_gltf_transmission_material_is_a_pane() {
     assert_eq!(m.ior, Some(1.5));
     let g = Glazing::new(m.transmittance, 1.5).unwrap();
     assert!((g.transmittance(1.0) - m.transmittance).abs() < 1e-12);
+}
+
+/// [`DirectSun`] is the sun column's direct light for any position: through the glazed roof
+/// opening the footprint point gets E_n sin 60° τ(30°) per unit E_n, a point outside the
+/// footprint nothing, and the same position asked twice gives the same values.
+#[test]
+fn direct_sun_lights_the_footprint_through_the_pane() {
+    let (w, d, h) = (6.0f64, 6.0f64, 3.0f64);
+    let scene = roof_room(
+        (w as f32, d as f32, h as f32),
+        [2.5, 3.5, 2.5, 3.5],
+        0.5,
+        Some(0.8),
+    );
+    let points = vec![
+        SensorPoint::new([3.0 - h / 3f64.sqrt(), 3.0, 0.0], [0.0, 0.0, 1.0]).unwrap(),
+        SensorPoint::new([5.0, 5.0, 0.0], [0.0, 0.0, 1.0]).unwrap(),
+    ];
+    let ds = DirectSun::new(&scene, &points, &settings(200)).unwrap();
+    let to_sun = SunPosition::new(60.0, 90.0).unwrap().direction();
+    let mut e = vec![0.0; 2];
+    ds.illuminance(to_sun, &mut e);
+    let g = Glazing::new(0.8, GLASS_INDEX).unwrap();
+    let want = 60f64.to_radians().sin() * g.transmittance(30f64.to_radians().cos());
+    assert!((e[0] - want).abs() < 1e-4 * want, "{} {want}", e[0]);
+    assert_eq!(e[1], 0.0);
+    let mut again = vec![0.0; 2];
+    ds.illuminance(to_sun, &mut again);
+    assert_eq!(e, again);
 }

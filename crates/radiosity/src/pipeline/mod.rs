@@ -12,6 +12,7 @@
 mod daylight;
 mod lighting;
 mod memory;
+mod panes;
 mod radiant;
 mod reference;
 mod solve;
@@ -25,7 +26,7 @@ pub use crate::mesh::patch_system;
 pub use crate::observe::{Event, Observer, Stage};
 pub use daylight::{
     daylight, daylight_coefficients, DaylightCoefficients, DaylightResult, DaylightSettings,
-    DaylightSource,
+    DaylightSource, DirectSun,
 };
 pub use lighting::{
     lighting, lighting_solution, luminance, EnergyBooks, LightingResult, LightingSettings,
