@@ -122,9 +122,17 @@ impl Obj {
         let (sill, head) = (WINDOW.1, WINDOW.2);
         let hole = |s: usize| holes[s].map(|[a, b]| [a, b, sill, head]);
         self.material("floor");
-        self.rect([x[0], y[0], 0.0], [x[1] - x[0], 0.0, 0.0], [0.0, y[1] - y[0], 0.0]);
+        self.rect(
+            [x[0], y[0], 0.0],
+            [x[1] - x[0], 0.0, 0.0],
+            [0.0, y[1] - y[0], 0.0],
+        );
         self.material("ceiling");
-        self.rect([x[0], y[0], h], [0.0, y[1] - y[0], 0.0], [x[1] - x[0], 0.0, 0.0]);
+        self.rect(
+            [x[0], y[0], h],
+            [0.0, y[1] - y[0], 0.0],
+            [x[1] - x[0], 0.0, 0.0],
+        );
         self.material("wall");
         self.wall_y(y[0], x, h, true, hole(0));
         self.wall_y(y[1], x, h, false, hole(1));
@@ -216,9 +224,8 @@ fn lattice(n: usize) -> (usize, usize) {
         .filter(|a| n % a == 0)
         .map(|a| (a, n / a))
         .min_by(|p, q| {
-            let aspect = |(a, b): (usize, usize)| {
-                ((ROOM.0 / a as f64) / (ROOM.1 / b as f64)).ln().abs()
-            };
+            let aspect =
+                |(a, b): (usize, usize)| ((ROOM.0 / a as f64) / (ROOM.1 / b as f64)).ln().abs();
             aspect(*p).total_cmp(&aspect(*q))
         })
         .unwrap_or((1, 1))
@@ -277,9 +284,15 @@ pub fn synthetic_year(seed: u64) -> String {
 
 /// Run the mode: write the files, then (with `--run`) time the annual command on them.
 pub fn run(a: &FloorArgs) -> Result<()> {
-    crate::positive(&[("--rooms", a.rooms), ("--points-per-room", a.points_per_room)])?;
+    crate::positive(&[
+        ("--rooms", a.rooms),
+        ("--points-per-room", a.points_per_room),
+    ])?;
     if a.rooms < 2 || a.rooms % 2 != 0 {
-        bail!("--rooms {}: must be even and at least 2 (two rows)", a.rooms);
+        bail!(
+            "--rooms {}: must be even and at least 2 (two rows)",
+            a.rooms
+        );
     }
     std::fs::create_dir_all(&a.out).with_context(|| format!("{}", a.out.display()))?;
     let write = |name: &str, text: &str| -> Result<()> {
@@ -346,7 +359,9 @@ mod tests {
     /// A planar polygon's area vector (Newell): its normal times its area.
     fn area_vector(p: &Polygon) -> Vec3 {
         let v = &p.vertices;
-        (1..v.len() - 1).fold(Vec3::ZERO, |a, i| a + 0.5 * (v[i] - v[0]).cross(v[i + 1] - v[0]))
+        (1..v.len() - 1).fold(Vec3::ZERO, |a, i| {
+            a + 0.5 * (v[i] - v[0]).cross(v[i + 1] - v[0])
+        })
     }
 
     #[test]
@@ -358,11 +373,19 @@ mod tests {
         std::fs::write(dir.join("floor.mtl"), &mtl).unwrap();
         let scene = radiosity::scene::obj::load(&dir.join("floor.obj")).unwrap();
         let _ = std::fs::remove_dir_all(&dir);
-        let glass = scene.materials.iter().position(|m| m.name == "glass").unwrap();
+        let glass = scene
+            .materials
+            .iter()
+            .position(|m| m.name == "glass")
+            .unwrap();
         assert!((scene.materials[glass].transmittance - 0.7).abs() < 1e-12);
         // 20 rooms and the corridor: a floor, a ceiling, a plain wall's 1 + 3 × 1 and the
         // façade's 4 pieces, and a pane; the corridor has two ends of 4 pieces, two panes.
-        let panes = scene.polygons.iter().filter(|p| p.material == glass).count();
+        let panes = scene
+            .polygons
+            .iter()
+            .filter(|p| p.material == glass)
+            .count();
         assert_eq!(panes, 22);
         assert_eq!(scene.polygons.len(), 20 * (2 + 3 + 4 + 1) + (2 + 2 + 8 + 2));
         // Every room's interior: floor area 4.5 × 6; the glazed area 22 panes (20 of 3.5 ×
@@ -375,7 +398,11 @@ mod tests {
                 .map(|p| area_vector(p).length() as f64)
                 .sum()
         };
-        let floor = scene.materials.iter().position(|m| m.name == "floor").unwrap();
+        let floor = scene
+            .materials
+            .iter()
+            .position(|m| m.name == "floor")
+            .unwrap();
         let length = 10.0 * 4.6 - 0.1;
         assert!((area(floor) - (20.0 * 27.0 + length * 2.0)).abs() < 1e-3);
         assert!((area(glass) - (20.0 * 5.25 + 2.0 * 1.5 * 1.5)).abs() < 1e-3);
@@ -429,6 +456,9 @@ mod tests {
         }
         // Daylight hours at 52° N average 12 h a day; clear days 40 % ± 3σ (σ = √(365·0.24)).
         assert!((4300..4500).contains(&lit), "{lit}");
-        assert!((clear_days as f64 - 146.0).abs() < 3.0 * 9.4, "{clear_days}");
+        assert!(
+            (clear_days as f64 - 146.0).abs() < 3.0 * 9.4,
+            "{clear_days}"
+        );
     }
 }
