@@ -378,10 +378,12 @@ fn block_jacobi_solves_every_column() {
     let mut u = || uniform(&mut rng) as f64;
     let rows: Vec<Vec<(u32, f32)>> = (0..n)
         .map(|i| {
-            let mut r: Vec<(u32, f32)> = (0..n)
-                .filter(|&j| j != i)
-                .filter_map(|j| (u() < 0.3).then(|| (j as u32, u() as f32)))
-                .collect();
+            let mut r: Vec<(u32, f32)> = Vec::new();
+            for j in (0..n).filter(|&j| j != i) {
+                if u() < 0.3 {
+                    r.push((j as u32, u() as f32));
+                }
+            }
             let sum: f32 = r.iter().map(|e| e.1).sum();
             let target = (0.5 + 0.45 * u()) as f32;
             for e in &mut r {
