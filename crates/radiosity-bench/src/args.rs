@@ -27,6 +27,7 @@ const EXAMPLES: &str = "Examples:
   radiosity-bench pictures cornell --out pictures
   radiosity-bench canyon --sizes 500,2000,8000 --closed
   radiosity-bench view3d --source View3D --sizes 484,1936,7744,20449
+  radiosity-bench daylight-floor --rooms 20 --points-per-room 500 --run
   mpirun -np 2 radiosity-bench ranks hosp.mgf --one-sided --patches 100000";
 
 /// The measurements.
@@ -78,6 +79,11 @@ pub enum Mode {
     /// meshes (at each --sizes, progressive) on SCENE, against path-traced surface means
     /// (`radiosity bench --hierarchical`).
     Hierarchical(HierarchicalArgs),
+    /// Issue 58's annual benchmark: writes an office floor of side-lit rooms (two rows along a
+    /// corridor, glazed windows), a work-plane grid at 0.8 m and a synthetic EPW year, and with
+    /// `--run` times `radiosity lighting FLOOR --weather --grid --annual` on them (CPU, wall,
+    /// peak memory, the metrics).
+    DaylightFloor(FloorArgs),
 }
 
 /// Repetitions of a measurement.
@@ -106,6 +112,30 @@ pub struct CanyonArgs {
     /// Folder for the View3D files (created if missing).
     #[arg(long, value_name = "DIR", default_value = "canyon")]
     pub out: std::path::PathBuf,
+}
+
+/// `daylight-floor`.
+#[derive(Debug, Args)]
+pub struct FloorArgs {
+    /// Rooms (even: two rows).
+    #[arg(long, value_name = "N", default_value_t = 20)]
+    pub rooms: usize,
+    /// Work-plane points in each room.
+    #[arg(long, value_name = "N", default_value_t = 500)]
+    pub points_per_room: usize,
+    /// Seed of the synthetic year's clear and overcast days.
+    #[arg(long, value_name = "S", default_value_t = 58)]
+    pub seed: u64,
+    /// Folder for floor.obj, floor.mtl, floor.pts, year.epw and the run's outputs (created if
+    /// missing).
+    #[arg(long, value_name = "DIR", default_value = "daylight-floor")]
+    pub out: std::path::PathBuf,
+    /// Also run and time the annual command on the files.
+    #[arg(long)]
+    pub run: bool,
+    /// More arguments for `radiosity lighting` (after `--`), e.g. `-- --sky-rays 4096`.
+    #[arg(last = true, value_name = "ARGS")]
+    pub extra: Vec<String>,
 }
 
 /// `view3d`.

@@ -8,6 +8,7 @@ mod canyon;
 mod cornell;
 #[cfg(feature = "embree")]
 mod embree;
+mod floor;
 mod pictures;
 mod ranks;
 mod rays;
@@ -73,6 +74,7 @@ fn run(mode: Mode, threads: Option<usize>) -> Result<()> {
         Mode::Scale(a) => scale::run(&a, threads),
         Mode::Pictures(a) => pictures::run(&a),
         Mode::Hierarchical(a) => accuracy::run(&a),
+        Mode::DaylightFloor(a) => floor::run(&a),
     }
 }
 

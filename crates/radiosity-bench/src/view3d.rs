@@ -354,15 +354,15 @@ pub fn build_view3d(source: &Path, out: &Path) -> Result<(PathBuf, f64)> {
 
 /// What one child process used.
 #[derive(Clone, Copy, Debug)]
-struct Usage {
-    wall: f64,
-    cpu: f64,
-    peak_mib: f64,
+pub(crate) struct Usage {
+    pub wall: f64,
+    pub cpu: f64,
+    pub peak_mib: f64,
 }
 
 /// Run `cmd` (its output to `log`), wait for it with `wait4`: wall seconds, user + system CPU
 /// seconds and peak resident memory of that child alone.
-fn run_measured(mut cmd: Command, log: &Path) -> Result<Usage> {
+pub(crate) fn run_measured(mut cmd: Command, log: &Path) -> Result<Usage> {
     let what = format!("{:?}", cmd.get_program());
     let out = File::create(log).with_context(|| format!("{}", log.display()))?;
     let err = out.try_clone()?;

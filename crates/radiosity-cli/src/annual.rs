@@ -195,7 +195,6 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
         (a.out.is_some(), "--out"),
         (a.luminaires.is_some(), "--luminaires"),
         (a.surfaces_out.is_some(), "--surfaces-out"),
-        (a.pictures.is_some(), "--pictures"),
     ] {
         if set {
             bail!("{flag} is not part of an annual run (--weather, --annual): leave it out");
@@ -228,6 +227,9 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
         }
         crate::settings::check_output(p)?;
     }
+    if let Some(dir) = &a.pictures {
+        crate::false_colour::grid::check_dir(dir)?;
+    }
     let (up, _) = crate::lighting::scene_up(&a)?;
     let epw = read_epw(weather).with_context(|| format!("--weather {}", weather.display()))?;
     let (mut points, mut grids) = crate::lighting::read_grids(&a)?;
@@ -237,6 +239,17 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     if points.is_empty() {
         bail!("no calculation points: give --grid or --workplane");
     }
+    let pictures = match &a.pictures {
+        Some(dir) => {
+            let unit = clap::ValueEnum::to_possible_value(&a.unit)
+                .map(|v| v.get_name().to_string())
+                .unwrap_or_default();
+            Some(crate::false_colour::grid::GridPictures::prepare(
+                dir, &grids, &a.grid, &points, up, &unit,
+            )?)
+        }
+        None => None,
+    };
 
     // The sky's patches as daylight sources in the sky frame the `--sky` path uses. Each
     // patch's column includes the ground outside lit by that patch alone (ρ_g × its
@@ -452,6 +465,33 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     }
     if let Some(p) = &a.summary {
         println!("wrote       {}", p.display());
+    }
+    if let Some(pictures) = &pictures {
+        let autonomy: Vec<f64> = m
+            .points
+            .iter()
+            .map(|p| 100.0 * p.daylight_autonomy)
+            .collect();
+        let caption = |da: &[f64]| {
+            let n = da.len().max(1) as f64;
+            format!(
+                "DA₃₀₀: share of the {} occupied hours at 300 lx or more    mean {:.1} %    sDA₃₀₀/₅₀% {:.1} % of {} points",
+                m.occupied_hours,
+                da.iter().sum::<f64>() / n,
+                100.0 * da.iter().filter(|&&v| v >= 50.0).count() as f64 / n,
+                da.len()
+            )
+        };
+        for p in pictures.write_maps(
+            &autonomy,
+            "daylight autonomy",
+            "daylight-autonomy",
+            "%",
+            false,
+            caption,
+        )? {
+            println!("wrote       {}", p.display());
+        }
     }
     Ok(())
 }

@@ -435,6 +435,8 @@ pub struct LightingArgs {
     /// false-colour map (viridis bands, legend in lux, Ē, E_min, E_max and U₀ in the
     /// caption), and `<stem>-isolux.png`/`.svg`, labelled isolux lines over the grid's points;
     /// the stem is the --grid file's, or `workplane-MATERIAL`. Each grid must lie in one plane.
+    /// With --sky also `<stem>-daylight-factor.png`/`.svg` (legend in %); in an annual run
+    /// (--weather) only `<stem>-daylight-autonomy.png`/`.svg` (DA₃₀₀ in %).
     #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
     pub pictures: Option<PathBuf>,
     /// Daylight: the sky outside, `cie-1` … `cie-15` (ISO 15469 / CIE S 011 general skies),

@@ -193,6 +193,22 @@ pub(crate) fn add_workplane(
     Ok(())
 }
 
+/// A daylight-factor map's caption: the mean, least and greatest DF, the share of points at
+/// 2 % or more (the BRE / BS 8206-2 "adequately daylit" average, applied per point), their
+/// count.
+fn df_caption(df: &[f64]) -> String {
+    let n = df.len().max(1) as f64;
+    let mean = df.iter().sum::<f64>() / n;
+    let min = df.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = df.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let lit = df.iter().filter(|&&v| v >= 2.0).count() as f64 / n;
+    format!(
+        "DF mean {mean:.2} %    min {min:.2} %    max {max:.2} %    ≥ 2 %: {:.0} % of {} points",
+        100.0 * lit,
+        df.len()
+    )
+}
+
 /// Mesh, solver and gather settings from the flags.
 pub(crate) fn lighting_settings(a: &LightingArgs) -> LightingSettings {
     let mut settings = LightingSettings {
@@ -535,7 +551,18 @@ pub fn run(a: LightingArgs) -> Result<()> {
         println!("wrote       {}", p.display());
     }
     if let Some(pictures) = &pictures {
-        for p in pictures.write(&r.total)? {
+        let mut written = pictures.write(&r.total)?;
+        if let Some(df) = &daylight_factor {
+            written.extend(pictures.write_maps(
+                df,
+                "daylight factor",
+                "daylight-factor",
+                "%",
+                true,
+                df_caption,
+            )?);
+        }
+        for p in written {
             println!("wrote       {}", p.display());
         }
     }

@@ -160,6 +160,18 @@ pub fn check_dir(dir: &Path) -> Result<()> {
     }
 }
 
+/// The bands' scale of a map whose values run from `lo` to `hi`: with `log_if_wide`,
+/// logarithmic (1–2–5 a decade) when they are positive and span a decade or more (a
+/// daylight factor from 0.5 % at the back of a side-lit room to 20 % at its window), else
+/// linear.
+pub fn map_scale(lo: f64, hi: f64, log_if_wide: bool) -> Scale {
+    if log_if_wide && lo > 0.0 && hi >= 10.0 * lo {
+        Scale::Log
+    } else {
+        Scale::Linear
+    }
+}
+
 /// A file-name stem from a grid's name: letters, digits, `.`, `_`, `-` kept, the rest `-`.
 fn file_stem(name: &str) -> String {
     name.chars()
@@ -307,6 +319,7 @@ impl GridPictures {
                 isolines,
                 frame: MapFrame::of(lo, hi),
                 bitmap: false,
+                unit: "lx",
             };
             let map = Picture {
                 title: format!("{}: illuminance", g.name),
@@ -325,6 +338,56 @@ impl GridPictures {
                 &self.dir.join(format!("{}-isolux", g.stem)),
                 &iso,
                 Kind::Isolux,
+            )?);
+        }
+        Ok(written)
+    }
+
+    /// Draw every grid's false-colour map of `values` (one a point, in `unit`) as
+    /// `<stem>-<suffix>.png` and `.svg`, titled `<grid>: <what>`, in the cells of the
+    /// illuminance map, in bands on the scale [`map_scale`] picks for the grid's range
+    /// (`log_if_wide`: 1–2–5 a decade when it spans one or more), `caption(grid's values)`
+    /// under the title; each file written atomically. Returns the files written.
+    pub fn write_maps(
+        &self,
+        values: &[f64],
+        what: &str,
+        suffix: &str,
+        unit: &'static str,
+        log_if_wide: bool,
+        caption: impl Fn(&[f64]) -> String,
+    ) -> Result<Vec<PathBuf>> {
+        std::fs::create_dir_all(&self.dir)
+            .with_context(|| format!("--pictures {}: creating the folder", self.dir.display()))?;
+        register_font();
+        let mut written = Vec::new();
+        for g in &self.grids {
+            let v = &values[g.range.clone()];
+            let field = g.field_of(v);
+            let min = v.iter().copied().fold(f64::INFINITY, f64::min);
+            let max = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let bands = Bands::new(min, max, map_scale(min, max, log_if_wide));
+            let (lo, hi) = g.extent(&field);
+            let pic = Picture {
+                title: format!("{}: {what}", g.name),
+                caption: caption(v),
+                axes: g
+                    .plane
+                    .names
+                    .clone()
+                    .map(|a| format!("{a} ({})", self.unit)),
+                field: &field,
+                bands: &bands,
+                points: &g.uv,
+                isolines: Vec::new(),
+                frame: MapFrame::of(lo, hi),
+                bitmap: false,
+                unit,
+            };
+            written.extend(write_both(
+                &self.dir.join(format!("{}-{suffix}", g.stem)),
+                &pic,
+                Kind::Map,
             )?);
         }
         Ok(written)
@@ -465,6 +528,8 @@ struct Picture<'a> {
     frame: MapFrame,
     /// Drawn into a bitmap (else SVG).
     bitmap: bool,
+    /// The values' unit, on top of the legend.
+    unit: &'static str,
 }
 
 type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
@@ -550,7 +615,7 @@ where
     draw_cells(&mut chart, pic.field, |v| {
         Some(pic.bands.colour(pic.bands.band(v)))
     })?;
-    draw_band_legend(&legend, pic.bands, "lx")?;
+    draw_band_legend(&legend, pic.bands, pic.unit)?;
     root.present()?;
     Ok(())
 }
@@ -688,7 +753,7 @@ where
     }
     // The legend: the unit, then each level's line and value, highest on top.
     legend.draw(&Text::new(
-        "lx".to_string(),
+        pic.unit.to_string(),
         (12, 16),
         ("sans-serif", 16).into_font().color(&BLACK),
     ))?;
@@ -803,6 +868,7 @@ mod tests {
                 isolines: Vec::new(),
                 frame: frame.clone(),
                 bitmap: true,
+                unit: "lx",
             };
             let (chart, _) = frame_chart(&root, &pic).unwrap();
             for t in [0.0, 0.13, 0.5, 0.77, 1.0] {

@@ -469,4 +469,86 @@ fn the_exact_sun_adds_e_n_sin_alpha_at_an_unobstructed_point() {
     }
     assert_eq!(sunny, 400);
     assert!(worst < 5e-3, "{worst}");
+/// `--pictures` in an annual run: each grid's daylight-autonomy map. On the open floor under
+/// 100 W/m² of diffuse light every occupied hour is above 300 lx, so DA = 100 % at every
+/// point of a 4 × 4 lattice and the map is one colour, the legend's colour of 100 %; a
+/// folder that is a file is refused before any work.
+#[test]
+fn an_annual_run_draws_its_daylight_autonomy() {
+    use radiosity::lighting::{SensorPoint, Up};
+    use radiosity_cli::false_colour::grid::{map_scale, GridPictures};
+    use radiosity_cli::false_colour::Bands;
+    use std::path::PathBuf;
+    let dir = scratch("annual-pictures");
+    open_floor(&dir);
+    write(&dir, "year.epw", &year_epw(100.0));
+    let mut pts = String::new();
+    let mut points = Vec::new();
+    for j in 0..4 {
+        for i in 0..4 {
+            let (x, y) = (2.0 + 2.0 * i as f64, 2.0 + 2.0 * j as f64);
+            pts += &format!("{x} {y} 0.5 0 0 1\n");
+            points.push(SensorPoint::new([x, y, 0.5], [0.0, 0.0, 1.0]).unwrap());
+        }
+    }
+    write(&dir, "desk.pts", &pts);
+    write(&dir, "taken", "a file\n");
+    let args = |pictures: &'static str| {
+        [
+            "lighting",
+            "floor.obj",
+            "--weather",
+            "year.epw",
+            "--grid",
+            "desk.pts",
+            "--annual",
+            "annual.csv",
+            "--pictures",
+            pictures,
+            "--patches",
+            "4",
+            "--sky-rays",
+            "256",
+        ]
+    };
+    fails(
+        &args("taken/pics"),
+        &dir,
+        &["--pictures taken/pics", "not a folder"],
+        &[
+            "floor.obj",
+            "floor.mtl",
+            "points.pts",
+            "year.epw",
+            "desk.pts",
+            "taken",
+        ],
+    );
+    let text = run_ok(&args("pics"), &dir);
+    assert!(text.contains("desk-daylight-autonomy.png"), "{text}");
+    let (h, rows) = read_csv(&dir.join("annual.csv"));
+    let da = column(&h, "daylight_autonomy");
+    assert!(rows.iter().all(|r| r[da] == "1.0000"));
+    let pics = dir.join("pics");
+    let layout = GridPictures::prepare(
+        &pics,
+        &[("desk.pts".to_string(), 0..16)],
+        &[PathBuf::from("desk.pts")],
+        &points,
+        Up::Z,
+        "m",
+    )
+    .unwrap();
+    let (_, plane, frame) = layout.frames().remove(0);
+    let img = image::open(pics.join("desk-daylight-autonomy.png"))
+        .unwrap()
+        .to_rgb8();
+    let bands = Bands::new(100.0, 100.0, map_scale(100.0, 100.0, false));
+    let want = bands.colour(bands.band(100.0));
+    for p in &points {
+        let (x, y) = frame.pixel(plane.project(p.position));
+        assert_eq!(img.get_pixel(x as u32, y as u32).0, want);
+    }
+    let svg = read(&pics, "desk-daylight-autonomy.svg");
+    assert!(svg.contains("daylight autonomy") && svg.contains("sDA"));
 }

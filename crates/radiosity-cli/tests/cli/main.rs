@@ -17,6 +17,7 @@ mod adaptive;
 mod annual;
 mod coincident;
 mod daylight;
+mod daylight_map;
 mod errors;
 mod experiment;
 mod form_factors;
