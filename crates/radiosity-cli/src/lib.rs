@@ -422,7 +422,8 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
 }
 
 /// Show a baked glTF's vertex colours from its camera (or `--eye`/`--target`), as an unlit
-/// glTF viewer would: no solving, PNG pixels are the sRGB encoding of COLOR_0.
+/// glTF viewer would: no solving, PNG pixels are the sRGB encoding of COLOR_0. A lightmapped
+/// file (`MOZ_lightmap`) is shown lit by its lightmaps, as three.js shows it.
 fn view(a: ViewArgs) -> Result<()> {
     let out = a
         .out
@@ -443,6 +444,39 @@ fn view(a: ViewArgs) -> Result<()> {
     }
     if a.gather && a.direct_samples == 0 {
         anyhow::bail!("--direct-samples 0: at least one shadow ray per sample is needed");
+    }
+    // A lightmapped file (MOZ_lightmap) is shown by its lightmaps; --gather needs the
+    // radiosity a vertex bake carries.
+    if !a.gather {
+        if let Some(baked) = BakedView::load_lightmap(&a.file)? {
+            for w in &baked.scene.warnings {
+                eprintln!("radiosity: warning: {w}");
+            }
+            let camera = settings::camera(baked.default_camera(), &a.camera)?;
+            let image = baked.render(&camera, &params, &Silent);
+            write_image(&out, &image, 1.0).context("writing the image")?;
+            let lit = baked.lightmapped_triangles();
+            let all = baked.mesh.patches.len();
+            let sizes: Vec<String> = baked
+                .lightmap
+                .iter()
+                .flat_map(|l| l.set.images.iter())
+                .map(|i| format!("{}×{}", i.width, i.height))
+                .collect();
+            println!(
+                "wrote       {} ({}×{}, {lit} triangles lit by their lightmap ({}){})",
+                out.display(),
+                params.width,
+                params.height,
+                sizes.join(", "),
+                if lit < all {
+                    format!(", {} without one shown black", all - lit)
+                } else {
+                    String::new()
+                }
+            );
+            return Ok(());
+        }
     }
     let which = if a.gather {
         radiosity::scene::gltf::VertexValues::Radiosity
