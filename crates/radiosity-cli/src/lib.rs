@@ -359,13 +359,14 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     let t = Instant::now();
     let mut lightmap_summary = None;
     if let Some(params) = &lightmap {
-        let map = solve_lightmap::write(&a, params, &scene, &solution)?;
+        let (map, kept) = solve_lightmap::write(&a, params, &scene, &solution)?;
         lightmap_summary = Some((
             map.width(),
             map.height(),
             map.surface_texels(),
             map.unwrap.texel,
             map.unwrap.charts.len(),
+            kept,
         ));
     } else if baked {
         let vertex = solution.vertex_display_radiosity();
@@ -385,9 +386,10 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
         let mut v = report::summary_json(&scene, &solution, None);
         v["seconds"]["write"] = serde_json::json!(write_s);
         v["out"] = serde_json::json!(a.out);
-        if let Some((w, h, texels, texel, charts)) = lightmap_summary {
+        if let Some((w, h, texels, texel, charts, kept)) = lightmap_summary {
             v["lightmap"] = serde_json::json!({"width": w, "height": h, "texels": texels,
-                "texel_size": texel, "charts": charts, "seconds": write_s});
+                "texel_size": texel, "charts": charts, "seconds": write_s,
+                "uv": if kept { "input" } else { "generated" }});
         }
         if let Some(r) = &distributed {
             v["ranks"] = serde_json::json!(r.blocks.len());
@@ -400,9 +402,14 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     if let Some(r) = &distributed {
         report::ranks(r);
     }
-    if let Some((w, h, texels, texel, charts)) = lightmap_summary {
+    if let Some((w, h, texels, texel, charts, kept)) = lightmap_summary {
         println!(
-            "lightmap    {w}×{h} atlas, {texels} surface texels of {texel:.4} scene units in {charts} charts"
+            "lightmap    {w}×{h} atlas, {texels} surface texels of {texel:.4} scene units in {charts} charts{}",
+            if kept {
+                " (the input's TEXCOORD_1, kept; mean texel size)"
+            } else {
+                ""
+            }
         );
         println!(
             "wrote       {}{} in {write_s:.3} s (bake included)",
