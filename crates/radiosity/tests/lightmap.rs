@@ -436,3 +436,178 @@ fn err_text(p: &LightmapParams, scene: &Scene, s: &Solution) -> String {
         .unwrap_err()
         .to_string()
 }
+
+/// A glTF of one square (−1..1 in x and y, facing +z) whose `TEXCOORD_1` spans the unit
+/// square (top-left corner (0, 0)), lit by a `MOZ_lightmap` of intensity `intensity` on the
+/// PNG `png`, with a camera at (0, 0, 3) looking down −z seeing ±1.5.
+fn gradient_glb(png: &[u8], intensity: f64) -> Vec<u8> {
+    let mut bin: Vec<u8> = Vec::new();
+    let pos: [[f32; 3]; 4] = [[-1., 1., 0.], [1., 1., 0.], [1., -1., 0.], [-1., -1., 0.]];
+    let uv: [[f32; 2]; 4] = [[0., 0.], [1., 0.], [1., 1.], [0., 1.]];
+    for p in pos.iter().flatten().chain(uv.iter().flatten()) {
+        bin.extend_from_slice(&p.to_le_bytes());
+    }
+    for i in [0u32, 3, 2, 0, 2, 1] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let png_at = bin.len();
+    bin.extend_from_slice(png);
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["MOZ_lightmap"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"camera": 0, "translation": [0.0, 0.0, 3.0]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 2.0 * (0.5f64).atan(), "znear": 0.01}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1, "TEXCOORD_1": 1},
+            "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0},
+            "extensions": {"MOZ_lightmap": {"index": 0, "texCoord": 1, "intensity": intensity}}}],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}],
+        "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [-1.0, -1.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 24},
+            {"buffer": 0, "byteOffset": png_at, "byteLength": png.len()}
+        ],
+        "buffers": [{"byteLength": bin.len()}]
+    });
+    let mut text = serde_json::to_vec(&json).unwrap();
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let mut out = b"glTF".to_vec();
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((28 + text.len() + bin.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+/// An 8-bit RGB PNG of `w × h` pixels.
+fn png_rgb(w: u32, h: u32, rgb: &[u8]) -> Vec<u8> {
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        rgb,
+        w,
+        h,
+        image::ExtendedColorType::Rgb8,
+    )
+    .unwrap();
+    png
+}
+
+/// IEC 61966-2-1's decoding, written out here (the test's own reference).
+fn srgb_decode(e: f64) -> f64 {
+    if e <= 0.04045 {
+        e / 12.92
+    } else {
+        ((e + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// `view` of a square lit by a 2 × 2 lightmap: red 0 → 255 left to right, blue 0 → 255 top to
+/// bottom, green 128 everywhere, intensity π/2. Bilinear filtering of the decoded texels with
+/// clamped edges makes red `clamp(2u − ½, 0, 1)` and blue `clamp(2v − ½, 0, 1)`, green
+/// `srgb⁻¹(128/255)`, all times intensity/π = ½: every pixel inside the square must show that
+/// at its centre's (u, v). Tolerance 0.003: a pixel is the mean over its area (16 stratified
+/// rays), which differs from the centre's value only at the clamp's kinks, by at most
+/// slope × pixel / 8 = 1 × 0.0156 / 8 = 0.002, plus the stratified jitter's noise.
+#[test]
+fn view_renders_a_known_lightmap_gradient() {
+    let rgb = [0, 128, 0, 255, 128, 0, 0, 128, 255, 255, 128, 255];
+    let glb = gradient_glb(&png_rgb(2, 2, &rgb), std::f64::consts::PI / 2.0);
+    let path = std::env::temp_dir().join(format!("radiosity-lm-gradient-{}.glb", std::process::id()));
+    std::fs::write(&path, &glb).unwrap();
+    let view = radiosity::render::baked::BakedView::load_lightmap(&path)
+        .unwrap()
+        .expect("a lightmapped file");
+    let (w, h) = (96u32, 96u32);
+    let image = view.render(
+        &view.default_camera(),
+        &radiosity::render::RenderParams {
+            width: w,
+            height: h,
+            samples_per_pixel: 16,
+            seed: 3,
+        },
+        &Silent,
+    );
+    let green = 0.5 * srgb_decode(128.0 / 255.0);
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for py in 0..h {
+        for px in 0..w {
+            let x = ((px as f64 + 0.5) / w as f64 * 2.0 - 1.0) * 1.5;
+            let y = (1.0 - (py as f64 + 0.5) / h as f64 * 2.0) * 1.5;
+            if x.abs() > 0.95 || y.abs() > 0.95 {
+                continue;
+            }
+            let (u, v) = ((x + 1.0) / 2.0, (1.0 - y) / 2.0);
+            let want = [
+                0.5 * (2.0 * u - 0.5).clamp(0.0, 1.0),
+                green,
+                0.5 * (2.0 * v - 0.5).clamp(0.0, 1.0),
+            ];
+            let got = image.at(px, py);
+            for c in 0..3 {
+                let d = (got[c] as f64 - want[c]).abs();
+                worst = worst.max(d);
+                assert!(d <= 3e-3, "pixel ({px}, {py}) channel {c}: {} vs {}", got[c], want[c]);
+            }
+            checked += 1;
+        }
+    }
+    eprintln!("gradient: {checked} pixels, worst difference {worst:.5}");
+    assert!(checked > 3000);
+    std::fs::remove_file(&path).unwrap();
+}
+
+/// Hostile lightmap images are refused on one line naming the file and the place: an image
+/// claiming more pixels than its bytes can hold, and a texture index past the list.
+#[test]
+fn hostile_lightmaps_are_refused() {
+    let dir = std::env::temp_dir();
+    // A PNG whose header claims 16384 × 16384 pixels, with 2×2 pixels of data.
+    let mut png = png_rgb(2, 2, &[0; 12]);
+    png[16..20].copy_from_slice(&16384u32.to_be_bytes());
+    png[20..24].copy_from_slice(&16384u32.to_be_bytes());
+    let path = dir.join(format!("radiosity-lm-huge-{}.glb", std::process::id()));
+    std::fs::write(&path, gradient_glb(&png, 1.0)).unwrap();
+    let err = radiosity::render::baked::BakedView::load_lightmap(&path)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("radiosity-lm-huge") && err.contains("images[0]"), "{err}");
+    assert!(!err.contains('\n'), "{err}");
+    // A MOZ_lightmap naming texture 7 of 1.
+    let glb = gradient_glb(&png_rgb(2, 2, &[0; 12]), 1.0);
+    let mut b = glb.clone();
+    let at = glb.windows(9).position(|w| w == b"\"index\":0").unwrap();
+    b[at + 8] = b'7';
+    let bad = dir.join(format!("radiosity-lm-index-{}.glb", std::process::id()));
+    std::fs::write(&bad, &b).unwrap();
+    let err = radiosity::render::baked::BakedView::load_lightmap(&bad)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("materials[0].extensions.MOZ_lightmap: no texture 7"),
+        "{err}"
+    );
+    std::fs::remove_file(&bad).unwrap();
+    std::fs::remove_file(&path).unwrap();
+}
