@@ -533,7 +533,8 @@ fn srgb_decode(e: f64) -> f64 {
 fn view_renders_a_known_lightmap_gradient() {
     let rgb = [0, 128, 0, 255, 128, 0, 0, 128, 255, 255, 128, 255];
     let glb = gradient_glb(&png_rgb(2, 2, &rgb), std::f64::consts::PI / 2.0);
-    let path = std::env::temp_dir().join(format!("radiosity-lm-gradient-{}.glb", std::process::id()));
+    let path =
+        std::env::temp_dir().join(format!("radiosity-lm-gradient-{}.glb", std::process::id()));
     std::fs::write(&path, &glb).unwrap();
     let view = radiosity::render::baked::BakedView::load_lightmap(&path)
         .unwrap()
@@ -568,7 +569,12 @@ fn view_renders_a_known_lightmap_gradient() {
             for c in 0..3 {
                 let d = (got[c] as f64 - want[c]).abs();
                 worst = worst.max(d);
-                assert!(d <= 3e-3, "pixel ({px}, {py}) channel {c}: {} vs {}", got[c], want[c]);
+                assert!(
+                    d <= 3e-3,
+                    "pixel ({px}, {py}) channel {c}: {} vs {}",
+                    got[c],
+                    want[c]
+                );
             }
             checked += 1;
         }
@@ -592,7 +598,10 @@ fn hostile_lightmaps_are_refused() {
     let err = radiosity::render::baked::BakedView::load_lightmap(&path)
         .unwrap_err()
         .to_string();
-    assert!(err.contains("radiosity-lm-huge") && err.contains("images[0]"), "{err}");
+    assert!(
+        err.contains("radiosity-lm-huge") && err.contains("images[0]"),
+        "{err}"
+    );
     assert!(!err.contains('\n'), "{err}");
     // A MOZ_lightmap naming texture 7 of 1.
     let glb = gradient_glb(&png_rgb(2, 2, &[0; 12]), 1.0);
@@ -625,9 +634,17 @@ fn display_sample(map: &Lightmap, scale: f64, uv: [f32; 2]) -> [f64; 3] {
         let b = map.texels[j * map.width() as usize + i];
         [b.r, b.g, b.b].map(|c| (c * scale).clamp(0.0, 1.0))
     };
-    let (a, b, c, d) = (at(x0, y0), at(x0 + 1.0, y0), at(x0, y0 + 1.0), at(x0 + 1.0, y0 + 1.0));
+    let (a, b, c, d) = (
+        at(x0, y0),
+        at(x0 + 1.0, y0),
+        at(x0, y0 + 1.0),
+        at(x0 + 1.0, y0 + 1.0),
+    );
     std::array::from_fn(|k| {
-        a[k] * (1.0 - fx) * (1.0 - fy) + b[k] * fx * (1.0 - fy) + c[k] * (1.0 - fx) * fy + d[k] * fx * fy
+        a[k] * (1.0 - fx) * (1.0 - fy)
+            + b[k] * fx * (1.0 - fy)
+            + c[k] * (1.0 - fx) * fy
+            + d[k] * fx * fy
     })
 }
 
@@ -656,7 +673,10 @@ fn face_points(map: &Lightmap) -> Vec<(usize, Vec3, Vec3, [f32; 2])> {
 /// arriving along −n.
 fn shown_at(view: &radiosity::render::baked::BakedView, x: Vec3, n: Vec3, lift: f32) -> [f64; 3] {
     let ray = radiosity::geom::Ray::new(x + n * lift, -n);
-    let hit = view.bvh.closest_hit(&ray, 2.0 * lift).expect("the view's surface is there");
+    let hit = view
+        .bvh
+        .closest_hit(&ray, 2.0 * lift)
+        .expect("the view's surface is there");
     let s = view.shown(&hit);
     [s.r, s.g, s.b]
 }
@@ -722,7 +742,10 @@ fn cornell_lightmap_view_matches_its_atlas_and_the_vertex_bake() {
         for c in 0..3 {
             let d = (got[c] - want[c]).abs();
             worst = worst.max(d);
-            assert!(d <= quant, "face {f} at {x:?}: {got:?} vs the atlas's {want:?}");
+            assert!(
+                d <= quant,
+                "face {f} at {x:?}: {got:?} vs the atlas's {want:?}"
+            );
         }
         let v = shown_at(&vview, x, n, lift);
         let e = &mut sums[f];
@@ -784,11 +807,16 @@ fn an_existing_texcoord_1_is_kept_bit_for_bit() {
     };
     write(&one, &scene, &first);
     let (input, set) = radiosity::scene::gltf::load_lightmap(&one, false, false).unwrap();
-    let uv: Vec<[[f32; 2]; 3]> = set.uv.iter().map(|u| u.expect("every triangle has TEXCOORD_1")).collect();
+    let uv: Vec<[[f32; 2]; 3]> = set
+        .uv
+        .iter()
+        .map(|u| u.expect("every triangle has TEXCOORD_1"))
+        .collect();
     let s2 = solved(&input, 1500);
     let vertex = radiosity::render::vertex_radiosity(&s2.mesh, &s2.radiosity);
-    let second = radiosity::bake::lightmap::bake_on(&input, s2.surfaces(), &vertex, &params, Some(&uv))
-        .unwrap();
+    let second =
+        radiosity::bake::lightmap::bake_on(&input, s2.surfaces(), &vertex, &params, Some(&uv))
+            .unwrap();
     assert_eq!((second.width(), second.height()), (128, 128));
     write(&two, &input, &second);
     let (output, set2) = radiosity::scene::gltf::load_lightmap(&two, false, false).unwrap();
@@ -798,10 +826,18 @@ fn an_existing_texcoord_1_is_kept_bit_for_bit() {
         for (k, v) in q.vertices.iter().enumerate() {
             // The same corner, wherever it sits in the triangle's order.
             let j = (0..3)
-                .min_by(|&x, &y| p.vertices[x].distance(*v).total_cmp(&p.vertices[y].distance(*v)))
+                .min_by(|&x, &y| {
+                    p.vertices[x]
+                        .distance(*v)
+                        .total_cmp(&p.vertices[y].distance(*v))
+                })
                 .unwrap();
             assert!(p.vertices[j].distance(*v) <= 1e-3, "polygon {i} moved");
-            assert_eq!(b[k].map(f32::to_bits), a[j].map(f32::to_bits), "polygon {i} corner {k}");
+            assert_eq!(
+                b[k].map(f32::to_bits),
+                a[j].map(f32::to_bits),
+                "polygon {i} corner {k}"
+            );
         }
     }
     // The same texels on the surface as the first bake's own layout.
@@ -818,7 +854,10 @@ fn an_existing_texcoord_1_is_kept_bit_for_bit() {
         first.surface_texels()
     );
     assert_eq!(second.unwrap.charts.len(), first.unwrap.charts.len());
-    assert!(differ as f64 <= 1e-3 * first.surface_texels() as f64, "{differ}");
+    assert!(
+        differ as f64 <= 1e-3 * first.surface_texels() as f64,
+        "{differ}"
+    );
     let report = crate::validator::validate_gltf_report(std::slice::from_ref(&two));
     assert!(report.contains(": 0 errors, 0 warnings"), "{report}");
     std::fs::remove_file(&one).unwrap();
