@@ -211,7 +211,8 @@ pub enum Command {
     /// colours (.glb, .gltf, .ply).
     #[command(after_help = EXAMPLES_SOLVE)]
     Solve(SolveCmdArgs),
-    /// Show a baked glTF as a glTF viewer does (unlit, COLOR_0 as is), without solving.
+    /// Show a baked glTF as a glTF viewer does (unlit, COLOR_0 as is, or lit by its
+    /// MOZ_lightmap lightmaps), without solving.
     #[command(after_help = EXAMPLES_VIEW)]
     View(ViewArgs),
     /// Solve a given linear system: a form-factor matrix (Matrix Market) and a patches CSV.
@@ -1026,7 +1027,8 @@ pub enum BakeArg {
 #[derive(Debug, Args)]
 pub struct ViewArgs {
     /// A baked glTF (.glb or .gltf) whose primitives carry COLOR_0, e.g. from
-    /// `radiosity solve SCENE --out baked.glb`.
+    /// `radiosity solve SCENE --out baked.glb`, or whose materials carry a lightmap
+    /// (MOZ_lightmap on a UV set, e.g. from `--bake lightmap`), then shown lit by it.
     pub file: PathBuf,
     /// The camera.
     #[command(flatten)]

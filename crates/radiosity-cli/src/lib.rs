@@ -359,13 +359,14 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     let t = Instant::now();
     let mut lightmap_summary = None;
     if let Some(params) = &lightmap {
-        let map = solve_lightmap::write(&a, params, &scene, &solution)?;
+        let (map, kept) = solve_lightmap::write(&a, params, &scene, &solution)?;
         lightmap_summary = Some((
             map.width(),
             map.height(),
             map.surface_texels(),
             map.unwrap.texel,
             map.unwrap.charts.len(),
+            kept,
         ));
     } else if baked {
         let vertex = solution.vertex_display_radiosity();
@@ -385,9 +386,10 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
         let mut v = report::summary_json(&scene, &solution, None);
         v["seconds"]["write"] = serde_json::json!(write_s);
         v["out"] = serde_json::json!(a.out);
-        if let Some((w, h, texels, texel, charts)) = lightmap_summary {
+        if let Some((w, h, texels, texel, charts, kept)) = lightmap_summary {
             v["lightmap"] = serde_json::json!({"width": w, "height": h, "texels": texels,
-                "texel_size": texel, "charts": charts, "seconds": write_s});
+                "texel_size": texel, "charts": charts, "seconds": write_s,
+                "uv": if kept { "input" } else { "generated" }});
         }
         if let Some(r) = &distributed {
             v["ranks"] = serde_json::json!(r.blocks.len());
@@ -400,9 +402,14 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     if let Some(r) = &distributed {
         report::ranks(r);
     }
-    if let Some((w, h, texels, texel, charts)) = lightmap_summary {
+    if let Some((w, h, texels, texel, charts, kept)) = lightmap_summary {
         println!(
-            "lightmap    {w}×{h} atlas, {texels} surface texels of {texel:.4} scene units in {charts} charts"
+            "lightmap    {w}×{h} atlas, {texels} surface texels of {texel:.4} scene units in {charts} charts{}",
+            if kept {
+                " (the input's TEXCOORD_1, kept; mean texel size)"
+            } else {
+                ""
+            }
         );
         println!(
             "wrote       {}{} in {write_s:.3} s (bake included)",
@@ -422,7 +429,8 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
 }
 
 /// Show a baked glTF's vertex colours from its camera (or `--eye`/`--target`), as an unlit
-/// glTF viewer would: no solving, PNG pixels are the sRGB encoding of COLOR_0.
+/// glTF viewer would: no solving, PNG pixels are the sRGB encoding of COLOR_0. A lightmapped
+/// file (`MOZ_lightmap`) is shown lit by its lightmaps, as three.js shows it.
 fn view(a: ViewArgs) -> Result<()> {
     let out = a
         .out
@@ -443,6 +451,39 @@ fn view(a: ViewArgs) -> Result<()> {
     }
     if a.gather && a.direct_samples == 0 {
         anyhow::bail!("--direct-samples 0: at least one shadow ray per sample is needed");
+    }
+    // A lightmapped file (MOZ_lightmap) is shown by its lightmaps; --gather needs the
+    // radiosity a vertex bake carries.
+    if !a.gather {
+        if let Some(baked) = BakedView::load_lightmap(&a.file)? {
+            for w in &baked.scene.warnings {
+                eprintln!("radiosity: warning: {w}");
+            }
+            let camera = settings::camera(baked.default_camera(), &a.camera)?;
+            let image = baked.render(&camera, &params, &Silent);
+            write_image(&out, &image, 1.0).context("writing the image")?;
+            let lit = baked.lightmapped_triangles();
+            let all = baked.mesh.patches.len();
+            let sizes: Vec<String> = baked
+                .lightmap
+                .iter()
+                .flat_map(|l| l.set.images.iter())
+                .map(|i| format!("{}×{}", i.width, i.height))
+                .collect();
+            println!(
+                "wrote       {} ({}×{}, {lit} triangles lit by their lightmap ({}){})",
+                out.display(),
+                params.width,
+                params.height,
+                sizes.join(", "),
+                if lit < all {
+                    format!(", {} without one shown black", all - lit)
+                } else {
+                    String::new()
+                }
+            );
+            return Ok(());
+        }
     }
     let which = if a.gather {
         radiosity::scene::gltf::VertexValues::Radiosity

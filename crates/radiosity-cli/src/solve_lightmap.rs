@@ -1,10 +1,11 @@
-//! `solve --bake lightmap`: flags → [`radiosity::bake::lightmap`] → the lightmapped glTF
+//! `solve --bake lightmap`: flags → [`radiosity::bake::lightmap`] (on a glTF scene's own
+//! `TEXCOORD_1` when every primitive has one, [`radiosity::bake::given`]) → the lightmapped glTF
 //! ([`radiosity::export::bake::write_lightmap_gltf`]) and, with `--lightmap-out`, the linear
 //! atlas ([`radiosity::export::bake::write_lightmap_exr`]).
 
 use crate::args::{BakeArg, SolveCmdArgs};
-use anyhow::{bail, Result};
-use radiosity::bake::lightmap::{bake, Lightmap, LightmapParams};
+use anyhow::{bail, Context, Result};
+use radiosity::bake::lightmap::{bake_on, Lightmap, LightmapParams};
 use radiosity::bake::uv::{Density, MAX_ATLAS};
 use radiosity::export::bake::{write_lightmap_exr, write_lightmap_gltf, LightmapBake};
 use radiosity::io::FileFormat;
@@ -77,15 +78,53 @@ pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
     }))
 }
 
-/// Bake the lightmap of a solved scene and write it; the lightmap, for the summary.
+/// The UV set a glTF scene already has for its lightmap: `TEXCOORD_1` at the corners of each
+/// polygon, when every primitive has one (some but not all: a warning, and a generated set).
+fn kept_uvs(a: &SolveCmdArgs, scene: &Scene) -> Result<Option<Vec<[[f32; 2]; 3]>>> {
+    let path = std::path::Path::new(&a.solve.scene);
+    if !matches!(
+        FileFormat::from_path(path),
+        Some(FileFormat::Glb | FileFormat::Gltf)
+    ) || !path.exists()
+    {
+        return Ok(None);
+    }
+    let (read, set) = radiosity::scene::gltf::load_lightmap(path, a.solve.one_sided, false)?;
+    if read.polygons.len() != scene.polygons.len() {
+        bail!(
+            "{}: the scene read again has {} polygons, not {}",
+            path.display(),
+            read.polygons.len(),
+            scene.polygons.len()
+        );
+    }
+    let with = set.uv.iter().filter(|u| u.is_some()).count();
+    if with == 0 {
+        return Ok(None);
+    }
+    if with < set.uv.len() {
+        eprintln!(
+            "radiosity: warning: {}: only {with} of {} triangles have TEXCOORD_1; the lightmap gets a new UV set",
+            path.display(),
+            set.uv.len()
+        );
+        return Ok(None);
+    }
+    Ok(Some(set.uv.into_iter().flatten().collect()))
+}
+
+/// Bake the lightmap of a solved scene and write it; the lightmap, for the summary, and
+/// whether it kept the scene's own `TEXCOORD_1`.
 pub(crate) fn write(
     a: &SolveCmdArgs,
     params: &LightmapParams,
     scene: &Scene,
     solution: &Solution,
-) -> Result<Lightmap> {
+) -> Result<(Lightmap, bool)> {
     let vertex = radiosity::render::vertex_radiosity(&solution.mesh, &solution.radiosity);
-    let map = bake(scene, solution.surfaces(), &vertex, params)?;
+    let kept = kept_uvs(a, scene)?;
+    let map = bake_on(scene, solution.surfaces(), &vertex, params, kept.as_deref())
+        .with_context(|| a.solve.scene.clone())?;
     let lightmap_bake = LightmapBake {
         scene,
         lightmap: &map,
@@ -97,5 +136,5 @@ pub(crate) fn write(
     if let Some(p) = &a.lightmap_out {
         write_lightmap_exr(p, &map)?;
     }
-    Ok(map)
+    Ok((map, kept.is_some()))
 }

@@ -28,6 +28,9 @@ pub enum Target {
     Gltf,
     /// Binary glTF.
     Glb,
+    /// Binary glTF with a lightmap (`TEXCOORD_1`, `MOZ_lightmap`, an embedded PNG), read as
+    /// `view` and a kept UV set read it.
+    GlbLightmap,
     /// PLY, ASCII.
     PlyAscii,
     /// PLY, binary big-endian.
@@ -65,12 +68,13 @@ pub enum Target {
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 21] = [
+    pub const ALL: [Target; 22] = [
         Target::Obj,
         Target::Mtl,
         Target::Mgf,
         Target::Gltf,
         Target::Glb,
+        Target::GlbLightmap,
         Target::PlyAscii,
         Target::PlyBinary,
         Target::MatrixMarket,
@@ -97,6 +101,7 @@ impl Target {
             Target::Mgf => "mgf",
             Target::Gltf => "gltf",
             Target::Glb => "glb",
+            Target::GlbLightmap => "glb-lightmap",
             Target::PlyAscii => "ply-ascii",
             Target::PlyBinary => "ply-binary",
             Target::MatrixMarket => "matrix-market",
@@ -171,6 +176,7 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
             ("checker.png".into(), room("checker.png")),
         ],
         Target::Glb => vec![("room.glb".into(), glb(scratch))],
+        Target::GlbLightmap => vec![("lit.glb".into(), glb_lightmap(scratch))],
         Target::PlyAscii => vec![("room.ply".into(), room("room.ply"))],
         Target::PlyBinary => vec![("room_be.ply".into(), room("room_be.ply"))],
         Target::MatrixMarket => vec![s("f.mtx", MTX), s("p.csv", CSV)],
@@ -241,6 +247,74 @@ fn glb(scratch: &Path) -> Vec<u8> {
     )
     .expect("the seed bakes");
     std::fs::read(&path).expect("the seed reads")
+}
+
+/// A small lightmapped binary glTF: the furnace's faces charted into a 32 × 32 atlas holding
+/// a gradient, written by our own writer.
+fn glb_lightmap(scratch: &Path) -> Vec<u8> {
+    use radiosity::bake::lightmap::{Lightmap, Texel};
+    let scene = radiosity::scene::builtin::furnace();
+    let unwrap = radiosity::bake::uv::unwrap(&scene, radiosity::bake::uv::Density::AtlasSize(32))
+        .expect("the furnace charts");
+    let n = (unwrap.width * unwrap.height) as usize;
+    let texels = (0..n)
+        .map(|i| radiosity::color::Rgb::new(i as f64 / n as f64, 0.5, 1.0 - i as f64 / n as f64))
+        .collect();
+    let map = Lightmap {
+        unwrap,
+        texels,
+        kind: vec![Texel::Surface; n],
+        points: vec![None; n],
+        records: 0,
+    };
+    let path = scratch.join("seed-lightmap.glb");
+    radiosity::export::bake::write_lightmap_gltf(
+        &path,
+        &radiosity::export::bake::LightmapBake {
+            scene: &scene,
+            lightmap: &map,
+            scale: 1.0,
+            camera: None,
+        },
+        true,
+    )
+    .expect("the seed bakes");
+    std::fs::read(&path).expect("the seed reads")
+}
+
+/// Read a lightmapped glTF as `view` does (and render a few pixels, which must be finite) and
+/// as a lightmap bake keeps its UV set (charting it into a small atlas).
+fn lightmapped(path: &Path) -> bool {
+    let mut ok = false;
+    if let Ok(Some(view)) = radiosity::render::baked::BakedView::load_lightmap(path) {
+        let image = view.render(
+            &view.default_camera(),
+            &radiosity::render::RenderParams {
+                width: 8,
+                height: 8,
+                samples_per_pixel: 1,
+                seed: 1,
+            },
+            &radiosity::observe::Silent,
+        );
+        assert!(
+            image.pixels.iter().flatten().all(|c| c.is_finite()),
+            "a lightmapped view made a non-finite pixel"
+        );
+        ok = true;
+    }
+    if let Ok((scene, set)) = radiosity::scene::gltf::load_lightmap(path, false, false) {
+        if set.uv.iter().all(|u| u.is_some()) && scene.validate_geometry().is_ok() {
+            let uv: Vec<[[f32; 2]; 3]> = set.uv.into_iter().flatten().collect();
+            let _ = radiosity::bake::given::unwrap_given(
+                &scene,
+                radiosity::bake::uv::Density::AtlasSize(32),
+                &uv,
+            );
+        }
+        ok = true;
+    }
+    ok
 }
 
 const TOKENS: [&str; 14] = [
@@ -326,6 +400,7 @@ fn parse(target: Target, dir: &Path) -> bool {
         Target::Mgf => scene("room.mgf"),
         Target::Gltf => scene("room.gltf"),
         Target::Glb => scene("room.glb"),
+        Target::GlbLightmap => lightmapped(&dir.join("lit.glb")),
         Target::PlyAscii => scene("room.ply"),
         Target::PlyBinary => scene("room_be.ply"),
         Target::Vs3 => scene("box.vs3"),

@@ -436,3 +436,430 @@ fn err_text(p: &LightmapParams, scene: &Scene, s: &Solution) -> String {
         .unwrap_err()
         .to_string()
 }
+
+/// A glTF of one square (−1..1 in x and y, facing +z) whose `TEXCOORD_1` spans the unit
+/// square (top-left corner (0, 0)), lit by a `MOZ_lightmap` of intensity `intensity` on the
+/// PNG `png`, with a camera at (0, 0, 3) looking down −z seeing ±1.5.
+fn gradient_glb(png: &[u8], intensity: f64) -> Vec<u8> {
+    let mut bin: Vec<u8> = Vec::new();
+    let pos: [[f32; 3]; 4] = [[-1., 1., 0.], [1., 1., 0.], [1., -1., 0.], [-1., -1., 0.]];
+    let uv: [[f32; 2]; 4] = [[0., 0.], [1., 0.], [1., 1.], [0., 1.]];
+    for p in pos.iter().flatten().chain(uv.iter().flatten()) {
+        bin.extend_from_slice(&p.to_le_bytes());
+    }
+    for i in [0u32, 3, 2, 0, 2, 1] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let png_at = bin.len();
+    bin.extend_from_slice(png);
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["MOZ_lightmap"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"camera": 0, "translation": [0.0, 0.0, 3.0]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 2.0 * (0.5f64).atan(), "znear": 0.01}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1, "TEXCOORD_1": 1},
+            "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0},
+            "extensions": {"MOZ_lightmap": {"index": 0, "texCoord": 1, "intensity": intensity}}}],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}],
+        "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [-1.0, -1.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 24},
+            {"buffer": 0, "byteOffset": png_at, "byteLength": png.len()}
+        ],
+        "buffers": [{"byteLength": bin.len()}]
+    });
+    let mut text = serde_json::to_vec(&json).unwrap();
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let mut out = b"glTF".to_vec();
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((28 + text.len() + bin.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+/// An 8-bit RGB PNG of `w × h` pixels.
+fn png_rgb(w: u32, h: u32, rgb: &[u8]) -> Vec<u8> {
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        rgb,
+        w,
+        h,
+        image::ExtendedColorType::Rgb8,
+    )
+    .unwrap();
+    png
+}
+
+/// IEC 61966-2-1's decoding, written out here (the test's own reference).
+fn srgb_decode(e: f64) -> f64 {
+    if e <= 0.04045 {
+        e / 12.92
+    } else {
+        ((e + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// `view` of a square lit by a 2 × 2 lightmap: red 0 → 255 left to right, blue 0 → 255 top to
+/// bottom, green 128 everywhere, intensity π/2. Bilinear filtering of the decoded texels with
+/// clamped edges makes red `clamp(2u − ½, 0, 1)` and blue `clamp(2v − ½, 0, 1)`, green
+/// `srgb⁻¹(128/255)`, all times intensity/π = ½: every pixel inside the square must show that
+/// at its centre's (u, v). Tolerance 0.003: a pixel is the mean over its area (16 stratified
+/// rays), which differs from the centre's value only at the clamp's kinks, by at most
+/// slope × pixel / 8 = 1 × 0.0156 / 8 = 0.002, plus the stratified jitter's noise.
+#[test]
+fn view_renders_a_known_lightmap_gradient() {
+    let rgb = [0, 128, 0, 255, 128, 0, 0, 128, 255, 255, 128, 255];
+    let glb = gradient_glb(&png_rgb(2, 2, &rgb), std::f64::consts::PI / 2.0);
+    let path =
+        std::env::temp_dir().join(format!("radiosity-lm-gradient-{}.glb", std::process::id()));
+    std::fs::write(&path, &glb).unwrap();
+    let view = radiosity::render::baked::BakedView::load_lightmap(&path)
+        .unwrap()
+        .expect("a lightmapped file");
+    let (w, h) = (96u32, 96u32);
+    let image = view.render(
+        &view.default_camera(),
+        &radiosity::render::RenderParams {
+            width: w,
+            height: h,
+            samples_per_pixel: 16,
+            seed: 3,
+        },
+        &Silent,
+    );
+    let green = 0.5 * srgb_decode(128.0 / 255.0);
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for py in 0..h {
+        for px in 0..w {
+            let x = ((px as f64 + 0.5) / w as f64 * 2.0 - 1.0) * 1.5;
+            let y = (1.0 - (py as f64 + 0.5) / h as f64 * 2.0) * 1.5;
+            if x.abs() > 0.95 || y.abs() > 0.95 {
+                continue;
+            }
+            let (u, v) = ((x + 1.0) / 2.0, (1.0 - y) / 2.0);
+            let want = [
+                0.5 * (2.0 * u - 0.5).clamp(0.0, 1.0),
+                green,
+                0.5 * (2.0 * v - 0.5).clamp(0.0, 1.0),
+            ];
+            let got = image.at(px, py);
+            for c in 0..3 {
+                let d = (got[c] as f64 - want[c]).abs();
+                worst = worst.max(d);
+                assert!(
+                    d <= 3e-3,
+                    "pixel ({px}, {py}) channel {c}: {} vs {}",
+                    got[c],
+                    want[c]
+                );
+            }
+            checked += 1;
+        }
+    }
+    eprintln!("gradient: {checked} pixels, worst difference {worst:.5}");
+    assert!(checked > 3000);
+    std::fs::remove_file(&path).unwrap();
+}
+
+/// Hostile lightmap images are refused on one line naming the file and the place: an image
+/// claiming more pixels than its bytes can hold, and a texture index past the list.
+#[test]
+fn hostile_lightmaps_are_refused() {
+    let dir = std::env::temp_dir();
+    // A PNG whose header claims 16384 × 16384 pixels, with 2×2 pixels of data.
+    let mut png = png_rgb(2, 2, &[0; 12]);
+    png[16..20].copy_from_slice(&16384u32.to_be_bytes());
+    png[20..24].copy_from_slice(&16384u32.to_be_bytes());
+    let path = dir.join(format!("radiosity-lm-huge-{}.glb", std::process::id()));
+    std::fs::write(&path, gradient_glb(&png, 1.0)).unwrap();
+    let err = radiosity::render::baked::BakedView::load_lightmap(&path)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("radiosity-lm-huge") && err.contains("images[0]"),
+        "{err}"
+    );
+    assert!(!err.contains('\n'), "{err}");
+    // A MOZ_lightmap naming texture 7 of 1.
+    let glb = gradient_glb(&png_rgb(2, 2, &[0; 12]), 1.0);
+    let mut b = glb.clone();
+    let at = glb.windows(9).position(|w| w == b"\"index\":0").unwrap();
+    b[at + 8] = b'7';
+    let bad = dir.join(format!("radiosity-lm-index-{}.glb", std::process::id()));
+    std::fs::write(&bad, &b).unwrap();
+    let err = radiosity::render::baked::BakedView::load_lightmap(&bad)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("materials[0].extensions.MOZ_lightmap: no texture 7"),
+        "{err}"
+    );
+    std::fs::remove_file(&bad).unwrap();
+    std::fs::remove_file(&path).unwrap();
+}
+
+/// The display value of lightmap `map` at `uv` as the PNG holds it before quantisation:
+/// `min(1, B · scale)` per texel, then bilinear with clamped edges (the test's own sampler).
+fn display_sample(map: &Lightmap, scale: f64, uv: [f32; 2]) -> [f64; 3] {
+    let (w, h) = (map.width() as f64, map.height() as f64);
+    let x = (uv[0] as f64 * w - 0.5).clamp(0.0, w - 1.0);
+    let y = (uv[1] as f64 * h - 0.5).clamp(0.0, h - 1.0);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let at = |i: f64, j: f64| {
+        let (i, j) = (i.min(w - 1.0) as usize, j.min(h - 1.0) as usize);
+        let b = map.texels[j * map.width() as usize + i];
+        [b.r, b.g, b.b].map(|c| (c * scale).clamp(0.0, 1.0))
+    };
+    let (a, b, c, d) = (
+        at(x0, y0),
+        at(x0 + 1.0, y0),
+        at(x0, y0 + 1.0),
+        at(x0 + 1.0, y0 + 1.0),
+    );
+    std::array::from_fn(|k| {
+        a[k] * (1.0 - fx) * (1.0 - fy)
+            + b[k] * fx * (1.0 - fy)
+            + c[k] * (1.0 - fx) * fy
+            + d[k] * fx * fy
+    })
+}
+
+/// Points on each face of `map`'s unwrap (a 4 × 4 grid of barycentric points a triangle):
+/// (face, point, normal, UV).
+fn face_points(map: &Lightmap) -> Vec<(usize, Vec3, Vec3, [f32; 2])> {
+    let u = &map.unwrap;
+    let mut out = Vec::new();
+    for (f, p) in u.mesh.patches.iter().enumerate() {
+        for t in p.triangles() {
+            for i in 0..4 {
+                for j in 0..4 - i {
+                    let (a, b) = ((i as f32 + 0.3) / 4.0, (j as f32 + 0.3) / 4.0);
+                    let w = [1.0 - a - b, a, b];
+                    let x: Vec3 = (0..3).map(|k| u.mesh.vertices[t[k] as usize] * w[k]).sum();
+                    let uv = [0, 1].map(|c| (0..3).map(|k| u.uv[t[k] as usize][c] * w[k]).sum());
+                    out.push((f, x, p.normal, uv));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// What a baked view shows at the surface point `x` (normal `n`): the front hit of a ray
+/// arriving along −n.
+fn shown_at(view: &radiosity::render::baked::BakedView, x: Vec3, n: Vec3, lift: f32) -> [f64; 3] {
+    let ray = radiosity::geom::Ray::new(x + n * lift, -n);
+    let hit = view
+        .bvh
+        .closest_hit(&ray, 2.0 * lift)
+        .expect("the view's surface is there");
+    let s = view.shown(&hit);
+    [s.r, s.g, s.b]
+}
+
+/// The Cornell box baked with `--bake lightmap`, written and shown by `view`: at points on
+/// every face, what the view shows equals the baked atlas's display value `min(1, B · scale)`
+/// (bilinear at the point's UVs) within the PNG's quantisation, 0.5/255 of the sRGB code
+/// times the decoding's largest slope (2.275 at 1): 0.00446. And each quad's mean matches the
+/// vertex-colour bake of the same solution viewed the same way, within 4 % of the brightest
+/// channel (or 0.01): the two differ by the method, the lightmap's exact direct light against
+/// the patch mesh's interpolation (the block's shadow, the light's penumbra), not by the
+/// file formats.
+#[test]
+fn cornell_lightmap_view_matches_its_atlas_and_the_vertex_bake() {
+    let scene = radiosity::scene::builtin::cornell();
+    let s = solved(&scene, 3000);
+    let scale = s.auto_exposure() as f64;
+    let params = LightmapParams {
+        density: Density::AtlasSize(192),
+        direct: 8,
+        indirect: 64,
+        ..Default::default()
+    };
+    let map = baked(&scene, &s, &params);
+    let dir = std::env::temp_dir();
+    let lm = dir.join(format!("radiosity-lm-view-{}.glb", std::process::id()));
+    write_lightmap_gltf(
+        &lm,
+        &LightmapBake {
+            scene: &scene,
+            lightmap: &map,
+            scale: scale as f32,
+            camera: None,
+        },
+        true,
+    )
+    .unwrap();
+    let vb = dir.join(format!("radiosity-lm-vertex-{}.glb", std::process::id()));
+    let vertex = s.vertex_display_radiosity();
+    radiosity::export::bake::write(
+        &vb,
+        &radiosity::export::bake::Bake {
+            scene: &scene,
+            mesh: &s.mesh,
+            vertex_radiosity: &vertex,
+            scale: scale as f32,
+            camera: None,
+        },
+    )
+    .unwrap();
+    let view = radiosity::render::baked::BakedView::load_lightmap(&lm)
+        .unwrap()
+        .unwrap();
+    let vview = radiosity::render::baked::BakedView::load(&vb).unwrap();
+    let lift = 1e-3 * scene.bounds().diagonal();
+    let quant = 2.2749 * 0.5 / 255.0 + 1e-5;
+    let faces = map.unwrap.mesh.len();
+    let mut sums = vec![([0.0f64; 3], [0.0f64; 3], 0usize); faces];
+    let mut worst = 0.0f64;
+    for (f, x, n, uv) in face_points(&map) {
+        let got = shown_at(&view, x, n, lift);
+        let want = display_sample(&map, scale, uv);
+        for c in 0..3 {
+            let d = (got[c] - want[c]).abs();
+            worst = worst.max(d);
+            assert!(
+                d <= quant,
+                "face {f} at {x:?}: {got:?} vs the atlas's {want:?}"
+            );
+        }
+        let v = shown_at(&vview, x, n, lift);
+        let e = &mut sums[f];
+        for c in 0..3 {
+            e.0[c] += got[c];
+            e.1[c] += v[c];
+        }
+        e.2 += 1;
+    }
+    eprintln!("view against the atlas: worst {worst:.5} (limit {quant:.5})");
+    let mut worst_rel = 0.0f64;
+    for (f, (a, b, n)) in sums.iter().enumerate() {
+        let (a, b) = (a.map(|x| x / *n as f64), b.map(|x| x / *n as f64));
+        let top = a.iter().chain(b.iter()).fold(0.0f64, |m, x| m.max(*x));
+        for c in 0..3 {
+            let d = (a[c] - b[c]).abs();
+            worst_rel = worst_rel.max(d / top.max(0.25));
+            assert!(
+                d <= (0.04 * top).max(0.01),
+                "face {f}: lightmap mean {a:?}, vertex bake {b:?}"
+            );
+        }
+    }
+    eprintln!("per-quad means, lightmap against vertex bake: worst {worst_rel:.4} of the brightest channel");
+    std::fs::remove_file(&lm).unwrap();
+    std::fs::remove_file(&vb).unwrap();
+}
+
+/// A glTF that already has `TEXCOORD_1` (written by a first bake) baked again on its own UV
+/// set: the output's `TEXCOORD_1` at every triangle corner equals the input's bit for bit, the
+/// texels that lie on the surface are the same ones (the layout is the input's), and the
+/// Khronos validator passes the file with no errors and no warnings.
+#[test]
+fn an_existing_texcoord_1_is_kept_bit_for_bit() {
+    let scene = radiosity::scene::builtin::cornell();
+    let s = solved(&scene, 1500);
+    let params = LightmapParams {
+        density: Density::AtlasSize(128),
+        direct: 4,
+        indirect: 32,
+        ..Default::default()
+    };
+    let first = baked(&scene, &s, &params);
+    let dir = std::env::temp_dir();
+    let one = dir.join(format!("radiosity-lm-first-{}.glb", std::process::id()));
+    let two = dir.join(format!("radiosity-lm-second-{}.glb", std::process::id()));
+    let write = |path: &PathBuf, scene: &Scene, map: &Lightmap| {
+        write_lightmap_gltf(
+            path,
+            &LightmapBake {
+                scene,
+                lightmap: map,
+                scale: 1.0,
+                camera: None,
+            },
+            true,
+        )
+        .unwrap()
+    };
+    write(&one, &scene, &first);
+    let (input, set) = radiosity::scene::gltf::load_lightmap(&one, false, false).unwrap();
+    let uv: Vec<[[f32; 2]; 3]> = set
+        .uv
+        .iter()
+        .map(|u| u.expect("every triangle has TEXCOORD_1"))
+        .collect();
+    let s2 = solved(&input, 1500);
+    let vertex = radiosity::render::vertex_radiosity(&s2.mesh, &s2.radiosity);
+    let second =
+        radiosity::bake::lightmap::bake_on(&input, s2.surfaces(), &vertex, &params, Some(&uv))
+            .unwrap();
+    assert_eq!((second.width(), second.height()), (128, 128));
+    write(&two, &input, &second);
+    let (output, set2) = radiosity::scene::gltf::load_lightmap(&two, false, false).unwrap();
+    assert_eq!(output.polygons.len(), input.polygons.len());
+    for (i, (p, q)) in input.polygons.iter().zip(&output.polygons).enumerate() {
+        let (a, b) = (set.uv[i].unwrap(), set2.uv[i].unwrap());
+        for (k, v) in q.vertices.iter().enumerate() {
+            // The same corner, wherever it sits in the triangle's order.
+            let j = (0..3)
+                .min_by(|&x, &y| {
+                    p.vertices[x]
+                        .distance(*v)
+                        .total_cmp(&p.vertices[y].distance(*v))
+                })
+                .unwrap();
+            assert!(p.vertices[j].distance(*v) <= 1e-3, "polygon {i} moved");
+            assert_eq!(
+                b[k].map(f32::to_bits),
+                a[j].map(f32::to_bits),
+                "polygon {i} corner {k}"
+            );
+        }
+    }
+    // The same texels on the surface as the first bake's own layout.
+    let differ = first
+        .kind
+        .iter()
+        .zip(&second.kind)
+        .filter(|(a, b)| (**a == Texel::Padding) != (**b == Texel::Padding))
+        .count();
+    eprintln!(
+        "kept UV set: {} charts, {} surface texels (first bake {}), {differ} texels differ in being on the surface",
+        second.unwrap.charts.len(),
+        second.surface_texels(),
+        first.surface_texels()
+    );
+    assert_eq!(second.unwrap.charts.len(), first.unwrap.charts.len());
+    assert!(
+        differ as f64 <= 1e-3 * first.surface_texels() as f64,
+        "{differ}"
+    );
+    let report = crate::validator::validate_gltf_report(std::slice::from_ref(&two));
+    assert!(report.contains(": 0 errors, 0 warnings"), "{report}");
+    std::fs::remove_file(&one).unwrap();
+    std::fs::remove_file(&two).unwrap();
+}

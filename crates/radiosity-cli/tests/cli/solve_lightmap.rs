@@ -109,3 +109,88 @@ fn lightmap_options_are_checked() {
         &["flat.obj"],
     );
 }
+
+/// `view` shows a lightmap bake lit by its lightmap: the picture's mean (linear, PFM) within
+/// 4 % of the vertex bake's of the same solution (the two bakes' methods differ by a few
+/// per cent per quad, `tests/lightmap.rs`); baking the lightmapped file again keeps its
+/// TEXCOORD_1; `--gather` on it asks for a vertex bake's radiosity.
+#[test]
+fn view_shows_a_lightmap_and_a_rebake_keeps_its_uvs() {
+    let dir = scratch("lightmap-view");
+    let solve = ["solve", "cornell", "--patches", "1500"];
+    let lm = [
+        &solve[..],
+        &[
+            "--out",
+            "lit.glb",
+            "--bake",
+            "lightmap",
+            "--lightmap-size",
+            "128",
+        ],
+    ]
+    .concat();
+    run_ok(&lm, &dir);
+    run_ok(&[&solve[..], &["--out", "vertex.glb"]].concat(), &dir);
+    let out = run_ok(
+        &[
+            "view", "lit.glb", "-o", "lit.pfm", "--width", "96", "--height", "96",
+        ],
+        &dir,
+    );
+    assert!(
+        out.contains("triangles lit by their lightmap (128×128)"),
+        "{out}"
+    );
+    run_ok(
+        &[
+            "view",
+            "vertex.glb",
+            "-o",
+            "vertex.pfm",
+            "--width",
+            "96",
+            "--height",
+            "96",
+        ],
+        &dir,
+    );
+    let mean = |name: &str| {
+        let p = read_pfm_pixels(&dir.join(name));
+        p.iter().map(|c| (c[0] + c[1] + c[2]) as f64).sum::<f64>() / p.len() as f64
+    };
+    let (a, b) = (mean("lit.pfm"), mean("vertex.pfm"));
+    eprintln!("picture means: lightmap view {a:.5}, vertex view {b:.5}");
+    assert!(
+        (a - b).abs() <= 0.04 * b,
+        "lightmap view mean {a}, vertex view {b}"
+    );
+    let again = run_ok(
+        &[
+            "solve",
+            "lit.glb",
+            "--patches",
+            "1500",
+            "--out",
+            "again.glb",
+            "--bake",
+            "lightmap",
+            "--lightmap-size",
+            "128",
+        ],
+        &dir,
+    );
+    assert!(again.contains("(the input's TEXCOORD_1, kept"), "{again}");
+    fails(
+        &["view", "lit.glb", "--gather", "-o", "g.png"],
+        &dir,
+        &["lit.glb", "_RADIOSITY"],
+        &[
+            "lit.glb",
+            "vertex.glb",
+            "lit.pfm",
+            "vertex.pfm",
+            "again.glb",
+        ],
+    );
+}

@@ -262,16 +262,44 @@ fn stand_in(p: [f32; 2], t: &[[f32; 2]; 3]) -> ([f32; 2], f32) {
     best
 }
 
-/// The evaluated texels of one chart, in row order.
+/// Barycentric weights of `p` in the 2-D triangle `t` (the centroid's when it has no area).
+fn barycentric(p: [f32; 2], t: &[[f32; 2]; 3]) -> [f32; 3] {
+    let cross = |a: [f32; 2], b: [f32; 2], c: [f32; 2]| {
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    let area = cross(t[0], t[1], t[2]);
+    if area == 0.0 {
+        return [1.0 / 3.0; 3];
+    }
+    let w0 = cross(p, t[1], t[2]) / area;
+    let w1 = cross(t[0], p, t[2]) / area;
+    [w0, w1, 1.0 - w0 - w1]
+}
+
+/// The evaluated texels of one chart, in row order. A generated chart ([`super::uv`]) maps
+/// texels to its plane; a chart of a kept UV set ([`super::given`], no plane frame: zero
+/// axes) maps each face's UV triangle to the face by barycentric coordinates.
 fn chart_samples(u: &Unwrap, c: u32) -> Vec<Sample> {
     let chart = &u.charts[c as usize];
+    let given = chart.axis_u == Vec3::ZERO;
     let (w, h) = (chart.width, chart.height);
     let reach = std::f32::consts::FRAC_1_SQRT_2;
     let mut best: Vec<(f32, [f32; 2], u32)> = vec![(f32::INFINITY, [0.0; 2], 0); (w * h) as usize];
+    let texel_of = |v: u32| {
+        if given {
+            let q = u.uv[v as usize];
+            [
+                q[0] * u.width as f32 - chart.x0 as f32,
+                q[1] * u.height as f32 - chart.y0 as f32,
+            ]
+        } else {
+            chart.texel_coords(u.mesh.vertices[v as usize], u.texel)
+        }
+    };
     for &f in &chart.faces {
         let p = &u.mesh.patches[f as usize];
         for tri in p.triangles() {
-            let t = tri.map(|v| chart.texel_coords(u.mesh.vertices[v as usize], u.texel));
+            let t = tri.map(texel_of);
             let lo = |k: usize| t.iter().map(|q| q[k]).fold(f32::INFINITY, f32::min);
             let hi = |k: usize| t.iter().map(|q| q[k]).fold(f32::NEG_INFINITY, f32::max);
             let x0 = (lo(0) - 1.0).floor().max(0.0) as u32;
@@ -294,7 +322,24 @@ fn chart_samples(u: &Unwrap, c: u32) -> Vec<Sample> {
     for j in 0..h {
         for i in 0..w {
             let (d, q, f) = best[(j * w + i) as usize];
-            if d.is_finite() {
+            if d.is_finite() && given {
+                let face = &u.mesh.patches[f as usize];
+                let tri = [face.vertices[0], face.vertices[1], face.vertices[2]];
+                let b = barycentric(q, &tri.map(texel_of));
+                let x = tri
+                    .iter()
+                    .zip(b)
+                    .map(|(&v, b)| u.mesh.vertices[v as usize] * b)
+                    .sum::<Vec3>();
+                out.push(Sample {
+                    index: (chart.y0 + j) * u.width + chart.x0 + i,
+                    chart: c,
+                    local: (i, j),
+                    face: f,
+                    x,
+                    inside: d == 0.0,
+                });
+            } else if d.is_finite() {
                 // On the face's own plane (a chart of nearly coplanar faces has their mean
                 // plane): along the chart's normal onto the face.
                 let p = chart.point(q, u.texel);
@@ -378,6 +423,18 @@ pub fn bake(
     vertex_radiosity: &[Rgb],
     params: &LightmapParams,
 ) -> Result<Lightmap, LightmapError> {
+    bake_on(scene, surfaces, vertex_radiosity, params, None)
+}
+
+/// [`bake`] on the scene's own UV set when `given` holds one (the UVs at each polygon's three
+/// corners, [`super::given`]), else on a generated one.
+pub fn bake_on(
+    scene: &Scene,
+    surfaces: Surfaces<'_>,
+    vertex_radiosity: &[Rgb],
+    params: &LightmapParams,
+    given: Option<&[[[f32; 2]; 3]]>,
+) -> Result<Lightmap, LightmapError> {
     if params.direct == 0 {
         return Err(LightmapError::NoSamples {
             what: "shadow rays a texel",
@@ -388,7 +445,10 @@ pub fn bake(
             what: "indirect samples a record",
         });
     }
-    let u = unwrap(scene, params.density)?;
+    let u = match given {
+        Some(uv) => super::given::unwrap_given(scene, params.density, uv)?,
+        None => unwrap(scene, params.density)?,
+    };
     let gather = Gather::new(
         surfaces,
         vertex_radiosity,
@@ -516,6 +576,10 @@ pub fn bake(
                     let index = (chart.y0 as i64 + rj) * u.width as i64 + chart.x0 as i64 + ri;
                     let rk = slot[index as usize];
                     if rk == u32::MAX {
+                        continue;
+                    }
+                    // Another chart's texel (a kept UV set's rectangles may overlap).
+                    if samples[rk as usize].chart != s.chart {
                         continue;
                     }
                     let Some(r) = records[rk as usize] else {

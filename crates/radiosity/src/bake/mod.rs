@@ -3,6 +3,7 @@
 //!
 //! - [`uv`]: the second UV set (`TEXCOORD_1`): planar charts of the scene's faces, projected
 //!   without stretch and packed into one atlas at a uniform texel density, with padding;
+//! - [`given`]: the input's own UV set (an existing `TEXCOORD_1`), kept instead;
 //! - [`lightmap`]: each texel's radiosity by the final gather at the texel's surface point
 //!   (exact direct light with shadow rays, the indirect from the radiosity solution), covered
 //!   texels dark, padding dilated.
@@ -26,5 +27,6 @@
 //! assert!(map.texels.iter().all(|b| b.r.is_finite() && b.r >= 0.0));
 //! ```
 
+pub mod given;
 pub mod lightmap;
 pub mod uv;

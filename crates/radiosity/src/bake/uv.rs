@@ -138,6 +138,9 @@ pub enum UnwrapError {
     /// The scene's faces could not be cut.
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// The input's own UV set cannot be kept ([`super::given`]).
+    #[error("the input's TEXCOORD_1: {0}")]
+    Given(String),
 }
 
 /// Chart the scene's faces and pack them at `density`.

@@ -445,7 +445,7 @@ fn baked_material(m: &::gltf::Material) -> Option<Result<(Rgb, Rgb), String>> {
 /// Load a glTF 2.0 scene (`.gltf` or `.glb`); `one_sided` drops the back copies of
 /// double-sided materials.
 pub fn load_with(path: &Path, one_sided: bool) -> Result<Scene, SceneError> {
-    read_scene(path, one_sided, None)
+    read_scene(path, one_sided, None, None)
 }
 
 /// A baked file as a viewer shows it: the scene, and for each polygon (triangle) the linear
@@ -487,8 +487,320 @@ pub fn load_vertex_values(
     which: VertexValues,
 ) -> Result<(Scene, Vec<[Rgb; 3]>), SceneError> {
     let mut values = Vec::new();
-    let scene = read_scene(path, false, Some((&mut values, which)))?;
+    let scene = read_scene(path, false, Some((&mut values, which)), None)?;
     Ok((scene, values))
+}
+
+/// Largest lightmap image side read, texels (as [`crate::bake::uv::MAX_ATLAS`]).
+pub const MAX_LIGHTMAP_SIDE: u32 = 16_384;
+
+/// Deflate's largest compression ratio (RFC 1951: a 258-byte match in 2 bits, about 1032:1),
+/// which bounds how many pixels an image of a given file size can honestly hold.
+const MAX_DEFLATE_RATIO: u64 = 1032;
+
+/// How a lightmap texture is sampled outside `[0, 1]` (glTF sampler `wrapS`/`wrapT`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    /// `CLAMP_TO_EDGE` (what `radiosity solve --bake lightmap` writes).
+    Clamp,
+    /// `REPEAT` (glTF's default).
+    Repeat,
+    /// `MIRRORED_REPEAT`.
+    Mirror,
+}
+
+impl Wrap {
+    fn index(self, i: i64, n: u32) -> usize {
+        let n = n as i64;
+        (match self {
+            Wrap::Clamp => i.clamp(0, n - 1),
+            Wrap::Repeat => i.rem_euclid(n),
+            Wrap::Mirror => {
+                let m = i.rem_euclid(2 * n);
+                if m >= n {
+                    2 * n - 1 - m
+                } else {
+                    m
+                }
+            }
+        }) as usize
+    }
+}
+
+/// A decoded lightmap image: 8-bit sRGB RGB texels, rows top to bottom (glTF's UV `(0, 0)` is
+/// the top-left corner).
+#[derive(Clone, Debug)]
+pub struct LightmapImage {
+    /// Width, texels.
+    pub width: u32,
+    /// Height, texels.
+    pub height: u32,
+    /// `width × height × 3` bytes.
+    pub srgb: Vec<u8>,
+}
+
+/// A material's `MOZ_lightmap` (Mozilla Hubs' extension, which three.js applies as its
+/// `lightMap`): the image, the UV set, the intensity, and how it lights the surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightmapMaterial {
+    /// Index into [`LightmapSet::images`].
+    pub image: u32,
+    /// The UV set it reads (`texCoord`: `TEXCOORD_n`).
+    pub tex_coord: u32,
+    /// `intensity` (default 1).
+    pub intensity: f64,
+    /// The material's diffuse colour: `baseColorFactor` (rgb) × (1 − `metallicFactor`), as
+    /// three.js's standard material multiplies the lightmap by it.
+    pub diffuse: Rgb,
+    /// The sampler's wrap modes along u and v.
+    pub wrap: [Wrap; 2],
+    /// Whether the sampler magnifies by the nearest texel (`magFilter` 9728) instead of
+    /// bilinearly.
+    pub nearest: bool,
+}
+
+/// The lightmap side of a glTF file: for each polygon of the scene (in the order the scene
+/// has them), the UV set's values at its three corners and its material's lightmap.
+#[derive(Clone, Debug, Default)]
+pub struct LightmapSet {
+    /// Per polygon: the UV set at its corners (`None`: the primitive has none).
+    pub uv: Vec<Option<[[f32; 2]; 3]>>,
+    /// Per polygon: index into [`LightmapSet::materials`] (`None`: no lightmap).
+    pub material: Vec<Option<u32>>,
+    /// The lightmapped materials.
+    pub materials: Vec<LightmapMaterial>,
+    /// The decoded images.
+    pub images: Vec<LightmapImage>,
+    /// Image indices (glTF) already decoded, to their slot.
+    image_slot: HashMap<usize, u32>,
+}
+
+impl LightmapSet {
+    /// The linear value of lightmap `material` at `uv`, sampled as a GPU samples an sRGB
+    /// texture: each texel decoded to linear (IEC 61966-2-1), then filtered bilinearly (or by
+    /// the nearest texel) with the sampler's wrap modes.
+    pub fn sample(&self, material: u32, uv: [f32; 2]) -> Rgb {
+        let m = &self.materials[material as usize];
+        let img = &self.images[m.image as usize];
+        let (w, h) = (img.width, img.height);
+        let texel = |x: i64, y: i64| {
+            let at = (m.wrap[1].index(y, h) * w as usize + m.wrap[0].index(x, w)) * 3;
+            let c = &img.srgb[at..at + 3];
+            Rgb::new(srgb8(c[0]), srgb8(c[1]), srgb8(c[2]))
+        };
+        // Texel coordinates; saturating casts keep absurd UVs finite.
+        let (x, y) = (uv[0] as f64 * w as f64, uv[1] as f64 * h as f64);
+        if m.nearest {
+            return texel(x.floor() as i64, y.floor() as i64);
+        }
+        let (x, y) = (x - 0.5, y - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        texel(x0, y0) * ((1.0 - fx) * (1.0 - fy))
+            + texel(x0.saturating_add(1), y0) * (fx * (1.0 - fy))
+            + texel(x0, y0.saturating_add(1)) * ((1.0 - fx) * fy)
+            + texel(x0.saturating_add(1), y0.saturating_add(1)) * (fx * fy)
+    }
+
+    /// The radiance a white-lit viewer shows for lightmap `material` at `uv`: three.js's
+    /// standard material takes the lightmap texel times `intensity` as irradiance and reflects
+    /// it by the Lambert BRDF, `L = diffuse · texel · intensity / π`.
+    pub fn radiance(&self, material: u32, uv: [f32; 2]) -> Rgb {
+        let m = &self.materials[material as usize];
+        self.sample(material, uv) * m.diffuse * (m.intensity * std::f64::consts::FRAC_1_PI)
+    }
+}
+
+/// The linear value of an 8-bit sRGB code.
+fn srgb8(c: u8) -> f64 {
+    static LUT: std::sync::OnceLock<[f64; 256]> = std::sync::OnceLock::new();
+    LUT.get_or_init(|| std::array::from_fn(|v| crate::color::srgb_to_linear(v as f64 / 255.0)))
+        [c as usize]
+}
+
+/// A material's `MOZ_lightmap` as written in the JSON.
+#[derive(Clone, Copy, Debug)]
+struct Moz {
+    index: usize,
+    tex_coord: u32,
+    intensity: f64,
+}
+
+/// `extensions.MOZ_lightmap` of every material (`None` where absent), checked.
+fn moz_lightmaps(path: &Path, json: &[u8], count: usize) -> Result<Vec<Option<Moz>>, SceneError> {
+    use serde_json::Value;
+    let root: Value = serde_json::from_str(&String::from_utf8_lossy(json))
+        .map_err(|e| invalid(path, format!("invalid glTF JSON: {e}")))?;
+    let mut out = vec![None; count];
+    let materials = root.get("materials").and_then(Value::as_array);
+    for (i, m) in materials.into_iter().flatten().enumerate().take(count) {
+        let Some(z) = m.get("extensions").and_then(|e| e.get("MOZ_lightmap")) else {
+            continue;
+        };
+        let what = format!("materials[{i}].extensions.MOZ_lightmap");
+        let index = z
+            .get("index")
+            .and_then(Value::as_u64)
+            .ok_or_else(|| invalid(path, format!("{what}: 'index' must be a texture index")))?;
+        let tex_coord = match z.get("texCoord") {
+            None => 0,
+            Some(v) => v
+                .as_u64()
+                .filter(|k| *k < 64)
+                .ok_or_else(|| invalid(path, format!("{what}: 'texCoord' must be a set index")))?,
+        };
+        let intensity = match z.get("intensity") {
+            None => 1.0,
+            Some(v) => v
+                .as_f64()
+                .filter(|x| x.is_finite() && *x >= 0.0)
+                .ok_or_else(|| {
+                    invalid(
+                        path,
+                        format!("{what}: 'intensity' must be a finite number ≥ 0"),
+                    )
+                })?,
+        };
+        out[i] = Some(Moz {
+            index: index.min(usize::MAX as u64) as usize,
+            tex_coord: tex_coord as u32,
+            intensity,
+        });
+    }
+    Ok(out)
+}
+
+impl Reader<'_> {
+    /// Decode a material's lightmap (its image once per file) into `set`; its slot.
+    fn lightmap_material(
+        &mut self,
+        set: &mut LightmapSet,
+        material: &::gltf::Material,
+        m: usize,
+        z: Moz,
+    ) -> Result<u32, SceneError> {
+        use ::gltf::texture::{MagFilter, WrappingMode};
+        let what = format!("materials[{m}].extensions.MOZ_lightmap");
+        let tex = self.doc.textures().nth(z.index).ok_or_else(|| {
+            invalid(
+                self.path,
+                format!(
+                    "{what}: no texture {} (the file has {})",
+                    z.index,
+                    self.doc.textures().count()
+                ),
+            )
+        })?;
+        let image = tex.source();
+        let slot = match set.image_slot.get(&image.index()) {
+            Some(s) => *s,
+            None => {
+                let img = self.lightmap_image(image, &format!("{what}: textures[{}]", z.index))?;
+                set.images.push(img);
+                let s = (set.images.len() - 1) as u32;
+                set.image_slot.insert(tex.source().index(), s);
+                s
+            }
+        };
+        let sampler = tex.sampler();
+        let wrap = |w: WrappingMode| match w {
+            WrappingMode::ClampToEdge => Wrap::Clamp,
+            WrappingMode::MirroredRepeat => Wrap::Mirror,
+            WrappingMode::Repeat => Wrap::Repeat,
+        };
+        let pbr = material.pbr_metallic_roughness();
+        let f = pbr.base_color_factor();
+        let metal = (1.0 - pbr.metallic_factor() as f64).clamp(0.0, 1.0);
+        set.materials.push(LightmapMaterial {
+            image: slot,
+            tex_coord: z.tex_coord,
+            intensity: z.intensity,
+            diffuse: Rgb::new(f[0] as f64, f[1] as f64, f[2] as f64) * metal,
+            wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
+            nearest: sampler.mag_filter() == Some(MagFilter::Nearest),
+        });
+        Ok((set.materials.len() - 1) as u32)
+    }
+
+    /// Decode a lightmap image to 8-bit sRGB RGB. Its size is checked before any pixel is
+    /// allocated: at most [`MAX_LIGHTMAP_SIDE`] a side, and no more pixels than its bytes can
+    /// hold (a row of one-bit pixels compressed at deflate's best ratio).
+    fn lightmap_image(
+        &self,
+        image: ::gltf::Image,
+        what: &str,
+    ) -> Result<LightmapImage, SceneError> {
+        let what = format!("{what}: images[{}]", image.index());
+        let (bytes, from) = match image.source() {
+            ::gltf::image::Source::View { view, .. } => {
+                let buffer = &self.buffers[view.buffer().index()];
+                let end = view.offset().checked_add(view.length());
+                let Some(end) = end.filter(|e| *e <= buffer.len()) else {
+                    return Err(invalid(
+                        self.path,
+                        format!("{what}: its buffer view reaches past the buffer"),
+                    ));
+                };
+                (buffer[view.offset()..end].to_vec(), what.clone())
+            }
+            ::gltf::image::Source::Uri { uri, .. } => self.resolve(uri, &what)?,
+        };
+        let fail = |e: &dyn std::fmt::Display| {
+            invalid(self.path, format!("{from}: cannot decode the image ({e})"))
+        };
+        let decoder = image::ImageReader::new(std::io::Cursor::new(&bytes))
+            .with_guessed_format()
+            .map_err(|e| fail(&e))?
+            .into_decoder()
+            .map_err(|e| fail(&e))?;
+        use image::ImageDecoder as _;
+        let (w, h) = decoder.dimensions();
+        if w == 0 || h == 0 || w > MAX_LIGHTMAP_SIDE || h > MAX_LIGHTMAP_SIDE {
+            return Err(invalid(
+                self.path,
+                format!("{from}: a {w} × {h} image; a lightmap must be 1 to {MAX_LIGHTMAP_SIDE} texels a side"),
+            ));
+        }
+        let least = h as u64 * (1 + (w as u64).div_ceil(8));
+        if least > MAX_DEFLATE_RATIO * bytes.len() as u64 + 1024 {
+            return Err(invalid(
+                self.path,
+                format!(
+                    "{from}: a {w} × {h} image cannot be held in {} bytes: the file is damaged",
+                    bytes.len()
+                ),
+            ));
+        }
+        let mut decoder = decoder;
+        let mut limits = image::Limits::default();
+        limits.max_image_width = Some(w);
+        limits.max_image_height = Some(h);
+        limits.max_alloc = Some(w as u64 * h as u64 * 8 + (1 << 20));
+        decoder.set_limits(limits).map_err(|e| fail(&e))?;
+        let img = image::DynamicImage::from_decoder(decoder)
+            .map_err(|e| fail(&e))?
+            .into_rgb8();
+        Ok(LightmapImage {
+            width: w,
+            height: h,
+            srgb: img.into_raw(),
+        })
+    }
+}
+
+/// A lightmapped glTF: the scene and, per polygon, its lightmap UVs. With `textures`, each
+/// primitive whose material has `MOZ_lightmap` gets that extension's UV set (`texCoord`) and
+/// its decoded image ([`LightmapSet::radiance`] lights it); without, every primitive's
+/// `TEXCOORD_1`, when it has one, is read (what a lightmap bake keeps) and no image is decoded.
+pub fn load_lightmap(
+    path: &Path,
+    one_sided: bool,
+    textures: bool,
+) -> Result<(Scene, LightmapSet), SceneError> {
+    let mut set = LightmapSet::default();
+    let scene = read_scene(path, one_sided, None, Some((&mut set, textures)))?;
+    Ok((scene, set))
 }
 
 /// What the `gltf` crate's validation lets through and its accessors then unwrap (a panic on a
@@ -610,6 +922,7 @@ fn read_scene(
     path: &Path,
     one_sided: bool,
     colours: Option<(&mut Vec<[Rgb; 3]>, VertexValues)>,
+    mut lightmap: Option<(&mut LightmapSet, bool)>,
 ) -> Result<Scene, SceneError> {
     let (mut colours, which) = match colours {
         Some((c, w)) => (Some(c), w),
@@ -619,7 +932,7 @@ fn read_scene(
         path: path.to_path_buf(),
         source,
     })?;
-    let Opened { gltf, bin, .. } = open(path, &bytes)?;
+    let Opened { gltf, bin, json } = open(path, &bytes)?;
     let doc = &gltf.document;
     let mut r = Reader {
         path,
@@ -628,6 +941,13 @@ fn read_scene(
         image_means: HashMap::new(),
     };
     r.load_buffers(bin)?;
+    // MOZ_lightmap of each material (parsed only when the lightmaps are asked for).
+    let moz = match &lightmap {
+        Some((_, true)) => moz_lightmaps(path, json, doc.materials().count())?,
+        _ => Vec::new(),
+    };
+    // glTF material index → the lightmap set's material slot.
+    let mut lightmap_slot: HashMap<usize, u32> = HashMap::new();
 
     let scene = doc
         .default_scene()
@@ -802,6 +1122,67 @@ fn read_scene(
                     )
                 }
             };
+            // The lightmap's UV set (and its material slot) when asked for.
+            let (corner_uvs, slot): (Option<Vec<[f32; 2]>>, Option<u32>) = match &mut lightmap {
+                None => (None, None),
+                Some((set, textures)) => {
+                    let moz_of = prim
+                        .material()
+                        .index()
+                        .and_then(|m| moz.get(m).copied().flatten().map(|z| (m, z)));
+                    let (set_index, slot) = match (*textures, moz_of) {
+                        (false, _) => (Some(1), None),
+                        (true, None) => (None, None),
+                        (true, Some((m, z))) => {
+                            let slot = match lightmap_slot.get(&m) {
+                                Some(s) => *s,
+                                None => {
+                                    let s = r.lightmap_material(set, &prim.material(), m, z)?;
+                                    lightmap_slot.insert(m, s);
+                                    s
+                                }
+                            };
+                            (Some(z.tex_coord), Some(slot))
+                        }
+                    };
+                    match set_index {
+                        None => (None, None),
+                        Some(k) => match prim.get(&::gltf::Semantic::TexCoords(k)) {
+                            None if slot.is_some() => {
+                                return Err(invalid(
+                                    path,
+                                    format!("{what}: its material's MOZ_lightmap reads TEXCOORD_{k}, which the primitive does not have"),
+                                ))
+                            }
+                            None => (None, None),
+                            Some(acc) => {
+                                let name = format!("{what}.TEXCOORD_{k}");
+                                let (c, dims) = r.read(&acc, &name)?;
+                                if dims != 2 || c.len() / 2 != nverts {
+                                    return Err(invalid(
+                                        path,
+                                        format!("{name}: must be VEC2 with one value per vertex"),
+                                    ));
+                                }
+                                if let Some(i) = c.iter().position(|x| !x.is_finite()) {
+                                    return Err(invalid(
+                                        path,
+                                        format!("{name}: element {} is not finite", i / 2),
+                                    ));
+                                }
+                                (
+                                    Some(
+                                        c.chunks_exact(2)
+                                            .map(|c| [c[0] as f32, c[1] as f32])
+                                            .collect(),
+                                    ),
+                                    slot,
+                                )
+                            }
+                        },
+                    }
+                }
+            };
             // A baked or unlit material's COLOR_0 is light, not reflectance: expected, not lost.
             let baked = prim.material().unlit() || baked_material(&prim.material()).is_some();
             if colours.is_none() && !baked && prim.get(&::gltf::Semantic::Colors(0)).is_some() {
@@ -881,6 +1262,22 @@ fn read_scene(
                         out.push([c[2], c[1], c[0]]);
                     }
                 }
+                if let Some((set, _)) = &mut lightmap {
+                    let mut uv = corner_uvs
+                        .as_ref()
+                        .map(|c| [c[t[0] as usize], c[t[1] as usize], c[t[2] as usize]]);
+                    if mirrored {
+                        if let Some(u) = &mut uv {
+                            u.reverse();
+                        }
+                    }
+                    set.uv.push(uv);
+                    set.material.push(slot);
+                    if back.is_some() {
+                        set.uv.push(uv.map(|u| [u[2], u[1], u[0]]));
+                        set.material.push(slot);
+                    }
+                }
                 let reversed = back.map(|b| (v.iter().rev().copied().collect(), b));
                 polygons.push(Polygon {
                     vertices: v,
@@ -916,6 +1313,18 @@ fn read_scene(
     if let Some(out) = colours {
         let mut k = 0;
         out.retain(|_| {
+            k += 1;
+            keep[k - 1]
+        });
+    }
+    if let Some((set, _)) = lightmap {
+        let mut k = 0;
+        set.uv.retain(|_| {
+            k += 1;
+            keep[k - 1]
+        });
+        let mut k = 0;
+        set.material.retain(|_| {
             k += 1;
             keep[k - 1]
         });
