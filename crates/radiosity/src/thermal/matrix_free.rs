@@ -53,6 +53,27 @@
 //! many patches a patch sees; and the start's remaining bias (below `tolerance`, damped the
 //! same way).
 //!
+//! **The adaptive stage** (`flux_error`, default 1 % of the mean |flux| of the patches at a
+//! prescribed temperature). On the city, the patches' reported errors spread from half to
+//! more than twice their mean, but two seeds' reports correlate at only about 0.1 patch by
+//! patch: the spread is the estimate's own noise (the standard deviation of 8 batches is
+//! uncertain by a quarter, and the largest of 10⁵ such estimates is twice the mean), not
+//! patches that are harder than others. Raising every patch's rays until the worst estimate
+//! is below the target would cost about four times the rays; the adaptive stage instead gives
+//! more rays to the patches whose estimate is above the target, **within every batch**: the
+//! patch gathers `m` more stratified rays from each batch's own radiosities with streams of
+//! that batch, and the batch's irradiation becomes the mean over all the batch's rays. The
+//! batches stay independent and alike, so their spread is still the error. Choosing a patch
+//! by the batches' spread does not bias its mean (for nearly normal batch means, the sample
+//! mean and the sample variance are independent), and the re-estimated spread of a chosen
+//! patch still holds the old rays' share, which the choice made large: the report errs on
+//! the high side there. Rounds repeat (at most 4) while estimates remain above the target; a
+//! patch's rays grow at most fourfold a round and to 64 times the flux rays in all, past
+//! which what is left is the noise carried in the radiosities it gathers from (those are
+//! reported as left above). Why not importance sampling toward the hot or cold parts of the
+//! hemisphere: it needs to know where they are, and the errors are spread evenly over the
+//! patches rather than concentrated where the hemisphere is split.
+//!
 //! **Energy books.** The power lost to the surroundings is estimated from the same rays as the
 //! irradiation: `Σ_i A_i F̂_ie (J_i − σT_e⁴)`, F̂_ie the share of patch i's final rays in a
 //! batch that met nothing, taken with the mean J of the *other* batches (a batch's own J is
@@ -440,14 +461,16 @@ fn refine_flux(
                     return;
                 }
                 let mean = (0..b).map(|k| hv[k][i]).sum::<f64>() / b as f64;
-                let var = (0..b).map(|k| (hv[k][i] - mean).powi(2)).sum::<f64>()
-                    / (b as f64 - 1.0);
+                let var = (0..b).map(|k| (hv[k][i] - mean).powi(2)).sum::<f64>() / (b as f64 - 1.0);
                 let eps = 1.0 - d[i];
                 *se = eps * (var / b as f64).sqrt();
                 *qa = (e[i] - eps * mean).abs();
             });
         let flux_patches = known_t.iter().filter(|&&k| k).count();
-        let mean_abs = (0..n).filter(|&i| known_t[i]).map(|i| q_abs[i]).sum::<f64>()
+        let mean_abs = (0..n)
+            .filter(|&i| known_t[i])
+            .map(|i| q_abs[i])
+            .sum::<f64>()
             / flux_patches.max(1) as f64;
         let target = params.flux_error * mean_abs;
         out.target = target;
@@ -751,9 +774,9 @@ pub fn solve_matrix_free(
         jb.par_iter_mut()
             .enumerate()
             .for_each(|(i, j)| *j = e[i] + d[i] * h[i]);
-        q.par_iter_mut().enumerate().for_each(|(i, q)| {
-            *q = flux_given[system.group[i] as usize].unwrap_or(jb[i] - h[i])
-        });
+        q.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, q)| *q = flux_given[system.group[i] as usize].unwrap_or(jb[i] - h[i]));
         m_h.add(batch, h.par_iter().copied());
         m_q.add(batch, q.par_iter().copied());
         m_eb.add(
