@@ -600,6 +600,11 @@ pub struct ThermalArgs {
     /// Matrix-free: independent batches, whose spread gives the standard errors (2 to 4096).
     #[arg(long, value_name = "B", default_value_t = radiosity::thermal::MatrixFreeParams::default().batches, help_heading = SOLVER)]
     pub batches: u32,
+    /// Matrix-free: the per-patch flux error wanted (one standard error), relative to the mean
+    /// |flux| of the patches at a prescribed temperature; patches above it after the batches
+    /// gather more rays within every batch (the adaptive stage). 0: no adaptive stage.
+    #[arg(long, value_name = "E", default_value_t = radiosity::thermal::MatrixFreeParams::default().flux_error, help_heading = SOLVER)]
+    pub flux_error: f64,
     /// Output: one row per boundary name, `name,area,emissivity,temperature,flux,power`
     /// (m², K, W/m², W).
     #[arg(long, short, value_name = "surfaces.csv", help_heading = OUTPUT)]

@@ -89,9 +89,16 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         temperature_rays: a.temperature_rays,
         sweep_rays: a.sweep_rays,
         batches: a.batches,
+        flux_error: a.flux_error,
         seed: a.seed,
         ..MatrixFreeParams::default()
     };
+    if !(a.flux_error.is_finite() && (0.0..1.0).contains(&a.flux_error)) {
+        bail!(
+            "--flux-error {}: give a share of the mean |flux| in [0, 1) (0: no adaptive stage)",
+            a.flux_error
+        );
+    }
     for (flag, value, lo, hi) in [
         (
             "--flux-rays",
@@ -476,6 +483,18 @@ pub fn run(a: ThermalArgs) -> Result<()> {
             mf.temperature_rays,
             mf.rays_cast as f64
         );
+        if mf.flux_target > 0.0 {
+            println!(
+                "adaptive    flux target {:.3e} W/m² ({} of the mean |flux|): {} patches gathered more rays in {} rounds ({:.3e} rays, at most {} a patch a batch); {} left above it",
+                mf.flux_target,
+                a.flux_error,
+                mf.refined_patches,
+                mf.refine_rounds,
+                mf.refine_rays as f64,
+                mf.most_flux_rays,
+                mf.above_target
+            );
+        }
         matrix_free_errors(system, solution);
     } else {
         let accuracy = match method {

@@ -655,8 +655,8 @@ fn thermal_reads_repeated_view3d_names() {
 /// `--solver matrix-free` on the hot-plate room (examples/, 4 × 4 patches a face at
 /// `--patches 200`): every surface's flux within 4 of its reported standard error of the
 /// stored solve's (adaptive factors), the `flux_std_error` columns written, the books' line,
-/// and the adaptive method's counts and accuracy on the stored run's summary; bad counts
-/// refused naming the flag.
+/// the adaptive stage's line, and the adaptive method's counts and accuracy on the stored
+/// run's summary; bad counts and flux-error targets refused naming the flag.
 #[test]
 fn thermal_matrix_free_matches_the_stored_solve() {
     let dir = scratch("thermal-matrix-free");
@@ -689,6 +689,10 @@ fn thermal_matrix_free_matches_the_stored_solve() {
     let free_out = thermal(&dir, &free_args);
     assert!(free_out.contains("matrix-free in"), "{free_out}");
     assert!(free_out.contains("standard errors: Σ power"), "{free_out}");
+    assert!(
+        free_out.contains("adaptive    flux target") && free_out.contains("left above it"),
+        "{free_out}"
+    );
     let stored = read_surfaces(&dir.join("s.csv"));
     let (header, rows) = read_csv(&dir.join("m.csv"));
     assert_eq!(
@@ -722,6 +726,8 @@ fn thermal_matrix_free_matches_the_stored_solve() {
         ("--batches", "1"),
         ("--flux-rays", "0"),
         ("--temperature-rays", "0"),
+        ("--flux-error", "1.5"),
+        ("--flux-error", "NaN"),
     ] {
         let mut args = vec!["thermal"];
         args.extend_from_slice(&common);

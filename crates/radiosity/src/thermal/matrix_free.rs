@@ -53,6 +53,27 @@
 //! many patches a patch sees; and the start's remaining bias (below `tolerance`, damped the
 //! same way).
 //!
+//! **The adaptive stage** (`flux_error`, default 1 % of the mean |flux| of the patches at a
+//! prescribed temperature). On the city, the patches' reported errors spread from half to
+//! more than twice their mean, but two seeds' reports correlate at only about 0.1 patch by
+//! patch: the spread is the estimate's own noise (the standard deviation of 8 batches is
+//! uncertain by a quarter, and the largest of 10⁵ such estimates is twice the mean), not
+//! patches that are harder than others. Raising every patch's rays until the worst estimate
+//! is below the target would cost about four times the rays; the adaptive stage instead gives
+//! more rays to the patches whose estimate is above the target, **within every batch**: the
+//! patch gathers `m` more stratified rays from each batch's own radiosities with streams of
+//! that batch, and the batch's irradiation becomes the mean over all the batch's rays. The
+//! batches stay independent and alike, so their spread is still the error. Choosing a patch
+//! by the batches' spread does not bias its mean (for nearly normal batch means, the sample
+//! mean and the sample variance are independent), and the re-estimated spread of a chosen
+//! patch still holds the old rays' share, which the choice made large: the report errs on
+//! the high side there. Rounds repeat (at most 4) while estimates remain above the target; a
+//! patch's rays grow at most fourfold a round and to 64 times the flux rays in all, past
+//! which what is left is the noise carried in the radiosities it gathers from (those are
+//! reported as left above). Why not importance sampling toward the hot or cold parts of the
+//! hemisphere: it needs to know where they are, and the errors are spread evenly over the
+//! patches rather than concentrated where the hemisphere is split.
+//!
 //! **Energy books.** The power lost to the surroundings is estimated from the same rays as the
 //! irradiation: `Σ_i A_i F̂_ie (J_i − σT_e⁴)`, F̂_ie the share of patch i's final rays in a
 //! batch that met nothing, taken with the mean J of the *other* batches (a batch's own J is
@@ -102,6 +123,10 @@ pub struct MatrixFreeParams {
     /// Remaining bias of the area-weighted mean radiosity, relative, at which the common
     /// sweeps stop.
     pub tolerance: f64,
+    /// Per-patch flux error wanted, relative to the mean |flux| of the patches at a
+    /// prescribed temperature: patches whose standard error is above it after the batches
+    /// gather more rays in the adaptive stage (see [the module](self)); 0: no adaptive stage.
+    pub flux_error: f64,
     /// Seed of every random stream.
     pub seed: u64,
 }
@@ -115,7 +140,8 @@ impl Default for MatrixFreeParams {
             batches: 8,
             batch_sweeps: 3,
             max_sweeps: 400,
-            tolerance: 1e-3,
+            tolerance: 1e-4,
+            flux_error: 0.01,
             seed: 1,
         }
     }
@@ -156,6 +182,12 @@ impl MatrixFreeParams {
         if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
             return Err(format!("tolerance {}: give (0, 1)", self.tolerance));
         }
+        if !(self.flux_error >= 0.0 && self.flux_error < 1.0) {
+            return Err(format!(
+                "flux error {}: give [0, 1) (0: no adaptive stage)",
+                self.flux_error
+            ));
+        }
         Ok(())
     }
 
@@ -195,6 +227,20 @@ pub struct MatrixFreeInfo {
     pub total_power_std_error: f64,
     /// Standard error of Σ A_i q_i − the power lost to the surroundings, W.
     pub balance_std_error: f64,
+    /// The adaptive stage's per-patch flux target (one standard error), W/m²: the requested
+    /// share of the mean |flux| of the patches at a prescribed temperature; 0 when off.
+    pub flux_target: f64,
+    /// Rounds of the adaptive stage that gathered more rays.
+    pub refine_rounds: usize,
+    /// Patches that gathered more rays in the adaptive stage.
+    pub refined_patches: usize,
+    /// Rays the adaptive stage cast (all batches).
+    pub refine_rays: u64,
+    /// Most rays any patch gathered in a batch's last sweep, the adaptive stage's included.
+    pub most_flux_rays: u32,
+    /// Patches at a prescribed temperature left above the target (at the ray cap or after
+    /// the last round).
+    pub above_target: usize,
 }
 
 /// The patches' fixed parts: `J = e + d H`.
@@ -339,6 +385,154 @@ impl Gather<'_> {
             ((sum + lost_count as f64 * self.sigma_te4) / n as f64, lost)
         }
     }
+}
+
+/// Most rounds of the adaptive stage.
+const REFINE_ROUNDS: usize = 4;
+
+/// The adaptive stage aims a patch it refines at this share of the target, so that the
+/// re-estimated error (itself uncertain by a quarter with 8 batches) lands below the target
+/// without another round.
+const REFINE_AIM: f64 = 0.7;
+
+/// Most growth of a patch's rays in one round of the adaptive stage: an error estimate far
+/// above the others is more likely the estimate's own noise than the patch's.
+const REFINE_GROWTH: f64 = 4.0;
+
+/// Most rays the adaptive stage gives a patch, as a multiple of the flux rays: past it, what
+/// is left of a patch's error is the noise carried in the radiosities it gathers from, which
+/// its own rays do not reduce.
+const REFINE_MOST: u32 = 64;
+
+/// What the adaptive stage did.
+#[derive(Clone, Copy, Debug, Default)]
+struct Refinement {
+    /// The per-patch flux target, W/m².
+    target: f64,
+    rounds: usize,
+    patches: usize,
+    rays: u64,
+    /// Patches at a prescribed temperature still above the target at the end.
+    above: usize,
+}
+
+/// The adaptive stage: rounds in which every patch at a prescribed temperature whose flux
+/// standard error (the spread of the batches over √batches) is above the target
+/// `params.flux_error` × (mean |flux| of those patches) gathers `m` more stratified rays in
+/// **every** batch, from that batch's radiosities `from_of[b]` and with streams of that batch
+/// and round, so the batches stay independent and identically distributed and their spread
+/// stays the error. The batch's irradiation and lost share become the ray-weighted means of
+/// the old and new estimates (`(c h + m h')/(c + m)`, c the rays so far: the mean of all the
+/// batch's rays). `m` aims the patch's error at [`REFINE_AIM`] of the target assuming the
+/// error falls as 1/√rays (a bound: stratification falls faster, while the noise carried in
+/// the batch's radiosities does not fall at all, which the next round then sees), at most
+/// [`REFINE_GROWTH`] times the rays so far and [`REFINE_MOST`] times the flux rays in all
+/// (and [`MAX_RAYS`]).
+#[allow(clippy::too_many_arguments)]
+fn refine_flux(
+    gather: &Gather,
+    known_t: &[bool],
+    (e, d): (&[f64], &[f64]),
+    from_of: &[Vec<f64>],
+    h_of: &mut [Vec<f64>],
+    lost_of: &mut [Vec<f32>],
+    count: &mut [u32],
+    params: &MatrixFreeParams,
+) -> Refinement {
+    let (n, b) = (count.len(), h_of.len());
+    let mut out = Refinement::default();
+    let mut refined = vec![false; n];
+    let mut chosen: Vec<(u32, u32)> = Vec::new();
+    let mut extra: Vec<(f64, f64)> = Vec::new();
+    let mut se = vec![0.0; n];
+    let mut q_abs = vec![0.0; n];
+    let most = MatrixFreeParams::side(params.flux_rays)
+        .pow(2)
+        .saturating_mul(REFINE_MOST)
+        .min(MAX_RAYS);
+    for round in 0..=REFINE_ROUNDS {
+        // Each patch's mean flux e − ε h̄ and its standard error ε s(h)/√b.
+        let hv = &*h_of;
+        se.par_iter_mut()
+            .zip(q_abs.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, (se, qa))| {
+                if !known_t[i] {
+                    return;
+                }
+                let mean = (0..b).map(|k| hv[k][i]).sum::<f64>() / b as f64;
+                let var = (0..b).map(|k| (hv[k][i] - mean).powi(2)).sum::<f64>() / (b as f64 - 1.0);
+                let eps = 1.0 - d[i];
+                *se = eps * (var / b as f64).sqrt();
+                *qa = (e[i] - eps * mean).abs();
+            });
+        let flux_patches = known_t.iter().filter(|&&k| k).count();
+        let mean_abs = (0..n)
+            .filter(|&i| known_t[i])
+            .map(|i| q_abs[i])
+            .sum::<f64>()
+            / flux_patches.max(1) as f64;
+        let target = params.flux_error * mean_abs;
+        out.target = target;
+        chosen.clear();
+        let mut above = 0;
+        for i in 0..n {
+            if !(known_t[i] && se[i] > target) {
+                continue;
+            }
+            above += 1;
+            if count[i] >= most {
+                continue;
+            }
+            let c = count[i] as f64;
+            let want = (c * (se[i] / (REFINE_AIM * target)).powi(2))
+                .min(c * REFINE_GROWTH)
+                .min(most as f64);
+            let mut side = (want - c).max(1.0).sqrt().ceil() as u32;
+            while side > 1 && count[i] + side * side > most {
+                side -= 1;
+            }
+            chosen.push((i as u32, side));
+        }
+        out.above = above;
+        if round == REFINE_ROUNDS || chosen.is_empty() {
+            break;
+        }
+        for (batch, (h, lost)) in h_of.iter_mut().zip(lost_of.iter_mut()).enumerate() {
+            let tag = ((batch as u64 + 1) << 32) | (1 << 31) | (round as u64 + 1);
+            let from = &from_of[batch];
+            chosen
+                .par_iter()
+                .with_min_len(16)
+                .map_init(
+                    || {
+                        (
+                            Vec::<u32>::new(),
+                            Vec::<Ray>::new(),
+                            Vec::<Option<Hit>>::new(),
+                        )
+                    },
+                    |(perm, rays, hits), &(i, s)| {
+                        gather.patch(i as usize, from, s, tag, perm, rays, hits)
+                    },
+                )
+                .collect_into_vec(&mut extra);
+            for (&(i, s), &(hx, lx)) in chosen.iter().zip(&extra) {
+                let i = i as usize;
+                let (c, m) = (count[i] as f64, (s * s) as f64);
+                h[i] = (c * h[i] + m * hx) / (c + m);
+                lost[i] = ((c * lost[i] as f64 + m * lx) / (c + m)) as f32;
+            }
+        }
+        for &(i, s) in &chosen {
+            count[i as usize] += s * s;
+            refined[i as usize] = true;
+            out.rays += b as u64 * (s * s) as u64;
+        }
+        out.rounds += 1;
+    }
+    out.patches = refined.iter().filter(|&&r| r).count();
+    out
 }
 
 /// Running mean and sum of squares over batches (Welford), per patch.
@@ -497,38 +691,25 @@ pub fn solve_matrix_free(
         }
     }
 
-    // Independent batches from the common start.
+    // Independent batches from the common start: each batch's last irradiation and lost
+    // shares are kept (and, for the adaptive stage, the radiosities it gathered from), so
+    // that the adaptive stage can add rays within each batch before the batch is summed.
     let b_count = params.batches as usize;
-    let mut m_h = Moments::new(n);
-    let mut m_q = Moments::new(n);
-    let mut m_eb = Moments::new(n);
-    let mut m_lost = Moments::new(n);
-    let k_groups = system.boundaries.len();
-    let mut group_power = vec![vec![0.0; b_count]; k_groups];
-    let mut totals = vec![0.0; b_count];
-    // Each batch's lost shares (f32: a share of at most 2²⁰ rays), Σ A lost J of the batch
-    // and Σ A lost: the loss to the surroundings is estimated with each batch's shares and
-    // the other batches' J (the same batch's J is correlated with its shares).
+    let adaptive = params.flux_error > 0.0 && any_temperature;
+    let mut h_of: Vec<Vec<f64>> = Vec::with_capacity(b_count);
+    // Lost shares in f32: a share of at most 2²⁰ rays is exact.
     let mut lost_of: Vec<Vec<f32>> = Vec::with_capacity(b_count);
-    let mut own = vec![0.0; b_count];
-    let mut lost_area = vec![0.0; b_count];
-    let mut j_sum = vec![0.0; n];
+    let mut from_of: Vec<Vec<f64>> = Vec::with_capacity(if adaptive { b_count } else { 0 });
     let mut jb = vec![0.0; n];
-    let flux_given: Vec<Option<f64>> = system
-        .boundaries
-        .iter()
-        .map(|b| match b.condition {
-            Condition::Temperature(_) => None,
-            Condition::Flux(q) => Some(q),
-            Condition::Adiabatic => Some(0.0),
-        })
-        .collect();
     let mut done = sweeps as u64;
     for batch in 0..b_count {
         jb.copy_from_slice(&j);
         for sweep in 1..=params.batch_sweeps as usize {
             let tag = ((batch as u64 + 1) << 32) | sweep as u64;
             if sweep == params.batch_sweeps as usize {
+                if adaptive {
+                    from_of.push(jb.clone());
+                }
                 gather.sweep(&jb, &final_side, tag, &mut h, &mut lost);
                 rays_cast += final_rays;
             } else {
@@ -539,12 +720,63 @@ pub fn solve_matrix_free(
             done += 1;
             progress(done, sweeps as u64 + tail);
         }
-        // This batch's flux (exactly the prescribed one where given), εσT⁴, and books.
-        let q: Vec<f64> = (0..n)
-            .into_par_iter()
-            .map(|i| flux_given[system.group[i] as usize].unwrap_or(jb[i] - h[i]))
-            .collect();
-        let eps = |i: usize| system.boundaries[system.group[i] as usize].emissivity;
+        h_of.push(h.clone());
+        lost_of.push(lost.iter().map(|&x| x as f32).collect());
+    }
+    drop((h, lost, next));
+
+    // The adaptive stage: more rays, within every batch, where the flux's error is above
+    // the target.
+    let eps = |i: usize| system.boundaries[system.group[i] as usize].emissivity;
+    let mut final_count: Vec<u32> = (0..n).map(|i| final_side(i).pow(2)).collect();
+    let mut refine = Refinement::default();
+    if adaptive {
+        refine = refine_flux(
+            &gather,
+            &known_t,
+            (&e, &d),
+            &from_of,
+            &mut h_of,
+            &mut lost_of,
+            &mut final_count,
+            params,
+        );
+        rays_cast += refine.rays;
+    }
+    drop(from_of);
+
+    // Each batch's flux (exactly the prescribed one where given), εσT⁴, and books.
+    let mut m_h = Moments::new(n);
+    let mut m_q = Moments::new(n);
+    let mut m_eb = Moments::new(n);
+    let mut m_lost = Moments::new(n);
+    let k_groups = system.boundaries.len();
+    let mut group_power = vec![vec![0.0; b_count]; k_groups];
+    let mut totals = vec![0.0; b_count];
+    // Σ A lost J of each batch and Σ A lost: the loss to the surroundings is estimated with
+    // each batch's shares and the other batches' J (the same batch's J is correlated with
+    // its shares).
+    let mut own = vec![0.0; b_count];
+    let mut lost_area = vec![0.0; b_count];
+    let mut j_sum = vec![0.0; n];
+    let flux_given: Vec<Option<f64>> = system
+        .boundaries
+        .iter()
+        .map(|b| match b.condition {
+            Condition::Temperature(_) => None,
+            Condition::Flux(q) => Some(q),
+            Condition::Adiabatic => Some(0.0),
+        })
+        .collect();
+    let mut q = vec![0.0; n];
+    for batch in 0..b_count {
+        let (h, lost) = (&h_of[batch], &lost_of[batch]);
+        jb.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, j)| *j = e[i] + d[i] * h[i]);
+        q.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, q)| *q = flux_given[system.group[i] as usize].unwrap_or(jb[i] - h[i]));
         m_h.add(batch, h.par_iter().copied());
         m_q.add(batch, q.par_iter().copied());
         m_eb.add(
@@ -553,18 +785,18 @@ pub fn solve_matrix_free(
                 .into_par_iter()
                 .map(|i| (jb[i] - (1.0 - eps(i)) * h[i]) / eps(i)),
         );
-        m_lost.add(batch, lost.par_iter().copied());
+        m_lost.add(batch, lost.par_iter().map(|&x| x as f64));
         for i in 0..n {
             group_power[system.group[i] as usize][batch] += area[i] * q[i];
         }
         totals[batch] = (0..n).map(|i| area[i] * q[i]).sum();
-        own[batch] = (0..n).map(|i| area[i] * lost[i] * jb[i]).sum();
-        lost_area[batch] = (0..n).map(|i| area[i] * lost[i]).sum();
-        lost_of.push(lost.iter().map(|&x| x as f32).collect());
+        own[batch] = (0..n).map(|i| area[i] * lost[i] as f64 * jb[i]).sum();
+        lost_area[batch] = (0..n).map(|i| area[i] * lost[i] as f64).sum();
         for i in 0..n {
             j_sum[i] += jb[i];
         }
     }
+    drop(h_of);
     // Batch b's loss: Σ A_i lost_i^b (J̄_i without b − σT_e⁴).
     let losses: Vec<f64> = (0..b_count)
         .map(|b| {
@@ -655,6 +887,16 @@ pub fn solve_matrix_free(
                 remaining_bias,
                 total_power_std_error,
                 balance_std_error,
+                flux_target: refine.target,
+                refine_rounds: refine.rounds,
+                refined_patches: refine.patches,
+                refine_rays: refine.rays,
+                most_flux_rays: (0..n)
+                    .filter(|&i| known_t[i])
+                    .map(|i| final_count[i])
+                    .max()
+                    .unwrap_or(0),
+                above_target: refine.above,
             }),
         },
     })

@@ -301,6 +301,8 @@ fn matrix_free_does_not_depend_on_the_thread_count() {
             })
     };
     let (one, two) = (go(1), go(2));
+    // The adaptive stage ran (its rounds are under test too).
+    assert!(one.info.matrix_free.unwrap().refined_patches > 0);
     assert_eq!(one.flux, two.flux);
     assert_eq!(one.temperature, two.temperature);
     assert_eq!(one.flux_std_error, two.flux_std_error);
@@ -311,9 +313,15 @@ fn matrix_free_does_not_depend_on_the_thread_count() {
 /// which the batches leave out, included): over 12 seeds, the standard deviation of each
 /// patch's flux against the mean reported error, averaged over the patches, within a factor
 /// of 2 (each ratio has 11 and 12 × 7 degrees of freedom; their mean over 8 patches is off
-/// by 2 far less often than once in 10⁴).
+/// by 2 far less often than once in 10⁴). Without the adaptive stage, and with its default.
 #[test]
 fn reported_error_is_the_spread_of_independent_seeds() {
+    for flux_error in [0.0, MatrixFreeParams::default().flux_error] {
+        seeds_against_reported_errors(flux_error);
+    }
+}
+
+fn seeds_against_reported_errors(flux_error: f64) {
     let scene = plates();
     let b = [temperature(0.8, 1000.0), temperature(0.6, 500.0)];
     let runs: Vec<ThermalSolution> = (0..12)
@@ -328,12 +336,19 @@ fn reported_error_is_the_spread_of_independent_seeds() {
                 MatrixFreeParams {
                     seed,
                     flux_rays: 16,
+                    flux_error,
                     ..MatrixFreeParams::default()
                 },
             )
             .solution
         })
         .collect();
+    if flux_error == 0.0 {
+        assert!(runs.iter().all(|s| {
+            let mf = s.info.matrix_free.unwrap();
+            mf.refined_patches == 0 && mf.flux_target == 0.0
+        }));
+    }
     // Per patch: the mean reported error against the spread of each patch's flux.
     let n = runs[0].flux.len();
     let mut ratios = Vec::new();
@@ -347,6 +362,77 @@ fn reported_error_is_the_spread_of_independent_seeds() {
     let mean_ratio = ratios.iter().sum::<f64>() / n as f64;
     assert!(
         (0.5..2.0).contains(&mean_ratio),
+        "flux error {flux_error}: spread / reported error {mean_ratio} ({ratios:?})"
+    );
+}
+
+/// The adaptive stage: with a target well below the error of the batches' own rays (16 rays
+/// a patch give about 1 % of the mean |flux| here), every patch's reported flux error ends
+/// below it, the patches gather more rays to get there, and the reported error is still the
+/// spread of independent seeds (12 seeds, the mean ratio over the patches within a factor 2,
+/// as above: the stage adds rays within every batch, so the batches stay independent). The
+/// refined result agrees with the stored solve within 4 of its reported errors.
+#[test]
+fn adaptive_stage_meets_the_flux_target_honestly() {
+    let scene = plates();
+    let b = [temperature(0.8, 1000.0), temperature(0.6, 500.0)];
+    let target = 0.005;
+    let go = |solver, seed| {
+        run(
+            &scene,
+            &b,
+            MeshParams::Patches(8),
+            300.0,
+            Enclosure::Open,
+            solver,
+            MatrixFreeParams {
+                seed,
+                flux_rays: 16,
+                flux_error: target,
+                ..MatrixFreeParams::default()
+            },
+        )
+    };
+    let runs: Vec<ThermalSolution> = (0..12)
+        .map(|seed| go(ThermalSolver::MatrixFree, seed).solution)
+        .collect();
+    let n = runs[0].flux.len();
+    for (seed, s) in runs.iter().enumerate() {
+        let mf = s.info.matrix_free.unwrap();
+        let mean_abs = s.flux.iter().map(|q| q.abs()).sum::<f64>() / n as f64;
+        assert!(
+            (mf.flux_target - target * mean_abs).abs() <= 1e-9 * mean_abs,
+            "seed {seed}: target {} W/m² against {target} of {mean_abs}",
+            mf.flux_target
+        );
+        assert!(
+            mf.refined_patches > 0 && mf.most_flux_rays > 16,
+            "seed {seed}: {mf:?}"
+        );
+        assert_eq!(mf.above_target, 0, "seed {seed}: {mf:?}");
+        for (i, e) in s.flux_std_error.iter().enumerate() {
+            assert!(
+                *e <= mf.flux_target,
+                "seed {seed}, patch {i}: error {e} above the target {}",
+                mf.flux_target
+            );
+        }
+    }
+    let mut ratios = Vec::new();
+    for i in 0..n {
+        let q: Vec<f64> = runs.iter().map(|s| s.flux[i]).collect();
+        let mq = q.iter().sum::<f64>() / 12.0;
+        let sd = (q.iter().map(|x| (x - mq).powi(2)).sum::<f64>() / 11.0).sqrt();
+        let rep = runs.iter().map(|s| s.flux_std_error[i]).sum::<f64>() / 12.0;
+        ratios.push(sd / rep);
+    }
+    let mean_ratio = ratios.iter().sum::<f64>() / n as f64;
+    assert!(
+        (0.5..2.0).contains(&mean_ratio),
         "spread / reported error {mean_ratio} ({ratios:?})"
+    );
+    agree(
+        &go(ThermalSolver::Stored, 0),
+        &go(ThermalSolver::MatrixFree, 0),
     );
 }
