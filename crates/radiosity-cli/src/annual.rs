@@ -294,9 +294,10 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     let d = DaylightMatrix::new(n, np, values)?;
 
     // The year, its outputs staged: all land or none.
+    // Exact unless asked otherwise (why: docs/daylight-radiance.md, "A year").
     let exact = match a.sun_method {
-        Some(SunMethod::Exact) => Some(DirectSun::new(&scene, &points, &settings)?),
-        _ => None,
+        Some(SunMethod::Patch) => None,
+        Some(SunMethod::Exact) | None => Some(DirectSun::new(&scene, &points, &settings)?),
     };
     let exact_sun = exact.as_ref().map(|direct| ExactSun {
         direct,

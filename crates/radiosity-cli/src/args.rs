@@ -510,9 +510,9 @@ pub struct LightingArgs {
     /// above HIGH). Default 100,3000.
     #[arg(long, value_name = "LOW,HIGH", help_heading = DAYLIGHT)]
     pub udi_range: Option<String>,
-    /// Annual daylight: where the sun goes. `patch` (default): into the sky patch holding it
-    /// (2-phase). `exact`: its direct light at its true position every hour (shadow rays,
-    /// what ASE counts), its interreflection from its patch (the 5-phase method).
+    /// Annual daylight: where the sun goes. `exact` (default): its direct light at its true
+    /// position every hour (shadow rays, what ASE counts), its interreflection from its patch
+    /// (the 5-phase method). `patch`: into the sky patch holding it (2-phase).
     #[arg(long, value_enum, value_name = "METHOD", help_heading = DAYLIGHT)]
     pub sun_method: Option<SunMethod>,
 }
