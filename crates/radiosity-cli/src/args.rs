@@ -470,6 +470,10 @@ pub struct LightingArgs {
     /// as N^(−3/4)).
     #[arg(long, value_name = "N", default_value_t = 16_384, requires = "daylight", help_heading = DAYLIGHT)]
     pub sky_rays: u32,
+    /// Shadow rays to the sun's disc (0.533°, stratified) at each point and patch, for each
+    /// sun: `--sun`'s, and every hour's in an annual run with the exact sun.
+    #[arg(long, value_name = "N", default_value_t = 16, requires = "daylight", help_heading = DAYLIGHT)]
+    pub sun_rays: u32,
     /// Annual daylight: the weather file (EnergyPlus EPW) whose hourly direct normal and
     /// diffuse horizontal irradiance give the year's skies (Perez all-weather model); needs
     /// --annual.
