@@ -182,6 +182,8 @@ const HIDDEN: u32 = u32::MAX - 1;
 pub struct Prepared {
     patches: Vec<Patch>,
     rule: Vec<(DVec3, f64)>,
+    /// The same points by coordinate (x, y, z, weight), for the product rule's inner loop.
+    rule_soa: [Vec<f64>; 4],
     occluders: Occluders,
     table: Option<GroupTable>,
     accuracy: f64,
@@ -278,7 +280,13 @@ impl Prepared {
                 }
             })
             .collect();
-        let rule = patches.iter().flat_map(gauss_points).collect();
+        let rule: Vec<(DVec3, f64)> = patches.iter().flat_map(gauss_points).collect();
+        let rule_soa = [
+            rule.iter().map(|r| r.0.x).collect(),
+            rule.iter().map(|r| r.0.y).collect(),
+            rule.iter().map(|r| r.0.z).collect(),
+            rule.iter().map(|r| r.1).collect(),
+        ];
         let scale = mesh
             .vertices
             .iter()
@@ -291,6 +299,7 @@ impl Prepared {
         Prepared {
             patches,
             rule,
+            rule_soa,
             occluders,
             table,
             accuracy,
@@ -473,15 +482,21 @@ impl Prepared {
     fn product(&self, ia: usize, ib: usize, m: usize) -> f64 {
         let (na, nb) = (self.patches[ia].normal, self.patches[ib].normal);
         let ra = &self.rule[ia * RULE_START[ORDERS] + RULE_START[m - 1]..][..m * m];
-        let rb = &self.rule[ib * RULE_START[ORDERS] + RULE_START[m - 1]..][..m * m];
+        let at = ib * RULE_START[ORDERS] + RULE_START[m - 1];
+        let [bx, by, bz, bw] = self.rule_soa.each_ref().map(|c| &c[at..at + m * m]);
+        // The terms of one outer point in a fixed array (a loop the compiler vectorises),
+        // then added in order.
+        let mut terms = [0.0f64; 16];
         let mut sum = 0.0;
         for &(x, wx) in ra {
-            let mut inner = 0.0;
-            for &(y, wy) in rb {
-                let r = y - x;
-                let r2 = r.length_squared();
-                inner += wy * na.dot(r) * -nb.dot(r) / (r2 * r2);
+            for k in 0..m * m {
+                let (rx, ry, rz) = (bx[k] - x.x, by[k] - x.y, bz[k] - x.z);
+                let r2 = rx * rx + ry * ry + rz * rz;
+                let ca = na.x * rx + na.y * ry + na.z * rz;
+                let cb = nb.x * rx + nb.y * ry + nb.z * rz;
+                terms[k] = bw[k] * ca * -cb / (r2 * r2);
             }
+            let inner: f64 = terms[..m * m].iter().sum();
             sum += wx * inner;
         }
         sum / PI
