@@ -88,10 +88,11 @@ fn main() {
             sum_abs += v.abs();
         }
         let row: Vec<f64> = (0..n).map(|i| (sums[i] - ref_sums[i]).abs()).collect();
-        let (at, worst_row) = row
-            .iter()
-            .enumerate()
-            .fold((0, 0.0f64), |(k, w), (i, d)| if *d > w { (i, *d) } else { (k, w) });
+        let (at, worst_row) =
+            row.iter().enumerate().fold(
+                (0, 0.0f64),
+                |(k, w), (i, d)| if *d > w { (i, *d) } else { (k, w) },
+            );
         println!(
             "against {reference}: mean |dF| {:.2e}, worst |dF| {:.2e}, mean |d row sum| {:.2e}, worst {:.2e} (row {at}: {:.7} here, {:.7} there)",
             sum_abs / (n * n) as f64,

@@ -230,7 +230,17 @@ mod tests {
     /// side, negatives, zeros and values past its range).
     #[test]
     fn fixed_six_decimals_match_the_formatter() {
-        let mut values = vec![0.0, -0.0, 1.0, 0.5, 999.9999995, 999.9999994, 1e3, 1e7, -0.25];
+        let mut values = vec![
+            0.0,
+            -0.0,
+            1.0,
+            0.5,
+            999.9999995,
+            999.9999994,
+            1e3,
+            1e7,
+            -0.25,
+        ];
         let mut x = 0x2545_f491_4f6c_dd1d_u64;
         for k in 0..200_000u64 {
             // xorshift for values over [0, 1), then ties (k + 0.5)·10⁻⁶ and their neighbours.
@@ -239,7 +249,11 @@ mod tests {
             x ^= x << 17;
             values.push((x >> 11) as f64 / (1u64 << 53) as f64);
             let tie = (k as f64 + 0.5) * 1e-6;
-            values.extend([tie, f64::from_bits(tie.to_bits() + 1), f64::from_bits(tie.to_bits() - 1)]);
+            values.extend([
+                tie,
+                f64::from_bits(tie.to_bits() + 1),
+                f64::from_bits(tie.to_bits() - 1),
+            ]);
             values.push(k as f64 * 1e-3 + 1e-7);
         }
         let mut fast = String::new();
