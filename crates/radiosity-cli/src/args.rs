@@ -601,6 +601,10 @@ pub struct ThermalArgs {
     /// Matrix-free: rays each patch gathers in the other sweeps (rounded up to a square).
     #[arg(long, value_name = "N", default_value_t = radiosity::thermal::MatrixFreeParams::default().sweep_rays, help_heading = SOLVER)]
     pub sweep_rays: u32,
+    /// Matrix-free: rays each patch gathers in the next-to-last sweep of every batch (the
+    /// radiosities the last sweep gathers from, whose noise the flux carries).
+    #[arg(long, value_name = "N", default_value_t = radiosity::thermal::MatrixFreeParams::default().carry_rays, help_heading = SOLVER)]
+    pub carry_rays: u32,
     /// Matrix-free: independent batches, whose spread gives the standard errors (2 to 4096).
     #[arg(long, value_name = "B", default_value_t = radiosity::thermal::MatrixFreeParams::default().batches, help_heading = SOLVER)]
     pub batches: u32,

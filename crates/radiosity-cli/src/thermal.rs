@@ -88,6 +88,7 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         flux_rays: a.flux_rays,
         temperature_rays: a.temperature_rays,
         sweep_rays: a.sweep_rays,
+        carry_rays: a.carry_rays,
         batches: a.batches,
         flux_error: a.flux_error,
         seed: a.seed,
@@ -115,6 +116,12 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         (
             "--sweep-rays",
             a.sweep_rays,
+            1,
+            thermal::matrix_free::MAX_RAYS,
+        ),
+        (
+            "--carry-rays",
+            a.carry_rays,
             1,
             thermal::matrix_free::MAX_RAYS,
         ),

@@ -726,6 +726,7 @@ fn thermal_matrix_free_matches_the_stored_solve() {
         ("--batches", "1"),
         ("--flux-rays", "0"),
         ("--temperature-rays", "0"),
+        ("--carry-rays", "0"),
         ("--flux-error", "1.5"),
         ("--flux-error", "NaN"),
     ] {

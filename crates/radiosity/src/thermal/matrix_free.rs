@@ -43,9 +43,11 @@
 //! noise floor). The slowest mode of the non-negative D K has a non-negative eigenvector
 //! (Perron–Frobenius), so it shows whole in this area-weighted sum, where the noise of N
 //! patches averages out. Then `batches` independent batches, each `batch_sweeps` sweeps from
-//! that common start with streams of its own, the last gathering `flux_rays` at each patch of
-//! prescribed temperature (whose flux is the answer) and `temperature_rays` at the others
-//! (whose temperature is); the result is
+//! that common start with streams of its own, the next-to-last gathering `carry_rays` at
+//! every patch (the radiosities the last sweep gathers from: their noise is carried into
+//! every flux, and no ray of the last sweep reduces it), the last gathering `flux_rays` at
+//! each patch of prescribed temperature (whose flux is the answer) and `temperature_rays` at
+//! the others (whose temperature is); the result is
 //! the mean of the batches and its **standard error** (of every patch's flux and temperature,
 //! of each boundary's power, of the energy balance) the batches' sample standard deviation
 //! over √batches. What it leaves out: the common start's own noise, which reaches a batch's
@@ -114,6 +116,10 @@ pub struct MatrixFreeParams {
     pub temperature_rays: u32,
     /// Rays each patch gathers in the other sweeps (rounded up to a square).
     pub sweep_rays: u32,
+    /// Rays each patch gathers in the next-to-last sweep of a batch (rounded up to a
+    /// square): the radiosities the last sweep gathers from, whose noise is carried into
+    /// every flux and which no ray of the last sweep can reduce.
+    pub carry_rays: u32,
     /// Independent batches (at least 2: their spread is the standard error).
     pub batches: u32,
     /// Sweeps of each batch from the common start (at least 1).
@@ -137,6 +143,7 @@ impl Default for MatrixFreeParams {
             flux_rays: 400,
             temperature_rays: 64,
             sweep_rays: 16,
+            carry_rays: 64,
             batches: 8,
             batch_sweeps: 3,
             max_sweeps: 400,
@@ -153,6 +160,7 @@ impl MatrixFreeParams {
         for (what, n) in [
             ("flux rays", self.flux_rays),
             ("temperature rays", self.temperature_rays),
+            ("carry rays", self.carry_rays),
         ] {
             if !(1..=MAX_RAYS).contains(&n) {
                 return Err(format!("{what} {n}: give 1 to {MAX_RAYS}"));
@@ -620,6 +628,7 @@ pub fn solve_matrix_free(
         seed: params.seed,
     };
     let area = &system.area;
+    let s_carry = MatrixFreeParams::side(params.carry_rays);
     let (s_sweep, s_flux, s_temperature) = (
         MatrixFreeParams::side(params.sweep_rays),
         MatrixFreeParams::side(params.flux_rays),
@@ -713,8 +722,14 @@ pub fn solve_matrix_free(
                 gather.sweep(&jb, &final_side, tag, &mut h, &mut lost);
                 rays_cast += final_rays;
             } else {
-                gather.sweep(&jb, &|_| s_sweep, tag, &mut h, &mut lost);
-                rays_cast += (n as u64) * (s_sweep * s_sweep) as u64;
+                // The next-to-last sweep sets the radiosities the last one gathers from.
+                let s = if sweep + 1 == params.batch_sweeps as usize {
+                    s_carry
+                } else {
+                    s_sweep
+                };
+                gather.sweep(&jb, &|_| s, tag, &mut h, &mut lost);
+                rays_cast += (n as u64) * (s * s) as u64;
             }
             update(&h, &mut jb);
             done += 1;
