@@ -160,7 +160,7 @@ pub fn run(a: FormFactorsArgs) -> Result<()> {
             &scene,
             vs3.as_ref(),
             mesh,
-            &matrix,
+            matrix,
             &area,
             compute_s,
         );
@@ -477,7 +477,7 @@ fn write_view3d(
     scene: &Scene,
     vs3: Option<&vs3::Vs3>,
     mesh: &Mesh,
-    matrix: &radiosity::system::SparseMatrix,
+    matrix: radiosity::system::SparseMatrix,
     area: &[f64],
     compute_s: f64,
 ) -> Result<()> {
@@ -500,20 +500,32 @@ fn write_view3d(
             None => p.surface,
         })
         .collect();
-    let (grouped, group_area) = aggregate(matrix, area, &group, k + 1);
-    // Drop the obstruction group.
-    let rows: Vec<Vec<(u32, f32)>> = (0..k)
-        .map(|i| {
-            grouped
-                .row_entries(i)
-                .iter()
-                .copied()
-                .filter(|&(j, _)| (j as usize) < k)
-                .collect()
-        })
-        .collect();
-    let grouped = radiosity::system::SparseMatrix::from_rows(rows);
-    let group_area = group_area[..k].to_vec();
+    // Patch i is surface i (every facet its own surface, no obstructions: the usual View3D
+    // scene): the patch matrix is the surface matrix, used as it is, with no copy
+    // (aggregating would multiply each entry by A_i / A_i = 1 exactly).
+    let identity = group.len() == k && group.iter().enumerate().all(|(i, &g)| g as usize == i);
+    let (grouped, group_area) = if identity {
+        (matrix, area.to_vec())
+    } else {
+        let (grouped, group_area) = aggregate(&matrix, area, &group, k + 1);
+        drop(matrix);
+        // Drop the obstruction group.
+        let rows: Vec<Vec<(u32, f32)>> = (0..k)
+            .map(|i| {
+                grouped
+                    .row_entries(i)
+                    .iter()
+                    .copied()
+                    .filter(|&(j, _)| (j as usize) < k)
+                    .collect()
+            })
+            .collect();
+        drop(grouped);
+        (
+            radiosity::system::SparseMatrix::from_rows(rows),
+            group_area[..k].to_vec(),
+        )
+    };
     let enclosure = vs3.is_some_and(|v| v.control.enclosure) || a.normalize_rows;
     let fix = Enforce {
         clamp: a.clamp,

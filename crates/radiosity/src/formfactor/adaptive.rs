@@ -1187,10 +1187,17 @@ fn keep_inside(poly: &[DVec3], m: DVec3, x: DVec3, eps: f64, inside: &mut Vec<DV
 pub fn point_polygon(x: DVec3, n: DVec3, p: &[DVec3]) -> f64 {
     let mut sum = 0.0;
     let m = p.len();
+    let mut r2 = p[0] - x;
     for k in 0..m {
-        let r1 = p[k] - x;
-        let r2 = p[(k + 1) % m] - x;
+        let r1 = r2;
+        r2 = p[(k + 1) % m] - x;
         let g = r1.cross(r2);
+        // An edge whose plane through x contains the normal adds nothing (a wall's
+        // vertical edge seen from the floor): no angle needed.
+        let ng = n.dot(g);
+        if ng == 0.0 {
+            continue;
+        }
         let gl = g.length();
         if gl <= 0.0 {
             continue;
@@ -1203,7 +1210,7 @@ pub fn point_polygon(x: DVec3, n: DVec3, p: &[DVec3]) -> f64 {
         } else {
             gl.atan2(c)
         };
-        sum += angle * n.dot(g) / gl;
+        sum += angle * ng / gl;
     }
     -sum / (2.0 * PI)
 }
@@ -1363,20 +1370,29 @@ pub(super) fn matrix(est: &Estimator, storage: Storage, observer: &dyn Observer)
             row
         })
         .collect();
-    let mut counts = vec![0usize; n];
+    // Both triangles straight into one compressed-row array: row r holds its lower part
+    // (i < r, from the rows above, ascending) then its upper part, sorted by column, with no
+    // per-row copies in between; each upper row is freed once spread.
+    let mut row_ptr = vec![0usize; n + 1];
     for (i, r) in upper.iter().enumerate() {
-        counts[i] += r.len();
+        row_ptr[i + 1] += r.len();
         for &(j, _) in r {
-            counts[j as usize] += 1;
+            row_ptr[j as usize + 1] += 1;
         }
     }
-    let mut rows: Vec<Vec<Entry>> = counts.iter().map(|&c| Vec::with_capacity(c)).collect();
+    for k in 0..n {
+        row_ptr[k + 1] += row_ptr[k];
+    }
+    let mut next = row_ptr[..n].to_vec();
+    let mut flat: Vec<Entry> = vec![(0, 0.0); row_ptr[n]];
     for (i, r) in upper.into_iter().enumerate() {
         let ai = prep.patches[i].area;
         for (j, g) in r {
             let (g, aj) = (g as f64, prep.patches[j as usize].area);
-            rows[j as usize].push((i as u32, (g / aj) as f32));
-            rows[i].push((j, (g / ai) as f32));
+            flat[next[j as usize]] = (i as u32, (g / aj) as f32);
+            next[j as usize] += 1;
+            flat[next[i]] = (j, (g / ai) as f32);
+            next[i] += 1;
         }
     }
     let dense = match storage {
@@ -1386,13 +1402,13 @@ pub(super) fn matrix(est: &Estimator, storage: Storage, observer: &dyn Observer)
     };
     if dense {
         let mut values = vec![0.0f32; n * n];
-        for (i, r) in rows.iter().enumerate() {
-            for &(j, f) in r {
+        for i in 0..n {
+            for &(j, f) in &flat[row_ptr[i]..row_ptr[i + 1]] {
                 values[i * n + j as usize] = f;
             }
         }
         Matrix::Dense { n, values }
     } else {
-        Matrix::Sparse(SparseMatrix::from_rows(rows))
+        Matrix::Sparse(SparseMatrix::from_csr(n, row_ptr, flat))
     }
 }

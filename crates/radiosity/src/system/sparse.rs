@@ -46,7 +46,9 @@ impl SparseMatrix {
         Self::from_rows(rows)
     }
 
-    fn from_csr(n: usize, row_ptr: Vec<usize>, rows: Vec<Entry>) -> Self {
+    /// From compressed rows: row `i` is `rows[row_ptr[i]..row_ptr[i + 1]]`, sorted by column,
+    /// without duplicates.
+    pub(crate) fn from_csr(n: usize, row_ptr: Vec<usize>, rows: Vec<Entry>) -> Self {
         let mut cumulative = Vec::with_capacity(rows.len());
         for i in 0..n {
             let mut acc = 0.0f32;
