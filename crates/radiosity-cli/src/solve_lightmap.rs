@@ -4,12 +4,13 @@
 
 use crate::args::{BakeArg, SolveCmdArgs};
 use anyhow::{bail, Result};
-use radiosity::bake::lightmap::{bake, Lightmap, LightmapParams};
+use radiosity::bake::lightmap::{bake, Denoise, Lightmap, LightmapParams};
 use radiosity::bake::uv::{Density, MAX_ATLAS};
 use radiosity::export::bake::{write_lightmap_exr, write_lightmap_gltf, LightmapBake};
 use radiosity::io::FileFormat;
 use radiosity::pipeline::Solution;
 use radiosity::scene::Scene;
+use std::path::PathBuf;
 
 /// The lightmap's parameters from the flags, checked before any work; `None` for a vertex bake
 /// (and then no lightmap flag may be given).
@@ -19,6 +20,8 @@ pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
             ("--lightmap-size", a.lightmap_size.is_some()),
             ("--texel-size", a.texel_size.is_some()),
             ("--lightmap-out", a.lightmap_out.is_some()),
+            ("--lightmap-denoise", a.lightmap_denoise),
+            ("--lightmap-denoise-radius", a.lightmap_denoise_radius.is_some()),
         ] {
             if given {
                 bail!("{flag}: only a lightmap bake has it (add --bake lightmap)");
@@ -54,6 +57,14 @@ pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
             bail!("{flag} 0: at least 1 is needed");
         }
     }
+    if let Some(r) = a.lightmap_denoise_radius {
+        if !a.lightmap_denoise {
+            bail!("--lightmap-denoise-radius: only a denoised bake has it (add --lightmap-denoise)");
+        }
+        if !(r.is_finite() && r >= 1.0) {
+            bail!("--lightmap-denoise-radius {r}: must be at least 1 texel");
+        }
+    }
     if let Some(p) = &a.lightmap_out {
         if FileFormat::from_path(p) != Some(FileFormat::Exr) {
             bail!("{}: --lightmap-out writes OpenEXR (use .exr)", p.display());
@@ -73,17 +84,22 @@ pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
         spacing: a.lightmap_spacing,
         seed: a.solve.seed,
         memory_limit: radiosity::pipeline::MemoryLimit::Available.bytes(),
+        denoise: a.lightmap_denoise.then(|| {
+            a.lightmap_denoise_radius
+                .map_or_else(Denoise::default, Denoise::with_radius)
+        }),
         ..Default::default()
     }))
 }
 
-/// Bake the lightmap of a solved scene and write it; the lightmap, for the summary.
+/// Bake the lightmap of a solved scene and write it; the lightmap and the EXR files written,
+/// for the summary.
 pub(crate) fn write(
     a: &SolveCmdArgs,
     params: &LightmapParams,
     scene: &Scene,
     solution: &Solution,
-) -> Result<Lightmap> {
+) -> Result<(Lightmap, Vec<PathBuf>)> {
     let vertex = radiosity::render::vertex_radiosity(&solution.mesh, &solution.radiosity);
     let map = bake(scene, solution.surfaces(), &vertex, params)?;
     let lightmap_bake = LightmapBake {
@@ -94,8 +110,9 @@ pub(crate) fn write(
     };
     let binary = FileFormat::from_path(&a.out) == Some(FileFormat::Glb);
     write_lightmap_gltf(&a.out, &lightmap_bake, binary)?;
+    let mut exrs = Vec::new();
     if let Some(p) = &a.lightmap_out {
-        write_lightmap_exr(p, &map)?;
+        exrs = write_lightmap_exr(p, &map)?;
     }
-    Ok(map)
+    Ok((map, exrs))
 }

@@ -78,11 +78,11 @@ fn cornell_texels_match_path_traced_references() {
     let reference = radiosity::pipeline::path_surface_means(&scene, 4_000_000, 7).unwrap();
     let mesh = &map.unwrap.mesh;
     let mut per = vec![(Rgb::BLACK, 0usize); scene.polygons.len()];
-    for (b, p) in map.texels.iter().zip(&map.points) {
-        if let Some(p) = p.filter(|p| p.inside) {
-            let k = mesh.patches[p.face as usize].surface as usize;
-            per[k].0 += *b;
-            per[k].1 += 1;
+    for k in 0..map.texels.len() {
+        if let Some(p) = map.point(k).filter(|p| p.inside) {
+            let s = mesh.patches[p.face as usize].surface as usize;
+            per[s].0 += map.texel(k);
+            per[s].1 += 1;
         }
     }
     for (k, ((b, n), (r, se))) in per.iter().zip(&reference).enumerate() {
@@ -115,7 +115,7 @@ fn cornell_texels_match_path_traced_references() {
     };
     let lights = radiosity::render::light::Lights::new(mesh, &system.emission);
     let lit: Vec<usize> = (0..map.texels.len())
-        .filter(|&k| map.kind[k] == Texel::Surface && map.points[k].is_some_and(|p| p.inside))
+        .filter(|&k| map.kind[k] == Texel::Surface && map.inside[k])
         .collect();
     let step = lit.len() / 400;
     use rayon::prelude::*;
@@ -123,12 +123,12 @@ fn cornell_texels_match_path_traced_references() {
         .into_par_iter()
         .map(|i| {
             let k = lit[i * step];
-            let p = map.points[k].unwrap();
+            let p = map.point(k).unwrap();
             let mut rng = radiosity::sampling::stream(11, 0, k as u64, 0);
             let (r, se) = radiosity::render::path::radiosity_at(
                 &surfaces, &lights, p.x, p.n, p.face, 20_000, &mut rng,
             );
-            (sum(map.texels[k]), sum(r), sum(se))
+            (sum(map.texel(k)), sum(r), sum(se))
         })
         .collect();
     let mse = pairs.iter().map(|(a, r, _)| (a - r).powi(2)).sum::<f64>() / 400.0;
@@ -261,10 +261,10 @@ fn no_light_leaks_into_a_closed_box() {
     let (mut lit, mut n_lit) = (0.0, 0usize);
     let mut under = Vec::new();
     let mut inside = Vec::new();
-    for (k, p) in map.points.iter().enumerate() {
-        let Some(p) = p else { continue };
+    for k in 0..map.texels.len() {
+        let Some(p) = map.point(k) else { continue };
         let surface = mesh.patches[p.face as usize].surface as usize;
-        let b = sum(map.texels[k]);
+        let b = sum(map.texel(k));
         if surface == 0 {
             let in_footprint = p.x.x > lo.x && p.x.x < hi.x && p.x.z > lo.z && p.x.z < hi.z;
             if in_footprint {
@@ -354,7 +354,7 @@ fn seams_agree() {
     let at = |c: usize, p: Vec3| {
         let chart = &u.charts[c];
         let s = chart.texel_coords(p, u.texel);
-        map.sample([
+        map.sample(0, [
             (chart.x0 as f32 + s[0]) / u.width as f32,
             (chart.y0 as f32 + s[1]) / u.height as f32,
         ])
@@ -366,9 +366,9 @@ fn seams_agree() {
         for j in c.y0..c.y0 + c.height {
             for i in c.x0..c.x0 + c.width - 1 {
                 let (a, b) = ((j * u.width + i) as usize, (j * u.width + i + 1) as usize);
-                let inside = |q: usize| map.points[q].is_some_and(|p| p.inside);
+                let inside = |q: usize| map.inside[q];
                 if inside(a) && inside(b) {
-                    var += (sum(map.texels[a]) - sum(map.texels[b])).abs();
+                    var += (sum(map.texel(a)) - sum(map.texel(b))).abs();
                     n_var += 1;
                 }
             }
@@ -425,7 +425,7 @@ fn an_atlas_past_the_memory_limit_is_refused() {
     else {
         panic!("{err}")
     };
-    assert_eq!(needed, width as u64 * height as u64 * bytes_per_texel());
+    assert_eq!(needed, width as u64 * height as u64 * bytes_per_texel(4, false));
     assert!(err_text(&params(1 << 10), &scene, &s).contains("lightmap needs about"));
     assert!(bake(&scene, s.surfaces(), &vertex, &params(needed)).is_ok());
 }
