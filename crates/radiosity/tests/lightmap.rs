@@ -123,7 +123,7 @@ fn cornell_texels_match_path_traced_references() {
         .into_par_iter()
         .map(|i| {
             let k = lit[i * step];
-            let p = map.point(k).unwrap();
+            let p = map.point_on(k, &scene, &s.surfaces()).unwrap();
             let mut rng = radiosity::sampling::stream(11, 0, k as u64, 0);
             let (r, se) = radiosity::render::path::radiosity_at(
                 &surfaces, &lights, p.x, p.n, p.face, 20_000, &mut rng,

@@ -272,6 +272,22 @@ impl Lightmap {
         })
     }
 
+    /// The point texel `k` was evaluated at, as the bake found it: [`Lightmap::point`] moved
+    /// along the normal onto the solution's own patches of its polygon (`surfaces`, the
+    /// solution's that baked it), with that patch's normal. On a planar polygon the same
+    /// point as [`Lightmap::point`].
+    pub fn point_on(&self, k: usize, scene: &Scene, surfaces: &Surfaces<'_>) -> Option<TexelPoint> {
+        let p = self.point(k)?;
+        let f = &self.unwrap.mesh.patches[p.face as usize];
+        let lift = lift(scene, f, surfaces.bvh.ray_offset());
+        let pr = probe(surfaces, p.x, f.normal, f.surface, lift);
+        Some(TexelPoint {
+            x: pr.x,
+            n: pr.n,
+            ..p
+        })
+    }
+
     /// Atlas `a` bilinearly sampled at `uv` (glTF texture coordinates, clamped to the edge),
     /// as a GPU samples it.
     pub fn sample(&self, a: u32, uv: [f32; 2]) -> Rgb {
@@ -438,6 +454,18 @@ fn probe(s: &Surfaces<'_>, x: Vec3, n: Vec3, surface: u32, lift: f32) -> Probe {
         x,
         n,
     }
+}
+
+/// How far the probe of a point of face `f` looks along the normal for the solution's
+/// patches: how far the face's polygon strays from the face's plane, plus four ray offsets.
+fn lift(scene: &Scene, f: &crate::mesh::Patch, off: f32) -> f32 {
+    let poly = &scene.polygons[f.surface as usize];
+    let stray = poly
+        .vertices
+        .iter()
+        .map(|v| f.normal.dot(*v - f.centre).abs())
+        .fold(0.0f32, f32::max);
+    1.01 * stray + 4.0 * off
 }
 
 /// An indirect record of a chart: where it lies and its indirect irradiance.
@@ -821,20 +849,7 @@ pub fn bake(
         },
     );
     let off = surfaces.bvh.ray_offset();
-    let lift: Vec<f32> = u
-        .mesh
-        .patches
-        .iter()
-        .map(|f| {
-            let poly = &scene.polygons[f.surface as usize];
-            let stray = poly
-                .vertices
-                .iter()
-                .map(|v| f.normal.dot(*v - f.centre).abs())
-                .fold(0.0f32, f32::max);
-            1.01 * stray + 4.0 * off
-        })
-        .collect();
+    let lift: Vec<f32> = u.mesh.patches.iter().map(|f| lift(scene, f, off)).collect();
     let mut texels = vec![[0.0f32; 3]; n_texels];
     let mut kind = vec![Texel::Padding; n_texels];
     let mut faces = vec![u32::MAX; n_texels];
