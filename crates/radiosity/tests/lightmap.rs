@@ -2,7 +2,7 @@
 //! leaking into a closed box, seams that agree, and the Khronos validator on every
 //! lightmapped glTF written.
 
-use radiosity::bake::lightmap::{bake, Lightmap, LightmapParams, Texel};
+use radiosity::bake::lightmap::{bake, Denoise, Lightmap, LightmapParams, Texel};
 use radiosity::bake::uv::Density;
 use radiosity::color::Rgb;
 use radiosity::export::bake::{write_lightmap_gltf, LightmapBake};
@@ -144,6 +144,165 @@ fn cornell_texels_match_path_traced_references() {
     assert!(rmse <= 0.03, "relative RMSE {rmse}");
 }
 
+/// 400 lit texels' radiosity at their points by the path tracer (20,000 paths each): the
+/// texel index, the reference and its standard error (summed over channels).
+fn texel_references(scene: &Scene, s: &Solution, map: &Lightmap) -> Vec<(usize, f64, f64)> {
+    let mesh = &map.unwrap.mesh;
+    let mesh_bvh = radiosity::accel::Bvh::build(mesh);
+    let system = radiosity::mesh::patch_system(scene, mesh);
+    let surfaces = radiosity::render::light::Surfaces {
+        mesh,
+        bvh: &mesh_bvh,
+        reflectance: &system.reflectance,
+        emission: &system.emission,
+    };
+    let lights = radiosity::render::light::Lights::new(mesh, &system.emission);
+    let lit: Vec<usize> = (0..map.texels.len())
+        .filter(|&k| map.kind[k] == Texel::Surface && map.inside[k])
+        .collect();
+    let step = lit.len() / 400;
+    use rayon::prelude::*;
+    (0..400)
+        .into_par_iter()
+        .map(|i| {
+            let k = lit[i * step];
+            let p = map.point_on(k, scene, &s.surfaces()).unwrap();
+            let mut rng = radiosity::sampling::stream(11, 0, k as u64, 0);
+            let (r, se) = radiosity::render::path::radiosity_at(
+                &surfaces, &lights, p.x, p.n, p.face, 20_000, &mut rng,
+            );
+            (k, sum(r), sum(se))
+        })
+        .collect()
+}
+
+/// Relative RMSE of `map`'s texels against `refs` (over the references' mean), the
+/// references' own variance taken off.
+fn relative_rmse(map: &Lightmap, refs: &[(usize, f64, f64)]) -> f64 {
+    let n = refs.len() as f64;
+    let mse = refs
+        .iter()
+        .map(|&(k, r, _)| (sum(map.texel(k)) - r).powi(2))
+        .sum::<f64>()
+        / n;
+    let noise = refs.iter().map(|(_, _, se)| se * se).sum::<f64>() / n;
+    let mean = refs.iter().map(|(_, r, _)| r).sum::<f64>() / n;
+    (mse - noise).max(0.0).sqrt() / mean
+}
+
+/// Denoising (issue 59): the Cornell box baked with few indirect samples (16 a record, noisy)
+/// comes closer to the path-traced per-texel reference with the cross-bilateral filter than
+/// without (measured 2.80 % → 1.60 % relative RMSE; 256 samples unfiltered give 1.07 %, the
+/// floor set by the solution's mesh): at most 0.75 times, and within the 3 % target. The
+/// direct light is not filtered, so a texel's value changes only by its indirect part; each
+/// quad's texel mean stays within 2 % (plus two reference standard errors) of the path
+/// tracer's surface mean, as without denoising (the edge between lit and covered texels is
+/// kept by the leak test, run with the filter too).
+#[test]
+fn denoising_lowers_the_texels_error() {
+    let scene = builtin::cornell();
+    let s = solved(&scene, 5000);
+    let bake_with = |denoise| {
+        baked(
+            &scene,
+            &s,
+            &LightmapParams {
+                density: Density::TexelSize(5.56),
+                direct: 32,
+                indirect: 16,
+                denoise,
+                ..Default::default()
+            },
+        )
+    };
+    let (noisy, filtered) = (bake_with(None), bake_with(Some(Denoise::default())));
+    let refs = texel_references(&scene, &s, &noisy);
+    let (before, after) = (
+        relative_rmse(&noisy, &refs),
+        relative_rmse(&filtered, &refs),
+    );
+    eprintln!(
+        "relative RMSE: {:.2} % without denoising, {:.2} % with",
+        100.0 * before,
+        100.0 * after
+    );
+    assert!(after <= 0.75 * before && after <= 0.03, "{before} → {after}");
+    // Quad means.
+    let reference = radiosity::pipeline::path_surface_means(&scene, 1_000_000, 7).unwrap();
+    let mesh = &filtered.unwrap.mesh;
+    let mut per = vec![(Rgb::BLACK, 0usize); scene.polygons.len()];
+    for k in 0..filtered.texels.len() {
+        if let Some(p) = filtered.point(k).filter(|p| p.inside) {
+            let q = mesh.patches[p.face as usize].surface as usize;
+            per[q].0 += filtered.texel(k);
+            per[q].1 += 1;
+        }
+    }
+    for (k, ((b, n), (r, se))) in per.iter().zip(&reference).enumerate() {
+        let m = &scene.materials[scene.polygons[k].material];
+        if m.emission.max_channel() > 0.0 {
+            continue;
+        }
+        let (mean, r, se) = (sum(*b) / *n as f64, sum(*r), sum(*se));
+        assert!(
+            (mean - r).abs() <= (0.02 + 2.0 * se / r) * r,
+            "quad {k}: {mean} vs {r} ± {se}"
+        );
+    }
+}
+
+/// Several atlases (issue 59): the Cornell box at one texel size packed into 64 × 64 atlases
+/// (several) holds, chart for chart, exactly the texels of the one atlas that texel size
+/// alone gives (each texel's streams are keyed by chart and texel, not by its place in an
+/// atlas), each face's UVs lie in its chart's rectangle of its atlas, and the glTF, a
+/// material and a texture per atlas, passes the validator.
+#[test]
+fn several_atlases_hold_the_texels_of_one() {
+    let scene = builtin::cornell();
+    let s = solved(&scene, 300);
+    let l = 12.0;
+    let params = |density| LightmapParams {
+        density,
+        direct: 4,
+        indirect: 16,
+        ..Default::default()
+    };
+    let one = baked(&scene, &s, &params(Density::TexelSize(l)));
+    let many = baked(&scene, &s, &params(Density::Both(l, 64)));
+    assert_eq!(one.atlases(), 1);
+    assert!(many.atlases() >= 2, "{} atlases", many.atlases());
+    assert_eq!((many.width(), many.height()), (64, 64));
+    validate(&scene, &many, "atlases");
+    assert_eq!(one.unwrap.charts.len(), many.unwrap.charts.len());
+    let per = |m: &Lightmap| m.width() as usize * m.height() as usize;
+    let mut compared = 0;
+    for (a, b) in one.unwrap.charts.iter().zip(&many.unwrap.charts) {
+        assert_eq!((a.width, a.height, &a.faces), (b.width, b.height, &b.faces));
+        for j in 0..a.height {
+            for i in 0..a.width {
+                let ka = ((a.y0 + j) * one.width() + a.x0 + i) as usize;
+                let kb = b.atlas as usize * per(&many)
+                    + ((b.y0 + j) * many.width() + b.x0 + i) as usize;
+                assert_eq!(one.texels[ka], many.texels[kb], "chart texel ({i}, {j})");
+                assert_eq!(one.kind[ka], many.kind[kb]);
+                compared += 1;
+            }
+        }
+    }
+    assert_eq!(compared, one.surface_texels().max(compared));
+    // Each face's UVs inside its chart's rectangle of its atlas.
+    let u = &many.unwrap;
+    for (f, p) in u.mesh.patches.iter().enumerate() {
+        let c = &u.charts[u.chart_of[f] as usize];
+        for &v in p.vertices.iter().take(if p.is_triangle() { 3 } else { 4 }) {
+            let t = u.uv[v as usize];
+            let (x, y) = (t[0] * u.width as f32, t[1] * u.height as f32);
+            assert!(x >= c.x0 as f32 && x <= (c.x0 + c.width) as f32);
+            assert!(y >= c.y0 as f32 && y <= (c.y0 + c.height) as f32);
+        }
+    }
+}
+
 fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3, material: usize) -> Polygon {
     Polygon {
         vertices: vec![a, b, c, d],
@@ -248,15 +407,26 @@ fn no_light_leaks_into_a_closed_box() {
         ..Default::default()
     };
     let s = solved(&scene, 4000);
-    let map = baked(
-        &scene,
-        &s,
-        &LightmapParams {
-            density: Density::TexelSize(0.02),
-            ..Default::default()
-        },
-    );
-    validate(&scene, &map, "leak");
+    for denoise in [None, Some(Denoise::default())] {
+        let map = baked(
+            &scene,
+            &s,
+            &LightmapParams {
+                density: Density::TexelSize(0.02),
+                denoise,
+                ..Default::default()
+            },
+        );
+        if denoise.is_none() {
+            validate(&scene, &map, "leak");
+        }
+        check_no_leak(&map, lo, hi);
+    }
+}
+
+/// The floor's texels under the box `[lo, hi]` and every texel inside it read below 0.1 % of
+/// the lit floor's mean.
+fn check_no_leak(map: &Lightmap, lo: Vec3, hi: Vec3) {
     let mesh = &map.unwrap.mesh;
     let (mut lit, mut n_lit) = (0.0, 0usize);
     let mut under = Vec::new();
@@ -426,7 +596,10 @@ fn an_atlas_past_the_memory_limit_is_refused() {
         panic!("{err}")
     };
     assert_eq!(needed, width as u64 * height as u64 * bytes_per_texel(4, false));
+    // The slimmed bake (issue 59): 22 bytes a texel at the default spacing, 145 before.
+    assert_eq!(bytes_per_texel(4, false), 22);
     assert!(err_text(&params(1 << 10), &scene, &s).contains("lightmap needs about"));
+    assert!(err_text(&params(1 << 10), &scene, &s).contains("64 × 64"));
     assert!(bake(&scene, s.surfaces(), &vertex, &params(needed)).is_ok());
 }
 
