@@ -21,7 +21,10 @@ pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
             ("--texel-size", a.texel_size.is_some()),
             ("--lightmap-out", a.lightmap_out.is_some()),
             ("--lightmap-denoise", a.lightmap_denoise),
-            ("--lightmap-denoise-radius", a.lightmap_denoise_radius.is_some()),
+            (
+                "--lightmap-denoise-radius",
+                a.lightmap_denoise_radius.is_some(),
+            ),
         ] {
             if given {
                 bail!("{flag}: only a lightmap bake has it (add --bake lightmap)");
@@ -59,7 +62,9 @@ pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
     }
     if let Some(r) = a.lightmap_denoise_radius {
         if !a.lightmap_denoise {
-            bail!("--lightmap-denoise-radius: only a denoised bake has it (add --lightmap-denoise)");
+            bail!(
+                "--lightmap-denoise-radius: only a denoised bake has it (add --lightmap-denoise)"
+            );
         }
         if !(r.is_finite() && r >= 1.0) {
             bail!("--lightmap-denoise-radius {r}: must be at least 1 texel");

@@ -302,7 +302,10 @@ impl Solution {
         }
         d.set_item("vertex_atlas", Array1::from(vertex_atlas).into_pyarray(py))?;
         d.set_item("triangles", t.into_pyarray(py))?;
-        d.set_item("triangle_surface", Array1::from(tri_surface).into_pyarray(py))?;
+        d.set_item(
+            "triangle_surface",
+            Array1::from(tri_surface).into_pyarray(py),
+        )?;
         d.set_item("texel_size", u.texel)?;
         Ok(d)
     }

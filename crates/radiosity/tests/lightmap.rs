@@ -226,7 +226,10 @@ fn denoising_lowers_the_texels_error() {
         100.0 * before,
         100.0 * after
     );
-    assert!(after <= 0.75 * before && after <= 0.03, "{before} → {after}");
+    assert!(
+        after <= 0.75 * before && after <= 0.03,
+        "{before} → {after}"
+    );
     // Quad means.
     let reference = radiosity::pipeline::path_surface_means(&scene, 1_000_000, 7).unwrap();
     let mesh = &filtered.unwrap.mesh;
@@ -281,8 +284,8 @@ fn several_atlases_hold_the_texels_of_one() {
         for j in 0..a.height {
             for i in 0..a.width {
                 let ka = ((a.y0 + j) * one.width() + a.x0 + i) as usize;
-                let kb = b.atlas as usize * per(&many)
-                    + ((b.y0 + j) * many.width() + b.x0 + i) as usize;
+                let kb =
+                    b.atlas as usize * per(&many) + ((b.y0 + j) * many.width() + b.x0 + i) as usize;
                 assert_eq!(one.texels[ka], many.texels[kb], "chart texel ({i}, {j})");
                 assert_eq!(one.kind[ka], many.kind[kb]);
                 compared += 1;
@@ -524,10 +527,13 @@ fn seams_agree() {
     let at = |c: usize, p: Vec3| {
         let chart = &u.charts[c];
         let s = chart.texel_coords(p, u.texel);
-        map.sample(0, [
-            (chart.x0 as f32 + s[0]) / u.width as f32,
-            (chart.y0 as f32 + s[1]) / u.height as f32,
-        ])
+        map.sample(
+            0,
+            [
+                (chart.x0 as f32 + s[0]) / u.width as f32,
+                (chart.y0 as f32 + s[1]) / u.height as f32,
+            ],
+        )
     };
     // Neighbouring texels inside each floor chart.
     let (mut var, mut n_var) = (0.0, 0usize);
@@ -595,7 +601,10 @@ fn an_atlas_past_the_memory_limit_is_refused() {
     else {
         panic!("{err}")
     };
-    assert_eq!(needed, width as u64 * height as u64 * bytes_per_texel(4, false));
+    assert_eq!(
+        needed,
+        width as u64 * height as u64 * bytes_per_texel(4, false)
+    );
     // The slimmed bake (issue 59): 22 bytes a texel at the default spacing, 145 before.
     assert_eq!(bytes_per_texel(4, false), 22);
     assert!(err_text(&params(1 << 10), &scene, &s).contains("lightmap needs about"));

@@ -35,8 +35,19 @@
 //! filled 8-neighbours in the same chart, [`super::uv::PADDING`] + 1 passes, so bilinear
 //! filtering at a chart's border never reads an empty texel or another chart.
 //!
-//! Every texel draws from its own stream keyed by chart and texel, so the atlas does not depend
-//! on the thread count.
+//! **Denoising** (optional, [`Denoise`]): a cross-bilateral filter of the records' indirect
+//! irradiance, guided by their positions, normals, chart and mutual visibility, before the
+//! interpolation; the direct light is never filtered.
+//!
+//! **Order and memory.** The charts are baked one after the other within a band of atlas rows
+//! that no other chart crosses (a shelf of the packing), the bands in parallel and each
+//! chart's rows in parallel: rasterise (each texel's face), gather the records, evaluate the
+//! texels, dilate. A texel keeps only its value (`f32` RGB), face and two flags; its surface
+//! point is recomputed from the chart's frame when needed ([`Lightmap::point`]), so the bake
+//! holds [`bytes_per_texel`] bytes a texel (22 at the default spacing).
+//!
+//! Every texel draws from its own streams keyed by its chart and its place in the chart, so
+//! the atlas does not depend on the thread count nor on where the chart is packed.
 
 use super::uv::{unwrap, Chart, Density, Unwrap, UnwrapError, PADDING};
 use crate::color::Rgb;
@@ -127,8 +138,7 @@ impl Denoise {
 pub fn bytes_per_texel(spacing: u32, denoise: bool) -> u64 {
     use std::mem::size_of;
     let kept = size_of::<[f32; 3]>() + size_of::<u32>() + size_of::<Texel>() + size_of::<bool>();
-    let record =
-        size_of::<Record>() + if denoise { size_of::<[f32; 3]>() } else { 0 };
+    let record = size_of::<Record>() + if denoise { size_of::<[f32; 3]>() } else { 0 };
     let s2 = (spacing.max(1) as u64).pow(2);
     (kept + 1) as u64 + (record as u64).div_ceil(s2)
 }
@@ -261,7 +271,10 @@ impl Lightmap {
         let u = &self.unwrap;
         let per = u.width as usize * u.height as usize;
         let rem = k % per;
-        let (x, y) = ((rem % u.width as usize) as u32, (rem / u.width as usize) as u32);
+        let (x, y) = (
+            (rem % u.width as usize) as u32,
+            (rem / u.width as usize) as u32,
+        );
         let chart = &u.charts[u.chart_of[face as usize] as usize];
         let (i, j) = (x - chart.x0, y - chart.y0);
         Some(TexelPoint {
@@ -518,7 +531,13 @@ impl Context<'_> {
     fn probe_at(&self, chart: &Chart, face: u32, i: u32, j: u32) -> Probe {
         let x = texel_point(self.u, chart, face, i, j);
         let f = &self.u.mesh.patches[face as usize];
-        probe(&self.surfaces, x, f.normal, f.surface, self.lift[face as usize])
+        probe(
+            &self.surfaces,
+            x,
+            f.normal,
+            f.surface,
+            self.lift[face as usize],
+        )
     }
 
     /// Bake chart `c` into its rows (`row0`: the chart's first row within `rows`); the
@@ -581,7 +600,10 @@ impl Context<'_> {
         // 2. The records: every `spacing`-th texel from `PADDING % spacing`.
         let s = self.params.spacing.max(1);
         let p = PADDING % s;
-        let (rw, rh) = (w.saturating_sub(p).div_ceil(s), h.saturating_sub(p).div_ceil(s));
+        let (rw, rh) = (
+            w.saturating_sub(p).div_ceil(s),
+            h.saturating_sub(p).div_ceil(s),
+        );
         let faces = &rows.faces[span.clone()];
         let face_at = |i: u32, j: u32| faces[j as usize * aw + x0 + i as usize];
         let mut records: Vec<Record> = (0..rw * rh)
@@ -594,7 +616,10 @@ impl Context<'_> {
                 }
                 let pr = self.probe_at(chart, f, i, j);
                 if pr.covered {
-                    return Record { x: pr.x, ..Record::NONE };
+                    return Record {
+                        x: pr.x,
+                        ..Record::NONE
+                    };
                 }
                 let (a, b) = self.rng_key(c, w, i, j);
                 let mut rng = stream(self.params.seed, 0x4c4d_4150, a, b);
@@ -766,8 +791,8 @@ impl Context<'_> {
                         }
                         let dx = q.x - r.x;
                         let dist2 = dx.length_squared();
-                        let w = (-(dist2 / two_sx2) - (q.n - r.n).length_squared() / two_sn2)
-                            .exp() as f64;
+                        let w = (-(dist2 / two_sx2) - (q.n - r.n).length_squared() / two_sn2).exp()
+                            as f64;
                         if w < 1e-4 {
                             continue;
                         }
@@ -825,8 +850,7 @@ pub fn bake(
     let u = unwrap(scene, params.density)?;
     let per_atlas = u.width as u64 * u.height as u64;
     let n_texels = per_atlas.saturating_mul(u.atlases as u64);
-    let needed =
-        n_texels.saturating_mul(bytes_per_texel(params.spacing, params.denoise.is_some()));
+    let needed = n_texels.saturating_mul(bytes_per_texel(params.spacing, params.denoise.is_some()));
     if needed > params.memory_limit {
         return Err(LightmapError::TooLarge {
             width: u.width,

@@ -519,7 +519,8 @@ pub fn write_lightmap_gltf(
         } else {
             format!("lightmap-{a}")
         };
-        images.push(json!({"name": name, "bufferView": buffer_views.len(), "mimeType": "image/png"}));
+        images
+            .push(json!({"name": name, "bufferView": buffer_views.len(), "mimeType": "image/png"}));
         textures.push(json!({"name": name, "source": a, "sampler": 0}));
         buffer_views.push(json!({"buffer": 0, "byteOffset": buf.len(), "byteLength": png.len()}));
         buf.extend_from_slice(png);
