@@ -58,8 +58,9 @@ groundglow source ground 0 0 4 0 0 -1 180
 """
 # rfluxmtx settings: (-ab, -ad, -lw).
 TWO_PHASE = [(4, 1024, 1e-3), (6, 4096, 2.5e-4), (8, 16384, 6e-5)]
-OURS = [("defaults", []), ("--patches 2500", ["--patches", "2500"]),
-        ("--patches 2500 --sky-rays 4096", ["--patches", "2500", "--sky-rays", "4096"])]
+# Ours: the default set; `--ours` replaces it ("A;B": settings separated by semicolons).
+OURS = ["", "--patches 2500", "--patches 2500 --sky-rays 4096", "--sun-method exact",
+        "--sun-method exact --patches 2500"]
 # The sampled hours split by the direct normal irradiance: the sun's discretisation (in its
 # patch, or over its nearest patches) dominates the error where there is direct sun.
 SUNLESS = 50.0  # W/m²
@@ -403,6 +404,13 @@ def main():
     ap.add_argument("--noise-hours", type=int, default=4)
     ap.add_argument("--reps", type=int, default=2)
     ap.add_argument("--nproc", type=int, default=2)
+    ap.add_argument("--ours", help="our settings, separated by ';' (empty: the defaults); "
+                    "default: " + "; ".join(o or "(defaults)" for o in OURS))
+    ap.add_argument("--two-phase", default="all", choices=["all", "none"],
+                    help="run Radiance's 2-phase years too (all three settings) or not")
+    ap.add_argument("--sun-study", action="store_true",
+                    help="also the sun's share of the error on Radiance's matrix (one more "
+                    "rfluxmtx -ab 8 -ad 16384 run)")
     ap.add_argument("--sky-check", action="store_true",
                     help="only the skies at an open point, ours against the reference sky")
     args = ap.parse_args()
@@ -416,9 +424,11 @@ def main():
     hours = np.sort(np.random.default_rng(58).choice(occupied, args.hours, replace=False))
 
     # The years, side by side.
-    settings = [("ours " + name, "ours", opts) for name, opts in OURS]
-    settings += [(f"2-phase -ab {ab} -ad {ad} -lw {lw:g}", "2phase", (ab, ad, lw))
-                 for ab, ad, lw in TWO_PHASE]
+    ours_sets = OURS if args.ours is None else [o.strip() for o in args.ours.split(";")]
+    settings = [("ours " + (o or "defaults"), "ours", o.split()) for o in ours_sets]
+    if args.two_phase == "all":
+        settings += [(f"2-phase -ab {ab} -ad {ad} -lw {lw:g}", "2phase", (ab, ad, lw))
+                     for ab, ad, lw in TWO_PHASE]
     times = {name: [] for name, _, _ in settings}
     commands, errs = {}, {}
     if args.sky_check:
@@ -445,7 +455,7 @@ def main():
                 year = read_ours(d) if side == "ours" else read_mtx(os.path.join(d, "ill.mtx")).T
                 errs[name] = agreement(year, ref, hours, ref_idx, records)
     load1 = load()
-    study = sun_study(d, records, hours, ref, ref_idx)
+    study = sun_study(d, records, hours, ref, ref_idx) if args.sun_study else {}
     noise_rel = float(np.sqrt(np.mean([np.mean((n - 1) ** 2) for n in noise])) / np.sqrt(2)) \
         if noise else None
 
@@ -471,10 +481,11 @@ def main():
                                                                 ("all", "sunless", "sun")))
         lines.append(f"| {name} | {cpu:.2f} | {wall:.2f} |" + cells)
     lines.append("")
-    lines.append(f"The sun's share (one daylight matrix, rfluxmtx -ab {TWO_PHASE[-1][0]} -ad "
+    if study:
+        lines.append(f"The sun's share (one daylight matrix, rfluxmtx -ab {TWO_PHASE[-1][0]} -ad "
                  f"{TWO_PHASE[-1][1]}; RMSE over the hours with DNI ≥ {SUNLESS:g} W/m²): "
-                 + "; ".join(f"the sun in {k}: {v:.0f} lx" for k, v in study.items()))
-    lines.append("")
+                     + "; ".join(f"the sun in {k}: {v:.0f} lx" for k, v in study.items()))
+        lines.append("")
     lines += [f"- {name}: `{cmd}`" for name, cmd in commands.items()]
     text = "\n".join(lines)
     with open(os.path.join(d, "annual.md"), "w") as f:

@@ -269,6 +269,7 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     let settings = DaylightSettings {
         lighting: crate::lighting::lighting_settings(&a),
         point_rays: a.sky_rays,
+        sun_rays: a.sun_rays,
         ground_reflectance: a.ground_reflectance,
         frame: SkyFrame::new(matches!(up, Up::Y), a.north).context("--north")?,
         ..DaylightSettings::default()
@@ -294,9 +295,10 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     let d = DaylightMatrix::new(n, np, values)?;
 
     // The year, its outputs staged: all land or none.
+    // Exact unless asked otherwise (why: docs/daylight-radiance.md, "A year").
     let exact = match a.sun_method {
-        Some(SunMethod::Exact) => Some(DirectSun::new(&scene, &points, &settings)?),
-        _ => None,
+        Some(SunMethod::Patch) => None,
+        Some(SunMethod::Exact) | None => Some(DirectSun::new(&scene, &points, &settings)?),
     };
     let exact_sun = exact.as_ref().map(|direct| ExactSun {
         direct,

@@ -471,6 +471,10 @@ pub struct LightingArgs {
     /// as N^(−3/4)).
     #[arg(long, value_name = "N", default_value_t = 16_384, requires = "daylight", help_heading = DAYLIGHT)]
     pub sky_rays: u32,
+    /// Shadow rays to the sun's disc (0.533°, stratified) at each point and patch, for each
+    /// sun: `--sun`'s, and every hour's in an annual run with the exact sun.
+    #[arg(long, value_name = "N", default_value_t = 16, requires = "daylight", help_heading = DAYLIGHT)]
+    pub sun_rays: u32,
     /// Annual daylight: the weather file (EnergyPlus EPW) whose hourly direct normal and
     /// diffuse horizontal irradiance give the year's skies (Perez all-weather model); needs
     /// --annual.
@@ -511,9 +515,9 @@ pub struct LightingArgs {
     /// above HIGH). Default 100,3000.
     #[arg(long, value_name = "LOW,HIGH", help_heading = DAYLIGHT)]
     pub udi_range: Option<String>,
-    /// Annual daylight: where the sun goes. `patch` (default): into the sky patch holding it
-    /// (2-phase). `exact`: its direct light at its true position every hour (shadow rays,
-    /// what ASE counts), its interreflection from its patch (the 5-phase method).
+    /// Annual daylight: where the sun goes. `exact` (default): its direct light at its true
+    /// position every hour (shadow rays, what ASE counts), its interreflection from its patch
+    /// (the 5-phase method). `patch`: into the sky patch holding it (2-phase).
     #[arg(long, value_enum, value_name = "METHOD", help_heading = DAYLIGHT)]
     pub sun_method: Option<SunMethod>,
 }

@@ -2,7 +2,9 @@
 //! (this process's user + system time, from `/proc/self/stat`), the method's counts, and the
 //! row sums, written to a file for comparing two builds.
 //!
-//! `cargo run --release -p radiosity --example adaptive_speed -- SCENE.vs3 [ROWSUMS.txt]`
+//! `cargo run --release -p radiosity --example adaptive_speed -- SCENE.vs3 [OUT.bin [REF.bin]]
+//! [--accuracy E]`: OUT.bin gets the matrix as (i, j, f) records, REF.bin (such a file from
+//! another build or accuracy) is compared with it.
 
 use radiosity::accel::Bvh;
 use radiosity::formfactor::{Estimator, FormFactorMethod, Params, Storage};
@@ -21,14 +23,19 @@ fn cpu_seconds() -> f64 {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
+    let mut args: Vec<String> = std::env::args().collect();
+    let mut accuracy = 1e-5;
+    if let Some(k) = args.iter().position(|a| a == "--accuracy") {
+        accuracy = args[k + 1].parse().expect("--accuracy E");
+        args.drain(k..k + 2);
+    }
     let path = std::path::Path::new(&args[1]);
     let v = radiosity::scene::vs3::load(path).expect("scene");
     let mesh = Mesh::build(&v.scene, MeshParams::Faces).expect("mesh");
     let bvh = Bvh::build(&mesh);
     let params = Params {
         method: FormFactorMethod::Adaptive,
-        accuracy: 1e-5,
+        accuracy,
         ..Params::default()
     };
     let t0 = cpu_seconds();
@@ -81,12 +88,19 @@ fn main() {
             sum_abs += v.abs();
         }
         let row: Vec<f64> = (0..n).map(|i| (sums[i] - ref_sums[i]).abs()).collect();
+        let (at, worst_row) =
+            row.iter().enumerate().fold(
+                (0, 0.0f64),
+                |(k, w), (i, d)| if *d > w { (i, *d) } else { (k, w) },
+            );
         println!(
-            "against {reference}: mean |dF| {:.2e}, worst |dF| {:.2e}, mean |d row sum| {:.2e}, worst {:.2e}",
+            "against {reference}: mean |dF| {:.2e}, worst |dF| {:.2e}, mean |d row sum| {:.2e}, worst {:.2e} (row {at}: {:.7} here, {:.7} there)",
             sum_abs / (n * n) as f64,
             worst,
             row.iter().sum::<f64>() / n as f64,
-            row.iter().fold(0.0f64, |a, b| a.max(*b))
+            worst_row,
+            sums[at],
+            ref_sums[at]
         );
     }
 }

@@ -469,6 +469,28 @@ fn the_exact_sun_adds_e_n_sin_alpha_at_an_unobstructed_point() {
     }
     assert_eq!(sunny, 400);
     assert!(worst < 5e-3, "{worst}");
+}
+
+/// `--sun-method` defaults to `exact`: with no flag the hourly file is byte for byte the
+/// explicit exact run's (same seed) and the summary says `exact`; `--sun-method patch` is
+/// still there and says `patch`.
+#[test]
+fn the_sun_method_defaults_to_exact() {
+    let dir = scratch("annual-sun-default");
+    open_floor(&dir);
+    write(&dir, "sunny.epw", &sunny_epw());
+    let (_, _, s) = sunny_year(&dir, &["--hourly", "default.csv"]);
+    assert_eq!(s["annual"]["sun"], "exact");
+    let (_, _, s) = sunny_year(&dir, &["--sun-method", "exact", "--hourly", "exact.csv"]);
+    assert_eq!(s["annual"]["sun"], "exact");
+    assert_eq!(
+        read_bytes(&dir, "default.csv"),
+        read_bytes(&dir, "exact.csv")
+    );
+    let (_, _, s) = sunny_year(&dir, &["--sun-method", "patch"]);
+    assert_eq!(s["annual"]["sun"], "patch");
+}
+
 /// `--pictures` in an annual run: each grid's daylight-autonomy map. On the open floor under
 /// 100 W/m² of diffuse light every occupied hour is above 300 lx, so DA = 100 % at every
 /// point of a 4 × 4 lattice and the map is one colour, the legend's colour of 100 %; a

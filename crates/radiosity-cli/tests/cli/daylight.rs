@@ -215,6 +215,12 @@ fn daylight_refuses_bad_input() {
         &keep,
     );
     fails(
+        &with(&["--sky", "uniform", "--sun", "30,0", "--sun-rays", "0"]),
+        &dir,
+        &["sun rays 0", "1 … 16777216"],
+        &keep,
+    );
+    fails(
         &with(&["--sky", "uniform", "--sky-illuminance", "-5"]),
         &dir,
         &["-5"],

@@ -158,17 +158,23 @@ impl Patch {
     }
 }
 
-/// The candidate occluders of each pair of occluders (groups), found once.
+/// The candidate occluders of each pair of occluders (groups), found once: those that meet the
+/// hull of the two and shadow one from somewhere on the other. Every patch lies in its group's
+/// polygon, so an occluder that shadows nothing between two groups shadows nothing between any
+/// of their patches, and one that hides all of one group from all of the other hides every
+/// pair of their patches.
 #[derive(Debug)]
 struct GroupTable {
     groups: usize,
     /// `(start, len)` into `candidates` for `(g, h)`, `g ≤ h`, at `g · groups + h`;
-    /// `len == NOT_FACING` when no part of one faces the other.
+    /// `len == NOT_FACING` when no part of one faces the other, `len == HIDDEN` when one
+    /// occluder hides all of one from all of the other.
     ranges: Vec<(u32, u32)>,
     candidates: Vec<u32>,
 }
 
 const NOT_FACING: u32 = u32::MAX;
+const HIDDEN: u32 = u32::MAX - 1;
 
 /// What the method prepares once per mesh: the patches in f64, their Gauss points, the
 /// occluders and their tree, and the candidates per pair of occluders.
@@ -176,6 +182,8 @@ const NOT_FACING: u32 = u32::MAX;
 pub struct Prepared {
     patches: Vec<Patch>,
     rule: Vec<(DVec3, f64)>,
+    /// The same points by coordinate (x, y, z, weight), for the product rule's inner loop.
+    rule_soa: [Vec<f64>; 4],
     occluders: Occluders,
     table: Option<GroupTable>,
     accuracy: f64,
@@ -214,7 +222,19 @@ pub struct Scratch {
     flat: Vec<(f64, f64, u32)>,
     hull: Vec<DVec3>,
     analytic: analytic::Scratch,
+    /// Which of the lost and the seen parts the points of the current pair must measure.
+    need: Need,
     stats: Stats,
+}
+
+/// What the visibility at a point of the outer integral must measure: both parts while the
+/// method chooses which to integrate, then only that one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+enum Need {
+    #[default]
+    Both,
+    Lost,
+    Seen,
 }
 
 /// A cell of the outer integral: region (triangle or quad of the fan), its square
@@ -260,7 +280,13 @@ impl Prepared {
                 }
             })
             .collect();
-        let rule = patches.iter().flat_map(gauss_points).collect();
+        let rule: Vec<(DVec3, f64)> = patches.iter().flat_map(gauss_points).collect();
+        let rule_soa = [
+            rule.iter().map(|r| r.0.x).collect(),
+            rule.iter().map(|r| r.0.y).collect(),
+            rule.iter().map(|r| r.0.z).collect(),
+            rule.iter().map(|r| r.1).collect(),
+        ];
         let scale = mesh
             .vertices
             .iter()
@@ -273,6 +299,7 @@ impl Prepared {
         Prepared {
             patches,
             rule,
+            rule_soa,
             occluders,
             table,
             accuracy,
@@ -354,6 +381,11 @@ impl Prepared {
             Some(t) => {
                 let (g, h) = (ga.min(gb) as usize, ga.max(gb) as usize);
                 let (start, len) = t.ranges[g * t.groups + h];
+                if len == HIDDEN {
+                    s.stats.occluded += 1;
+                    s.stats.occluded_hidden += 1;
+                    return 0.0;
+                }
                 if len != NOT_FACING && len > 0 {
                     // The hull lies in the pair's bounding box: a candidate whose box is
                     // clear of it (by far more than the shaft's slack) cuts no segment, and
@@ -450,15 +482,21 @@ impl Prepared {
     fn product(&self, ia: usize, ib: usize, m: usize) -> f64 {
         let (na, nb) = (self.patches[ia].normal, self.patches[ib].normal);
         let ra = &self.rule[ia * RULE_START[ORDERS] + RULE_START[m - 1]..][..m * m];
-        let rb = &self.rule[ib * RULE_START[ORDERS] + RULE_START[m - 1]..][..m * m];
+        let at = ib * RULE_START[ORDERS] + RULE_START[m - 1];
+        let [bx, by, bz, bw] = self.rule_soa.each_ref().map(|c| &c[at..at + m * m]);
+        // The terms of one outer point in a fixed array (a loop the compiler vectorises),
+        // then added in order.
+        let mut terms = [0.0f64; 16];
         let mut sum = 0.0;
         for &(x, wx) in ra {
-            let mut inner = 0.0;
-            for &(y, wy) in rb {
-                let r = y - x;
-                let r2 = r.length_squared();
-                inner += wy * na.dot(r) * -nb.dot(r) / (r2 * r2);
+            for k in 0..m * m {
+                let (rx, ry, rz) = (bx[k] - x.x, by[k] - x.y, bz[k] - x.z);
+                let r2 = rx * rx + ry * ry + rz * rz;
+                let ca = na.x * rx + na.y * ry + na.z * rz;
+                let cb = nb.x * rx + nb.y * ry + nb.z * rz;
+                terms[k] = bw[k] * ca * -cb / (r2 * r2);
             }
+            let inner: f64 = terms[..m * m].iter().sum();
             sum += wx * inner;
         }
         sum / PI
@@ -509,7 +547,7 @@ impl Prepared {
             }
         }
         for o in 0..s.occ_range.len() {
-            if self.shadow_region(o, eps, s) {
+            if Self::shadow_region(o, eps, s) {
                 s.active.push(o as u32);
             }
         }
@@ -533,6 +571,8 @@ impl Prepared {
         // together is then exactly 0, not a difference of two nearly equal integrals).
         let whole_patch = polygon_area(&omega) >= (1.0 - 1e-9) * polygon_area(&s.pa);
         let regions = if omega.len() == 4 { 1 } else { omega.len() - 2 };
+        // Only a whole patch may integrate what is seen; otherwise only the lost part counts.
+        s.need = if whole_patch { Need::Both } else { Need::Lost };
         let mut cells = std::mem::take(&mut s.cells);
         cells.clear();
         // Each region once whole and once in four: the first estimates come from comparing
@@ -552,6 +592,7 @@ impl Prepared {
         let total = |cells: &[Cell], k: usize| cells.iter().map(|c| c.value[k]).sum::<f64>();
         // 0: the lost part (G = unoccluded − lost), 1: the visible part (G = visible).
         let k = usize::from(whole_patch && total(&cells, 1) < total(&cells, 0));
+        s.need = if k == 1 { Need::Seen } else { Need::Lost };
         loop {
             let err: f64 = cells.iter().map(|c| c.err[k]).sum();
             if err <= tol {
@@ -627,7 +668,7 @@ impl Prepared {
     /// (the penumbra's boundary, Nishita & Nakamae 1985; Teller 1992); those found here are a
     /// subset, so the region they bound holds the true one. The region (the outer patch
     /// clipped by the separating planes) goes into `s.omega` and the planes into `s.planes`.
-    fn shadow_region(&self, o: usize, eps: f64, s: &mut Scratch) -> bool {
+    fn shadow_region(o: usize, eps: f64, s: &mut Scratch) -> bool {
         let (start, len) = s.occ_range[o];
         let occ = &s.occ[start as usize..(start + len) as usize];
         let rec = &s.pb;
@@ -791,7 +832,9 @@ impl Prepared {
     /// The factor from the point `x` (normal `n`) to the part of the receiver `s.pb` that the
     /// active occluders hide: each occluder's pyramid from `x` cuts the visible pieces
     /// (Sutherland–Hodgman against its side planes), and what falls inside is measured by
-    /// Lambert's formula; and the factor to the pieces left visible.
+    /// Lambert's formula; and the factor to the pieces left visible. Of the two only what
+    /// `s.need` asks for is measured (the other is 0): when only the lost part counts, the last
+    /// occluder's pyramid is cut from the pieces without keeping what lies outside it.
     fn blocked(&self, x: DVec3, n: DVec3, size: f64, s: &mut Scratch) -> (f64, f64) {
         let eps = 1e-11 * size;
         s.pieces.clear();
@@ -799,7 +842,15 @@ impl Prepared {
         s.pieces.extend_from_slice(&s.pb);
         s.ranges.push((0, s.pb.len() as u32));
         let mut lost = 0.0;
+        let (want_lost, want_seen) = match s.need {
+            Need::Both => (true, true),
+            Need::Lost => (true, false),
+            Need::Seen => (false, true),
+        };
+        let last = s.active.len().saturating_sub(1);
         for idx in 0..s.active.len() {
+            // Pieces outside this pyramid matter only to later occluders or to what is seen.
+            let keep = want_seen || idx < last;
             let o = s.active[idx] as usize;
             // Only from its penumbra region does an occluder shadow the receiver.
             let (ps, pl) = s.plane_range[idx];
@@ -842,27 +893,33 @@ impl Prepared {
                 let (ps, pl) = s.ranges[r];
                 let piece = &s.pieces[ps as usize..(ps + pl) as usize];
                 if outside(piece, &s.cone) {
-                    let at = s.next.len() as u32;
-                    s.next.extend_from_slice(piece);
-                    s.next_ranges.push((at, pl));
+                    if keep {
+                        let at = s.next.len() as u32;
+                        s.next.extend_from_slice(piece);
+                        s.next_ranges.push((at, pl));
+                    }
                     continue;
                 }
                 s.inside.clear();
                 s.inside.extend_from_slice(piece);
                 for k in 0..s.cone.len() {
                     let m = s.cone[k];
-                    split(&s.inside, m, x, eps, &mut s.tmp, &mut s.outside);
-                    if s.outside.len() >= 3 {
-                        let at = s.next.len() as u32;
-                        s.next.extend_from_slice(&s.outside);
-                        s.next_ranges.push((at, s.outside.len() as u32));
+                    if keep {
+                        split(&s.inside, m, x, eps, &mut s.tmp, &mut s.outside);
+                        if s.outside.len() >= 3 {
+                            let at = s.next.len() as u32;
+                            s.next.extend_from_slice(&s.outside);
+                            s.next_ranges.push((at, s.outside.len() as u32));
+                        }
+                    } else {
+                        keep_inside(&s.inside, m, x, eps, &mut s.tmp);
                     }
                     std::mem::swap(&mut s.inside, &mut s.tmp);
                     if s.inside.len() < 3 {
                         break;
                     }
                 }
-                if s.inside.len() >= 3 {
+                if want_lost && s.inside.len() >= 3 {
                     lost += point_polygon(x, n, &s.inside);
                 }
             }
@@ -873,8 +930,10 @@ impl Prepared {
             }
         }
         let mut seen = 0.0;
-        for &(ps, pl) in &s.ranges {
-            seen += point_polygon(x, n, &s.pieces[ps as usize..(ps + pl) as usize]);
+        if want_seen {
+            for &(ps, pl) in &s.ranges {
+                seen += point_polygon(x, n, &s.pieces[ps as usize..(ps + pl) as usize]);
+            }
         }
         (lost, seen)
     }
@@ -1087,6 +1146,38 @@ fn split(
     }
 }
 
+/// The part of the convex `poly` with `m · (p − x) ≥ 0` into `inside`, exactly as [`split`]
+/// makes it, without the other part.
+fn keep_inside(poly: &[DVec3], m: DVec3, x: DVec3, eps: f64, inside: &mut Vec<DVec3>) {
+    inside.clear();
+    let n = poly.len();
+    let side = |p: DVec3| {
+        let d = m.dot(p - x);
+        if d.abs() <= eps {
+            0.0
+        } else {
+            d
+        }
+    };
+    let mut d0 = side(poly[0]);
+    for k in 0..n {
+        let a = poly[k];
+        let b = poly[(k + 1) % n];
+        let da = d0;
+        let db = side(b);
+        if da >= 0.0 {
+            inside.push(a);
+        }
+        if (da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0) {
+            inside.push(a + (b - a) * (da / (da - db)));
+        }
+        d0 = db;
+    }
+    if inside.len() < 3 {
+        inside.clear();
+    }
+}
+
 /// The exact factor from a point `x` with unit normal `n` to the convex polygon `p`
 /// (counter-clockwise about its own normal, facing `x`, wholly in front of `x`): Lambert's
 /// contour formula `F = (1/2π) Σ_k γ_k n · (r_k × r_{k+1}) / |r_k × r_{k+1}|`, `r_k = p_k − x`,
@@ -1117,6 +1208,54 @@ pub fn point_polygon(x: DVec3, n: DVec3, p: &[DVec3]) -> f64 {
     -sum / (2.0 * PI)
 }
 
+/// Of the candidates `s.found` of two whole occluders (`s.pa`, normal `na`, and `s.pb`,
+/// normal `nb`, each clipped to the other's front), keep those that shadow one from somewhere
+/// on the other ([`Prepared::shadow_region`]); true when one of them hides all of `s.pb` from
+/// all of `s.pa` ([`umbra`]). The slack is a thousandth of a pair's, so that what is dropped
+/// is dropped at every pair of their patches too.
+fn group_shadows(occ: &Occluders, na: DVec3, nb: DVec3, s: &mut Scratch) -> bool {
+    let (mut lo, mut hi) = (s.pa[0], s.pa[0]);
+    for p in s.pa.iter().chain(&s.pb) {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let size = (hi - lo).length();
+    let eps = 1e-12 * size;
+    let (oa, ob) = (s.pa[0], s.pb[0]);
+    let mut kept = 0;
+    for idx in 0..s.found.len() {
+        let k = s.found[idx];
+        let poly = occ.polygon(k);
+        let flat = |n: DVec3, o: DVec3| poly.iter().all(|p| n.dot(*p - o).abs() <= eps);
+        if flat(na, oa) || flat(nb, ob) {
+            continue;
+        }
+        clip(poly, oa, na, 0.0, &mut s.tmp);
+        clip(&s.tmp, ob, nb, 0.0, &mut s.inside);
+        if s.inside.len() < 3 || polygon_area(&s.inside) <= 1e-14 * size * size {
+            continue;
+        }
+        s.occ.clear();
+        s.occ.extend_from_slice(&s.inside);
+        s.occ_range.clear();
+        s.occ_range.push((0, s.inside.len() as u32));
+        s.occ_normal.clear();
+        s.occ_normal.push(occ.normal(k));
+        if umbra(0, eps, s) {
+            return true;
+        }
+        s.planes.clear();
+        s.plane_range.clear();
+        s.omega.clear();
+        if Prepared::shadow_region(0, eps, s) {
+            s.found[kept] = k;
+            kept += 1;
+        }
+    }
+    s.found.truncate(kept);
+    false
+}
+
 /// One occluder's candidate pairs and their members, as `group_table` gathers them.
 type GroupRows = (Vec<(u32, u32)>, Vec<u32>);
 
@@ -1125,49 +1264,42 @@ fn group_table(occ: &Occluders) -> GroupTable {
     let g = occ.len();
     let per: Vec<GroupRows> = (0..g)
         .into_par_iter()
-        .map_init(
-            || {
-                (
-                    Vec::new(),
-                    Vec::new(),
-                    Vec::new(),
-                    Vec::new(),
-                    Shaft::default(),
-                )
-            },
-            |(pa, pb, stack, found, shaft), p| {
-                let mut ranges = Vec::with_capacity(g - p);
-                let mut cands = Vec::new();
-                let (np, ppoly) = (occ.normal(p as u32), occ.polygon(p as u32));
-                for q in p..g {
-                    let (nq, qpoly) = (occ.normal(q as u32), occ.polygon(q as u32));
-                    clip(ppoly, qpoly[0], nq, 0.0, pa);
-                    clip(qpoly, ppoly[0], np, 0.0, pb);
-                    let facing = q != p
-                        && pa.len() >= 3
-                        && pb.len() >= 3
-                        && polygon_area(pa) > 0.0
-                        && polygon_area(pb) > 0.0;
-                    if !facing {
-                        ranges.push((0, NOT_FACING));
-                        continue;
-                    }
-                    shaft.set(pa, np, pb, nq);
-                    occ.query(shaft, [p as u32, q as u32], stack, found);
-                    ranges.push((cands.len() as u32, found.len() as u32));
-                    cands.extend_from_slice(found);
+        .map_init(Scratch::default, |s, p| {
+            let mut ranges = Vec::with_capacity(g - p);
+            let mut cands = Vec::new();
+            let (np, ppoly) = (occ.normal(p as u32), occ.polygon(p as u32));
+            for q in p..g {
+                let (nq, qpoly) = (occ.normal(q as u32), occ.polygon(q as u32));
+                clip(ppoly, qpoly[0], nq, 0.0, &mut s.pa);
+                clip(qpoly, ppoly[0], np, 0.0, &mut s.pb);
+                let facing = q != p
+                    && s.pa.len() >= 3
+                    && s.pb.len() >= 3
+                    && polygon_area(&s.pa) > 0.0
+                    && polygon_area(&s.pb) > 0.0;
+                if !facing {
+                    ranges.push((0, NOT_FACING));
+                    continue;
                 }
-                (ranges, cands)
-            },
-        )
+                s.shaft.set(&s.pa, np, &s.pb, nq);
+                occ.query(&s.shaft, [p as u32, q as u32], &mut s.stack, &mut s.found);
+                if group_shadows(occ, np, nq, s) {
+                    ranges.push((0, HIDDEN));
+                    continue;
+                }
+                ranges.push((cands.len() as u32, s.found.len() as u32));
+                cands.extend_from_slice(&s.found);
+            }
+            (ranges, cands)
+        })
         .collect();
     let mut ranges = vec![(0u32, NOT_FACING); g * g];
     let mut candidates = Vec::new();
     for (p, (r, c)) in per.into_iter().enumerate() {
         let base = candidates.len() as u32;
         for (k, &(start, len)) in r.iter().enumerate() {
-            ranges[p * g + p + k] = if len == NOT_FACING {
-                (0, NOT_FACING)
+            ranges[p * g + p + k] = if len == NOT_FACING || len == HIDDEN {
+                (0, len)
             } else {
                 (base + start, len)
             };

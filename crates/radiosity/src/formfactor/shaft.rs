@@ -358,6 +358,15 @@ pub(super) struct Shaft {
 
 impl Shaft {
     /// The hull of `a` (normal `na`) and `b` (normal `nb`), each in front of the other's plane.
+    ///
+    /// Every face of the hull of two convex polygons holds three of their corners, so it is
+    /// one polygon's own plane or a plane through an edge of one and a corner of the other
+    /// (two corners of one polygon on a face that is not its plane are the ends of an edge).
+    /// Each edge `pq` of a polygon `E` lies on exactly one such face: the plane through `pq`
+    /// turned about it from `E`'s inside, across the side `E` faces, to the last corner of the
+    /// other polygon (whose corners all lie on that side, in the half-turn between `E`'s inside
+    /// and its outside). That corner is found by comparing the corners' angles about the edge
+    /// with one cross product each, so a shaft of two quads costs eight planes of four corners.
     pub(super) fn set(&mut self, a: &[DVec3], na: DVec3, b: &[DVec3], nb: DVec3) {
         self.planes.clear();
         let (lo, hi) = a
@@ -369,35 +378,48 @@ impl Shaft {
         // The polygons' own planes: the other lies in front, so the hull is on the front side.
         self.planes.push((-na, -na.dot(a[0])));
         self.planes.push((-nb, -nb.dot(b[0])));
-        for (edges, corners) in [(a, b), (b, a)] {
+        let tiny = 1e-12 * size;
+        for (edges, ne, corners) in [(a, na, b), (b, nb, a)] {
+            let centre = edges.iter().copied().sum::<DVec3>() / edges.len() as f64;
             for k in 0..edges.len() {
                 let (p, q) = (edges[k], edges[(k + 1) % edges.len()]);
+                let d = q - p;
+                let dl = d.length();
+                if dl <= tiny {
+                    // A degenerate edge: leaving its face out only widens the hull.
+                    continue;
+                }
+                // In the plane across the edge: `o` points out of E, `ne` to the side it faces.
+                let mut o = (d / dl).cross(ne);
+                if o.dot(centre - p) > 0.0 {
+                    o = -o;
+                }
+                // The corner of largest angle from E's inside (−o) towards ne, (u, v) its
+                // coordinates along (o, ne): angle(c) > angle(best) ⇔ u_c v_b − u_b v_c > 0.
+                let (mut ub, mut vb) = (f64::NAN, f64::NAN);
                 for &c in corners {
-                    let m = (q - p).cross(c - p);
-                    let len2 = m.length_squared();
-                    if len2 <= 1e-24 * size.powi(4) {
+                    let w = c - p;
+                    let (u, v) = (o.dot(w), ne.dot(w));
+                    if u.abs().max(v.abs()) <= tiny {
+                        // A corner on the edge's line spans no plane with it.
                         continue;
                     }
-                    // Sides of every corner, unnormalised (the slack scaled to match), stopping
-                    // at the first pair of corners on opposite sides.
-                    let h = m.dot(p);
-                    let slack = self.eps * len2.sqrt();
-                    let (mut above, mut below) = (false, false);
-                    for x in corners.iter().chain(edges) {
-                        let d = m.dot(*x) - h;
-                        above |= d > slack;
-                        below |= d < -slack;
-                        if above && below {
-                            break;
-                        }
-                    }
-                    let inv = 1.0 / len2.sqrt();
-                    match (above, below) {
-                        (false, _) => self.planes.push((m * inv, h * inv)),
-                        (true, false) => self.planes.push((-m * inv, -h * inv)),
-                        (true, true) => {}
+                    if ub.is_nan() || u * vb - ub * v > 0.0 {
+                        (ub, vb) = (u, v);
                     }
                 }
+                if ub.is_nan() {
+                    continue;
+                }
+                // The outward normal, at a right angle past the corner's direction:
+                // v_b o − u_b ne (perpendicular to the edge and to the corner's offset).
+                let m = o * vb - ne * ub;
+                let l = m.length();
+                if l <= tiny {
+                    continue;
+                }
+                let m = m / l;
+                self.planes.push((m, m.dot(p)));
             }
         }
     }

@@ -887,7 +887,7 @@ fn solve_columns(
             .for_each(|(row, (_, hits))| {
                 let out = &mut row[c0..c0 + m];
                 for &(p, count) in hits {
-                    let w = gather_weight * count as f64;
+                    let w = gather_weight * count;
                     let src = &y[p as usize * m..(p as usize + 1) * m];
                     for (o, v) in out.iter_mut().zip(src) {
                         *o += w * v;

@@ -394,6 +394,8 @@ fn direct_sun_lights_the_footprint_through_the_pane() {
     let mut again = vec![0.0; 2];
     ds.illuminance(to_sun, &mut again);
     assert_eq!(e, again);
+}
+
 /// The block Jacobi solve against Gaussian elimination of (I − ρ F) B = E, channel by channel
 /// and column by column, on a random sparse F (rows summing to 0.5…0.95) of 40 patches, 7
 /// columns in blocks of 3 (the last block short): tolerance 10⁻¹³ on the unshot flux leaves
