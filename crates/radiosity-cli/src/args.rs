@@ -1025,6 +1025,13 @@ pub struct SolveCmdArgs {
     /// Lightmap: texels between indirect records along each chart axis (1: every texel).
     #[arg(long, value_name = "N", default_value_t = radiosity::bake::lightmap::LightmapParams::default().spacing, help_heading = LIGHTMAP)]
     pub lightmap_spacing: u32,
+    /// Lightmap: filter the indirect light's noise with an edge-preserving cross-bilateral
+    /// filter guided by the texels' positions, normals and charts (docs/baking.md).
+    #[arg(long, help_heading = LIGHTMAP)]
+    pub lightmap_denoise: bool,
+    /// Lightmap: the denoising window's radius in texels (the spatial sigma is half of it).
+    #[arg(long, value_name = "R", help_heading = LIGHTMAP)]
+    pub lightmap_denoise_radius: Option<f32>,
 }
 
 /// What `solve --bake` puts in a baked glTF.

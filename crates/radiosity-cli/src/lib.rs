@@ -359,14 +359,16 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     let t = Instant::now();
     let mut lightmap_summary = None;
     if let Some(params) = &lightmap {
-        let (map, kept) = solve_lightmap::write(&a, params, &scene, &solution)?;
+        let (map, kept, exrs) = solve_lightmap::write(&a, params, &scene, &solution)?;
         lightmap_summary = Some((
             map.width(),
             map.height(),
+            map.atlases(),
             map.surface_texels(),
             map.unwrap.texel,
             map.unwrap.charts.len(),
             kept,
+            exrs,
         ));
     } else if baked {
         let vertex = solution.vertex_display_radiosity();
@@ -386,10 +388,10 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
         let mut v = report::summary_json(&scene, &solution, None);
         v["seconds"]["write"] = serde_json::json!(write_s);
         v["out"] = serde_json::json!(a.out);
-        if let Some((w, h, texels, texel, charts, kept)) = lightmap_summary {
-            v["lightmap"] = serde_json::json!({"width": w, "height": h, "texels": texels,
-                "texel_size": texel, "charts": charts, "seconds": write_s,
-                "uv": if kept { "input" } else { "generated" }});
+        if let Some((w, h, atlases, texels, texel, charts, kept, exrs)) = lightmap_summary {
+            v["lightmap"] = serde_json::json!({"width": w, "height": h, "atlases": atlases,
+                "texels": texels, "texel_size": texel, "charts": charts, "exr": exrs,
+                "uv": if kept { "input" } else { "generated" }, "seconds": write_s});
         }
         if let Some(r) = &distributed {
             v["ranks"] = serde_json::json!(r.blocks.len());
@@ -402,21 +404,29 @@ fn solve(a: SolveCmdArgs) -> Result<()> {
     if let Some(r) = &distributed {
         report::ranks(r);
     }
-    if let Some((w, h, texels, texel, charts, kept)) = lightmap_summary {
+    if let Some((w, h, atlases, texels, texel, charts, kept, exrs)) = lightmap_summary {
+        let atlases = if atlases == 1 {
+            "atlas".to_string()
+        } else {
+            format!("atlases ×{atlases}")
+        };
         println!(
-            "lightmap    {w}×{h} atlas, {texels} surface texels of {texel:.4} scene units in {charts} charts{}",
+            "lightmap    {w}×{h} {atlases}, {texels} surface texels of {texel:.4} scene units in {charts} charts{}",
             if kept {
                 " (the input's TEXCOORD_1, kept; mean texel size)"
             } else {
                 ""
             }
         );
+        let exrs: Vec<String> = exrs.iter().map(|p| p.display().to_string()).collect();
         println!(
             "wrote       {}{} in {write_s:.3} s (bake included)",
             a.out.display(),
-            a.lightmap_out
-                .as_ref()
-                .map_or(String::new(), |p| format!(" and {}", p.display()))
+            if exrs.is_empty() {
+                String::new()
+            } else {
+                format!(" and {}", exrs.join(", "))
+            }
         );
         return capped(&a.solve, &solution.info, &a.out);
     }

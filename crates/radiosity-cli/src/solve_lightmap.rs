@@ -5,12 +5,13 @@
 
 use crate::args::{BakeArg, SolveCmdArgs};
 use anyhow::{bail, Context, Result};
-use radiosity::bake::lightmap::{bake_on, Lightmap, LightmapParams};
+use radiosity::bake::lightmap::{bake_on, Denoise, Lightmap, LightmapParams};
 use radiosity::bake::uv::{Density, MAX_ATLAS};
 use radiosity::export::bake::{write_lightmap_exr, write_lightmap_gltf, LightmapBake};
 use radiosity::io::FileFormat;
 use radiosity::pipeline::Solution;
 use radiosity::scene::Scene;
+use std::path::PathBuf;
 
 /// The lightmap's parameters from the flags, checked before any work; `None` for a vertex bake
 /// (and then no lightmap flag may be given).
@@ -20,6 +21,11 @@ pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
             ("--lightmap-size", a.lightmap_size.is_some()),
             ("--texel-size", a.texel_size.is_some()),
             ("--lightmap-out", a.lightmap_out.is_some()),
+            ("--lightmap-denoise", a.lightmap_denoise),
+            (
+                "--lightmap-denoise-radius",
+                a.lightmap_denoise_radius.is_some(),
+            ),
         ] {
             if given {
                 bail!("{flag}: only a lightmap bake has it (add --bake lightmap)");
@@ -55,6 +61,16 @@ pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
             bail!("{flag} 0: at least 1 is needed");
         }
     }
+    if let Some(r) = a.lightmap_denoise_radius {
+        if !a.lightmap_denoise {
+            bail!(
+                "--lightmap-denoise-radius: only a denoised bake has it (add --lightmap-denoise)"
+            );
+        }
+        if !(r.is_finite() && r >= 1.0) {
+            bail!("--lightmap-denoise-radius {r}: must be at least 1 texel");
+        }
+    }
     if let Some(p) = &a.lightmap_out {
         if FileFormat::from_path(p) != Some(FileFormat::Exr) {
             bail!("{}: --lightmap-out writes OpenEXR (use .exr)", p.display());
@@ -74,6 +90,10 @@ pub(crate) fn params(a: &SolveCmdArgs) -> Result<Option<LightmapParams>> {
         spacing: a.lightmap_spacing,
         seed: a.solve.seed,
         memory_limit: radiosity::pipeline::MemoryLimit::Available.bytes(),
+        denoise: a.lightmap_denoise.then(|| {
+            a.lightmap_denoise_radius
+                .map_or_else(Denoise::default, Denoise::with_radius)
+        }),
         ..Default::default()
     }))
 }
@@ -113,14 +133,14 @@ fn kept_uvs(a: &SolveCmdArgs, scene: &Scene) -> Result<Option<Vec<[[f32; 2]; 3]>
     Ok(Some(set.uv.into_iter().flatten().collect()))
 }
 
-/// Bake the lightmap of a solved scene and write it; the lightmap, for the summary, and
-/// whether it kept the scene's own `TEXCOORD_1`.
+/// Bake the lightmap of a solved scene and write it; the lightmap, whether it kept the
+/// scene's own `TEXCOORD_1`, and the EXR files written, for the summary.
 pub(crate) fn write(
     a: &SolveCmdArgs,
     params: &LightmapParams,
     scene: &Scene,
     solution: &Solution,
-) -> Result<(Lightmap, bool)> {
+) -> Result<(Lightmap, bool, Vec<PathBuf>)> {
     let vertex = radiosity::render::vertex_radiosity(&solution.mesh, &solution.radiosity);
     let kept = kept_uvs(a, scene)?;
     let map = bake_on(scene, solution.surfaces(), &vertex, params, kept.as_deref())
@@ -133,8 +153,9 @@ pub(crate) fn write(
     };
     let binary = FileFormat::from_path(&a.out) == Some(FileFormat::Glb);
     write_lightmap_gltf(&a.out, &lightmap_bake, binary)?;
+    let mut exrs = Vec::new();
     if let Some(p) = &a.lightmap_out {
-        write_lightmap_exr(p, &map)?;
+        exrs = write_lightmap_exr(p, &map)?;
     }
-    Ok((map, kept.is_some()))
+    Ok((map, kept.is_some(), exrs))
 }

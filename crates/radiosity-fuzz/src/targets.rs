@@ -256,15 +256,16 @@ fn glb_lightmap(scratch: &Path) -> Vec<u8> {
     let scene = radiosity::scene::builtin::furnace();
     let unwrap = radiosity::bake::uv::unwrap(&scene, radiosity::bake::uv::Density::AtlasSize(32))
         .expect("the furnace charts");
-    let n = (unwrap.width * unwrap.height) as usize;
+    let n = (unwrap.width * unwrap.height * unwrap.atlases) as usize;
     let texels = (0..n)
-        .map(|i| radiosity::color::Rgb::new(i as f64 / n as f64, 0.5, 1.0 - i as f64 / n as f64))
+        .map(|i| [i as f32 / n as f32, 0.5, 1.0 - i as f32 / n as f32])
         .collect();
     let map = Lightmap {
         unwrap,
         texels,
         kind: vec![Texel::Surface; n],
-        points: vec![None; n],
+        faces: vec![0; n],
+        inside: vec![true; n],
         records: 0,
     };
     let path = scratch.join("seed-lightmap.glb");

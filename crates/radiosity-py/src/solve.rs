@@ -179,6 +179,137 @@ impl Solution {
         Ok(a.into_pyarray(py).unbind())
     }
 
+    /// Bake a lightmap of the scene (docs/baking.md) from this solution: a second UV set on
+    /// the scene's faces and atlases of radiosity. `texel_size` (scene units) and/or `size`
+    /// (atlas side, texels) as the CLI's `--texel-size` and `--lightmap-size` (neither:
+    /// `size` 1024); `direct`, `indirect`, `spacing`, `denoise` (bool, or the filter's
+    /// radius in texels) as the `--lightmap-*` flags. Returns a dict: `atlases`, a list of
+    /// (H, W, 3) float32 arrays of linear radiosity B (one unless the charts did not fit one
+    /// atlas); per atlas `surface` (H, W) int32, the input polygon each texel lies on (−1:
+    /// padding), and `inside` (H, W) bool, whether the texel's centre is inside it (else a
+    /// border texel), and `covered` (H, W) bool; the faces' mesh `positions` (V, 3) float64,
+    /// `uv` (V, 2) float32 (`TEXCOORD_1`, in [0, 1]² of the vertex's atlas, (0, 0) the
+    /// image's top-left corner), `vertex_atlas` (V,) uint32, `triangles` (T, 3) uint32 and
+    /// `triangle_surface` (T,) uint32; and `texel_size`.
+    #[pyo3(signature = (texel_size = None, size = None, direct = 16, indirect = 256, spacing = 4, denoise = None, seed = 1))]
+    #[allow(clippy::too_many_arguments)]
+    fn bake_lightmap<'py>(
+        &self,
+        py: Python<'py>,
+        texel_size: Option<f32>,
+        size: Option<u32>,
+        direct: u32,
+        indirect: u32,
+        spacing: u32,
+        denoise: Option<Bound<'py, PyAny>>,
+        seed: u64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        use numpy::ndarray::Array2;
+        use radiosity::bake::lightmap::{bake, Denoise, LightmapParams, Texel};
+        use radiosity::bake::uv::Density;
+        if spacing == 0 {
+            return Err(value_error("spacing: at least 1 texel"));
+        }
+        let density = match (texel_size, size) {
+            (Some(l), Some(n)) => Density::Both(l, n),
+            (Some(l), None) => Density::TexelSize(l),
+            (None, Some(n)) => Density::AtlasSize(n),
+            (None, None) => LightmapParams::default().density,
+        };
+        let denoise = match denoise {
+            None => None,
+            Some(d) if d.is_instance_of::<pyo3::types::PyBool>() => {
+                d.extract::<bool>()?.then(Denoise::default)
+            }
+            Some(d) => Some(Denoise::with_radius(d.extract::<f32>().map_err(|_| {
+                value_error("denoise: a bool or the filter's radius in texels")
+            })?)),
+        };
+        let params = LightmapParams {
+            density,
+            direct,
+            indirect,
+            spacing,
+            seed,
+            denoise,
+            memory_limit: pipeline::MemoryLimit::Available.bytes(),
+            ..Default::default()
+        };
+        let map = py
+            .allow_threads(|| {
+                let vertex =
+                    radiosity::render::vertex_radiosity(&self.inner.mesh, &self.inner.radiosity);
+                bake(&self.scene, self.inner.surfaces(), &vertex, &params)
+            })
+            .map_err(value_error)?;
+        let (w, h) = (map.width() as usize, map.height() as usize);
+        let u = &map.unwrap;
+        let d = PyDict::new(py);
+        let (mut atlases, mut surfaces, mut insides, mut covered) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for a in 0..map.atlases() as usize {
+            let base = a * w * h;
+            let mut img = Array3::<f32>::zeros((h, w, 3));
+            let mut surface = Array2::<i32>::from_elem((h, w), -1);
+            let mut inside = Array2::<bool>::from_elem((h, w), false);
+            let mut cov = Array2::<bool>::from_elem((h, w), false);
+            for y in 0..h {
+                for x in 0..w {
+                    let k = base + y * w + x;
+                    for c in 0..3 {
+                        img[[y, x, c]] = map.texels[k][c];
+                    }
+                    if map.faces[k] != u32::MAX {
+                        surface[[y, x]] = u.mesh.patches[map.faces[k] as usize].surface as i32;
+                        inside[[y, x]] = map.inside[k];
+                        cov[[y, x]] = map.kind[k] == Texel::Covered;
+                    }
+                }
+            }
+            atlases.push(img.into_pyarray(py));
+            surfaces.push(surface.into_pyarray(py));
+            insides.push(inside.into_pyarray(py));
+            covered.push(cov.into_pyarray(py));
+        }
+        d.set_item("atlases", atlases)?;
+        d.set_item("surface", surfaces)?;
+        d.set_item("inside", insides)?;
+        d.set_item("covered", covered)?;
+        d.set_item("positions", vec3_array(py, u.mesh.vertices.iter().copied()))?;
+        let mut uv = Array2::<f32>::zeros((u.uv.len(), 2));
+        for (i, t) in u.uv.iter().enumerate() {
+            uv[[i, 0]] = t[0];
+            uv[[i, 1]] = t[1];
+        }
+        d.set_item("uv", uv.into_pyarray(py))?;
+        let mut vertex_atlas = vec![0u32; u.mesh.vertices.len()];
+        let (mut tris, mut tri_surface) = (Vec::new(), Vec::new());
+        for (f, p) in u.mesh.patches.iter().enumerate() {
+            let a = u.atlas_of(f as u32);
+            for t in p.triangles() {
+                for v in t {
+                    vertex_atlas[v as usize] = a;
+                }
+                tris.push(t);
+                tri_surface.push(p.surface);
+            }
+        }
+        let mut t = Array2::<u32>::zeros((tris.len(), 3));
+        for (i, tri) in tris.iter().enumerate() {
+            for c in 0..3 {
+                t[[i, c]] = tri[c];
+            }
+        }
+        d.set_item("vertex_atlas", Array1::from(vertex_atlas).into_pyarray(py))?;
+        d.set_item("triangles", t.into_pyarray(py))?;
+        d.set_item(
+            "triangle_surface",
+            Array1::from(tri_surface).into_pyarray(py),
+        )?;
+        d.set_item("texel_size", u.texel)?;
+        Ok(d)
+    }
+
     /// Write the solution as the CLI's `solve --out` does: `.csv` (one row per patch) or a
     /// baked mesh (`.glb`, `.gltf`, `.ply`).
     fn save(&self, py: Python<'_>, path: &str) -> PyResult<()> {

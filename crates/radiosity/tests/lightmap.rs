@@ -2,7 +2,7 @@
 //! leaking into a closed box, seams that agree, and the Khronos validator on every
 //! lightmapped glTF written.
 
-use radiosity::bake::lightmap::{bake, Lightmap, LightmapParams, Texel};
+use radiosity::bake::lightmap::{bake, Denoise, Lightmap, LightmapParams, Texel};
 use radiosity::bake::uv::Density;
 use radiosity::color::Rgb;
 use radiosity::export::bake::{write_lightmap_gltf, LightmapBake};
@@ -78,11 +78,11 @@ fn cornell_texels_match_path_traced_references() {
     let reference = radiosity::pipeline::path_surface_means(&scene, 4_000_000, 7).unwrap();
     let mesh = &map.unwrap.mesh;
     let mut per = vec![(Rgb::BLACK, 0usize); scene.polygons.len()];
-    for (b, p) in map.texels.iter().zip(&map.points) {
-        if let Some(p) = p.filter(|p| p.inside) {
-            let k = mesh.patches[p.face as usize].surface as usize;
-            per[k].0 += *b;
-            per[k].1 += 1;
+    for k in 0..map.texels.len() {
+        if let Some(p) = map.point(k).filter(|p| p.inside) {
+            let s = mesh.patches[p.face as usize].surface as usize;
+            per[s].0 += map.texel(k);
+            per[s].1 += 1;
         }
     }
     for (k, ((b, n), (r, se))) in per.iter().zip(&reference).enumerate() {
@@ -115,7 +115,7 @@ fn cornell_texels_match_path_traced_references() {
     };
     let lights = radiosity::render::light::Lights::new(mesh, &system.emission);
     let lit: Vec<usize> = (0..map.texels.len())
-        .filter(|&k| map.kind[k] == Texel::Surface && map.points[k].is_some_and(|p| p.inside))
+        .filter(|&k| map.kind[k] == Texel::Surface && map.inside[k])
         .collect();
     let step = lit.len() / 400;
     use rayon::prelude::*;
@@ -123,12 +123,12 @@ fn cornell_texels_match_path_traced_references() {
         .into_par_iter()
         .map(|i| {
             let k = lit[i * step];
-            let p = map.points[k].unwrap();
+            let p = map.point_on(k, &scene, &s.surfaces()).unwrap();
             let mut rng = radiosity::sampling::stream(11, 0, k as u64, 0);
             let (r, se) = radiosity::render::path::radiosity_at(
                 &surfaces, &lights, p.x, p.n, p.face, 20_000, &mut rng,
             );
-            (sum(map.texels[k]), sum(r), sum(se))
+            (sum(map.texel(k)), sum(r), sum(se))
         })
         .collect();
     let mse = pairs.iter().map(|(a, r, _)| (a - r).powi(2)).sum::<f64>() / 400.0;
@@ -142,6 +142,168 @@ fn cornell_texels_match_path_traced_references() {
         100.0 * noise.sqrt() / mean
     );
     assert!(rmse <= 0.03, "relative RMSE {rmse}");
+}
+
+/// 400 lit texels' radiosity at their points by the path tracer (20,000 paths each): the
+/// texel index, the reference and its standard error (summed over channels).
+fn texel_references(scene: &Scene, s: &Solution, map: &Lightmap) -> Vec<(usize, f64, f64)> {
+    let mesh = &map.unwrap.mesh;
+    let mesh_bvh = radiosity::accel::Bvh::build(mesh);
+    let system = radiosity::mesh::patch_system(scene, mesh);
+    let surfaces = radiosity::render::light::Surfaces {
+        mesh,
+        bvh: &mesh_bvh,
+        reflectance: &system.reflectance,
+        emission: &system.emission,
+    };
+    let lights = radiosity::render::light::Lights::new(mesh, &system.emission);
+    let lit: Vec<usize> = (0..map.texels.len())
+        .filter(|&k| map.kind[k] == Texel::Surface && map.inside[k])
+        .collect();
+    let step = lit.len() / 400;
+    use rayon::prelude::*;
+    (0..400)
+        .into_par_iter()
+        .map(|i| {
+            let k = lit[i * step];
+            let p = map.point_on(k, scene, &s.surfaces()).unwrap();
+            let mut rng = radiosity::sampling::stream(11, 0, k as u64, 0);
+            let (r, se) = radiosity::render::path::radiosity_at(
+                &surfaces, &lights, p.x, p.n, p.face, 20_000, &mut rng,
+            );
+            (k, sum(r), sum(se))
+        })
+        .collect()
+}
+
+/// Relative RMSE of `map`'s texels against `refs` (over the references' mean), the
+/// references' own variance taken off.
+fn relative_rmse(map: &Lightmap, refs: &[(usize, f64, f64)]) -> f64 {
+    let n = refs.len() as f64;
+    let mse = refs
+        .iter()
+        .map(|&(k, r, _)| (sum(map.texel(k)) - r).powi(2))
+        .sum::<f64>()
+        / n;
+    let noise = refs.iter().map(|(_, _, se)| se * se).sum::<f64>() / n;
+    let mean = refs.iter().map(|(_, r, _)| r).sum::<f64>() / n;
+    (mse - noise).max(0.0).sqrt() / mean
+}
+
+/// Denoising (issue 59): the Cornell box baked with few indirect samples (16 a record, noisy)
+/// comes closer to the path-traced per-texel reference with the cross-bilateral filter than
+/// without (measured 2.80 % → 1.60 % relative RMSE; 256 samples unfiltered give 1.07 %, the
+/// floor set by the solution's mesh): at most 0.75 times, and within the 3 % target. The
+/// direct light is not filtered, so a texel's value changes only by its indirect part; each
+/// quad's texel mean stays within 2 % (plus two reference standard errors) of the path
+/// tracer's surface mean, as without denoising (the edge between lit and covered texels is
+/// kept by the leak test, run with the filter too).
+#[test]
+fn denoising_lowers_the_texels_error() {
+    let scene = builtin::cornell();
+    let s = solved(&scene, 5000);
+    let bake_with = |denoise| {
+        baked(
+            &scene,
+            &s,
+            &LightmapParams {
+                density: Density::TexelSize(5.56),
+                direct: 32,
+                indirect: 16,
+                denoise,
+                ..Default::default()
+            },
+        )
+    };
+    let (noisy, filtered) = (bake_with(None), bake_with(Some(Denoise::default())));
+    let refs = texel_references(&scene, &s, &noisy);
+    let (before, after) = (
+        relative_rmse(&noisy, &refs),
+        relative_rmse(&filtered, &refs),
+    );
+    eprintln!(
+        "relative RMSE: {:.2} % without denoising, {:.2} % with",
+        100.0 * before,
+        100.0 * after
+    );
+    assert!(
+        after <= 0.75 * before && after <= 0.03,
+        "{before} → {after}"
+    );
+    // Quad means.
+    let reference = radiosity::pipeline::path_surface_means(&scene, 1_000_000, 7).unwrap();
+    let mesh = &filtered.unwrap.mesh;
+    let mut per = vec![(Rgb::BLACK, 0usize); scene.polygons.len()];
+    for k in 0..filtered.texels.len() {
+        if let Some(p) = filtered.point(k).filter(|p| p.inside) {
+            let q = mesh.patches[p.face as usize].surface as usize;
+            per[q].0 += filtered.texel(k);
+            per[q].1 += 1;
+        }
+    }
+    for (k, ((b, n), (r, se))) in per.iter().zip(&reference).enumerate() {
+        let m = &scene.materials[scene.polygons[k].material];
+        if m.emission.max_channel() > 0.0 {
+            continue;
+        }
+        let (mean, r, se) = (sum(*b) / *n as f64, sum(*r), sum(*se));
+        assert!(
+            (mean - r).abs() <= (0.02 + 2.0 * se / r) * r,
+            "quad {k}: {mean} vs {r} ± {se}"
+        );
+    }
+}
+
+/// Several atlases (issue 59): the Cornell box at one texel size packed into 64 × 64 atlases
+/// (several) holds, chart for chart, exactly the texels of the one atlas that texel size
+/// alone gives (each texel's streams are keyed by chart and texel, not by its place in an
+/// atlas), each face's UVs lie in its chart's rectangle of its atlas, and the glTF, a
+/// material and a texture per atlas, passes the validator.
+#[test]
+fn several_atlases_hold_the_texels_of_one() {
+    let scene = builtin::cornell();
+    let s = solved(&scene, 300);
+    let l = 12.0;
+    let params = |density| LightmapParams {
+        density,
+        direct: 4,
+        indirect: 16,
+        ..Default::default()
+    };
+    let one = baked(&scene, &s, &params(Density::TexelSize(l)));
+    let many = baked(&scene, &s, &params(Density::Both(l, 64)));
+    assert_eq!(one.atlases(), 1);
+    assert!(many.atlases() >= 2, "{} atlases", many.atlases());
+    assert_eq!((many.width(), many.height()), (64, 64));
+    validate(&scene, &many, "atlases");
+    assert_eq!(one.unwrap.charts.len(), many.unwrap.charts.len());
+    let per = |m: &Lightmap| m.width() as usize * m.height() as usize;
+    let mut compared = 0;
+    for (a, b) in one.unwrap.charts.iter().zip(&many.unwrap.charts) {
+        assert_eq!((a.width, a.height, &a.faces), (b.width, b.height, &b.faces));
+        for j in 0..a.height {
+            for i in 0..a.width {
+                let ka = ((a.y0 + j) * one.width() + a.x0 + i) as usize;
+                let kb =
+                    b.atlas as usize * per(&many) + ((b.y0 + j) * many.width() + b.x0 + i) as usize;
+                assert_eq!(one.texels[ka], many.texels[kb], "chart texel ({i}, {j})");
+                assert_eq!(one.kind[ka], many.kind[kb]);
+                compared += 1;
+            }
+        }
+    }
+    assert_eq!(compared, one.surface_texels().max(compared));
+    // Each face's UVs inside its chart's rectangle of its atlas.
+    let u = &many.unwrap;
+    for (f, p) in u.mesh.patches.iter().enumerate() {
+        let c = &u.charts[u.chart_of[f] as usize];
+        for &v in p.vertices.iter().take(if p.is_triangle() { 3 } else { 4 }) {
+            let t = u.uv[v as usize];
+            let (x, y) = (t[0] * u.width as f32, t[1] * u.height as f32);
+            assert!(x >= c.x0 as f32 && x <= (c.x0 + c.width) as f32);
+            assert!(y >= c.y0 as f32 && y <= (c.y0 + c.height) as f32);
+        }
+    }
 }
 
 fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3, material: usize) -> Polygon {
@@ -248,23 +410,34 @@ fn no_light_leaks_into_a_closed_box() {
         ..Default::default()
     };
     let s = solved(&scene, 4000);
-    let map = baked(
-        &scene,
-        &s,
-        &LightmapParams {
-            density: Density::TexelSize(0.02),
-            ..Default::default()
-        },
-    );
-    validate(&scene, &map, "leak");
+    for denoise in [None, Some(Denoise::default())] {
+        let map = baked(
+            &scene,
+            &s,
+            &LightmapParams {
+                density: Density::TexelSize(0.02),
+                denoise,
+                ..Default::default()
+            },
+        );
+        if denoise.is_none() {
+            validate(&scene, &map, "leak");
+        }
+        check_no_leak(&map, lo, hi);
+    }
+}
+
+/// The floor's texels under the box `[lo, hi]` and every texel inside it read below 0.1 % of
+/// the lit floor's mean.
+fn check_no_leak(map: &Lightmap, lo: Vec3, hi: Vec3) {
     let mesh = &map.unwrap.mesh;
     let (mut lit, mut n_lit) = (0.0, 0usize);
     let mut under = Vec::new();
     let mut inside = Vec::new();
-    for (k, p) in map.points.iter().enumerate() {
-        let Some(p) = p else { continue };
+    for k in 0..map.texels.len() {
+        let Some(p) = map.point(k) else { continue };
         let surface = mesh.patches[p.face as usize].surface as usize;
-        let b = sum(map.texels[k]);
+        let b = sum(map.texel(k));
         if surface == 0 {
             let in_footprint = p.x.x > lo.x && p.x.x < hi.x && p.x.z > lo.z && p.x.z < hi.z;
             if in_footprint {
@@ -354,10 +527,13 @@ fn seams_agree() {
     let at = |c: usize, p: Vec3| {
         let chart = &u.charts[c];
         let s = chart.texel_coords(p, u.texel);
-        map.sample([
-            (chart.x0 as f32 + s[0]) / u.width as f32,
-            (chart.y0 as f32 + s[1]) / u.height as f32,
-        ])
+        map.sample(
+            0,
+            [
+                (chart.x0 as f32 + s[0]) / u.width as f32,
+                (chart.y0 as f32 + s[1]) / u.height as f32,
+            ],
+        )
     };
     // Neighbouring texels inside each floor chart.
     let (mut var, mut n_var) = (0.0, 0usize);
@@ -366,9 +542,9 @@ fn seams_agree() {
         for j in c.y0..c.y0 + c.height {
             for i in c.x0..c.x0 + c.width - 1 {
                 let (a, b) = ((j * u.width + i) as usize, (j * u.width + i + 1) as usize);
-                let inside = |q: usize| map.points[q].is_some_and(|p| p.inside);
+                let inside = |q: usize| map.inside[q];
                 if inside(a) && inside(b) {
-                    var += (sum(map.texels[a]) - sum(map.texels[b])).abs();
+                    var += (sum(map.texel(a)) - sum(map.texel(b))).abs();
                     n_var += 1;
                 }
             }
@@ -425,8 +601,14 @@ fn an_atlas_past_the_memory_limit_is_refused() {
     else {
         panic!("{err}")
     };
-    assert_eq!(needed, width as u64 * height as u64 * bytes_per_texel());
+    assert_eq!(
+        needed,
+        width as u64 * height as u64 * bytes_per_texel(4, false)
+    );
+    // The slimmed bake (issue 59): 22 bytes a texel at the default spacing, 145 before.
+    assert_eq!(bytes_per_texel(4, false), 22);
     assert!(err_text(&params(1 << 10), &scene, &s).contains("lightmap needs about"));
+    assert!(err_text(&params(1 << 10), &scene, &s).contains("64 × 64"));
     assert!(bake(&scene, s.surfaces(), &vertex, &params(needed)).is_ok());
 }
 
@@ -623,7 +805,7 @@ fn hostile_lightmaps_are_refused() {
 
 /// The display value of lightmap `map` at `uv` as the PNG holds it before quantisation:
 /// `min(1, B · scale)` per texel, then bilinear with clamped edges (the test's own sampler).
-fn display_sample(map: &Lightmap, scale: f64, uv: [f32; 2]) -> [f64; 3] {
+fn display_sample(map: &Lightmap, atlas: u32, scale: f64, uv: [f32; 2]) -> [f64; 3] {
     let (w, h) = (map.width() as f64, map.height() as f64);
     let x = (uv[0] as f64 * w - 0.5).clamp(0.0, w - 1.0);
     let y = (uv[1] as f64 * h - 0.5).clamp(0.0, h - 1.0);
@@ -631,8 +813,8 @@ fn display_sample(map: &Lightmap, scale: f64, uv: [f32; 2]) -> [f64; 3] {
     let (fx, fy) = (x - x0, y - y0);
     let at = |i: f64, j: f64| {
         let (i, j) = (i.min(w - 1.0) as usize, j.min(h - 1.0) as usize);
-        let b = map.texels[j * map.width() as usize + i];
-        [b.r, b.g, b.b].map(|c| (c * scale).clamp(0.0, 1.0))
+        let b = map.atlas_texels(atlas)[j * map.width() as usize + i];
+        b.map(|c| (c as f64 * scale).clamp(0.0, 1.0))
     };
     let (a, b, c, d) = (
         at(x0, y0),
@@ -738,7 +920,7 @@ fn cornell_lightmap_view_matches_its_atlas_and_the_vertex_bake() {
     let mut worst = 0.0f64;
     for (f, x, n, uv) in face_points(&map) {
         let got = shown_at(&view, x, n, lift);
-        let want = display_sample(&map, scale, uv);
+        let want = display_sample(&map, 0, scale, uv);
         for c in 0..3 {
             let d = (got[c] - want[c]).abs();
             worst = worst.max(d);
@@ -772,6 +954,57 @@ fn cornell_lightmap_view_matches_its_atlas_and_the_vertex_bake() {
     eprintln!("per-quad means, lightmap against vertex bake: worst {worst_rel:.4} of the brightest channel");
     std::fs::remove_file(&lm).unwrap();
     std::fs::remove_file(&vb).unwrap();
+}
+
+/// A lightmap in several atlases shown by `view`: each material's `MOZ_lightmap` names its
+/// atlas's texture, so at points on every face what the view shows equals the display value
+/// of the face's own atlas (bilinear at the point's UVs) within the PNG's quantisation, as in
+/// the one-atlas test above; faces of every atlas are checked.
+#[test]
+fn view_shows_each_face_from_its_atlas() {
+    let scene = radiosity::scene::builtin::cornell();
+    let s = solved(&scene, 300);
+    let scale = s.auto_exposure() as f64;
+    let params = LightmapParams {
+        density: Density::Both(12.0, 64),
+        direct: 4,
+        indirect: 16,
+        ..Default::default()
+    };
+    let map = baked(&scene, &s, &params);
+    assert!(map.atlases() >= 2, "{} atlases", map.atlases());
+    let lm = std::env::temp_dir().join(format!("radiosity-lm-atlases-{}.glb", std::process::id()));
+    write_lightmap_gltf(
+        &lm,
+        &LightmapBake {
+            scene: &scene,
+            lightmap: &map,
+            scale: scale as f32,
+            camera: None,
+        },
+        true,
+    )
+    .unwrap();
+    let view = radiosity::render::baked::BakedView::load_lightmap(&lm)
+        .unwrap()
+        .unwrap();
+    let lift = 1e-3 * scene.bounds().diagonal();
+    let quant = 2.2749 * 0.5 / 255.0 + 1e-5;
+    let mut per_atlas = vec![0usize; map.atlases() as usize];
+    for (f, x, n, uv) in face_points(&map) {
+        let a = map.unwrap.atlas_of(f as u32);
+        let got = shown_at(&view, x, n, lift);
+        let want = display_sample(&map, a, scale, uv);
+        for c in 0..3 {
+            assert!(
+                (got[c] - want[c]).abs() <= quant,
+                "face {f} (atlas {a}) at {x:?}: {got:?} vs the atlas's {want:?}"
+            );
+        }
+        per_atlas[a as usize] += 1;
+    }
+    assert!(per_atlas.iter().all(|n| *n > 0), "{per_atlas:?}");
+    std::fs::remove_file(&lm).unwrap();
 }
 
 /// A glTF that already has `TEXCOORD_1` (written by a first bake) baked again on its own UV

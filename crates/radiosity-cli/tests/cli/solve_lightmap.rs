@@ -194,3 +194,79 @@ fn view_shows_a_lightmap_and_a_rebake_keeps_its_uvs() {
         ],
     );
 }
+
+/// Several atlases: a texel size whose charts do not fit one `--lightmap-size` atlas packs
+/// into several, the glTF (a material and a texture per atlas) passes the validator with no
+/// errors and no warnings, and `--lightmap-out x.exr` writes `x-0.exr`, `x-1.exr`, …; the
+/// denoised bake of the same runs too.
+#[test]
+#[ignore = "needs Node.js and the glTF validator (run with --include-ignored, as .ci/run does)"]
+fn lightmap_in_several_atlases() {
+    let dir = scratch("lightmap-atlases");
+    let out = run_ok(
+        &[
+            "solve",
+            "cornell",
+            "--patches",
+            "300",
+            "--out",
+            "many.glb",
+            "--bake",
+            "lightmap",
+            "--texel-size",
+            "12",
+            "--lightmap-size",
+            "64",
+            "--lightmap-indirect",
+            "16",
+            "--lightmap-denoise",
+            "--lightmap-out",
+            "many.exr",
+        ],
+        &dir,
+    );
+    let atlases: usize = out
+        .split("64×64 atlases ×")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .and_then(|n| n.trim().parse().ok())
+        .unwrap_or_else(|| panic!("{out}"));
+    assert!(atlases >= 2, "{out}");
+    for a in 0..atlases {
+        let exr = read_bytes(&dir, &format!("many-{a}.exr"));
+        assert_eq!(&exr[..4], &[0x76, 0x2f, 0x31, 0x01], "OpenEXR magic");
+    }
+    assert!(!dir.join("many.exr").exists());
+    let report = crate::validator::validate_gltf_report(&[dir.join("many.glb")]);
+    assert!(report.contains(": 0 errors, 0 warnings"), "{report}");
+}
+
+#[test]
+fn lightmap_denoise_options_are_checked() {
+    let dir = scratch("lightmap-denoise-bad");
+    let base = ["solve", "cornell", "--patches", "50", "--out", "x.glb"];
+    for (extra, needles) in [
+        (
+            vec!["--lightmap-denoise"],
+            vec!["--lightmap-denoise", "--bake lightmap"],
+        ),
+        (
+            vec!["--bake", "lightmap", "--lightmap-denoise-radius", "4"],
+            vec!["--lightmap-denoise-radius", "add --lightmap-denoise"],
+        ),
+        (
+            vec![
+                "--bake",
+                "lightmap",
+                "--lightmap-denoise",
+                "--lightmap-denoise-radius",
+                "0",
+            ],
+            vec!["--lightmap-denoise-radius 0", "at least 1"],
+        ),
+    ] {
+        let mut args: Vec<&str> = base.to_vec();
+        args.extend_from_slice(&extra);
+        fails(&args, &dir, &needles, &[]);
+    }
+}

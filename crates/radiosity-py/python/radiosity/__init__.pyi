@@ -51,6 +51,16 @@ class Solution:
         seed: int = 1,
         progress: Progress = None,
     ) -> np.ndarray: ...
+    def bake_lightmap(
+        self,
+        texel_size: Optional[float] = None,
+        size: Optional[int] = None,
+        direct: int = 16,
+        indirect: int = 256,
+        spacing: int = 4,
+        denoise: Union[bool, float, None] = None,
+        seed: int = 1,
+    ) -> dict[str, Any]: ...
     def save(self, path: str) -> None: ...
 
 def builtin(name: str) -> Scene: ...

@@ -6,7 +6,7 @@
 //! touches its square), and its surface point is the face's point with those barycentric
 //! coordinates, so any UV layout works, stretched or not.
 //!
-//! **Atlas size.** The side `N` is `--lightmap-size` when given; from a texel size `L` alone
+//! **Atlas size.** One atlas (a kept UV set is one texture's coordinates). The side `N` is `--lightmap-size` when given; from a texel size `L` alone
 //! it is `⌈√(A / a) / L⌉`, with `A` the faces' area and `a` their UV area (as a share of the
 //! unit square), so that the mean texel covers `L × L`; with both, `N` must hold that density.
 //! [`Unwrap::texel`] is then the mean texel size `√(A / a) / N`.
@@ -189,6 +189,7 @@ pub fn unwrap_given(
                 axis_u: Vec3::ZERO,
                 axis_v: Vec3::ZERO,
                 extent: [0.0; 2],
+                atlas: 0,
                 x0: 0,
                 y0: 0,
                 width: 0,
@@ -252,6 +253,7 @@ pub fn unwrap_given(
         texel: (unit / nf) as f32,
         width: n,
         height: n,
+        atlases: 1,
         uv,
     })
 }

@@ -2,11 +2,12 @@
 //! reads (issue 59).
 //!
 //! - [`uv`]: the second UV set (`TEXCOORD_1`): planar charts of the scene's faces, projected
-//!   without stretch and packed into one atlas at a uniform texel density, with padding;
-//! - [`given`]: the input's own UV set (an existing `TEXCOORD_1`), kept instead;
+//!   without stretch and packed into one or more atlases at a uniform texel density, with
+//!   padding;
+//! - [`given`]: the input's own UV set (an existing `TEXCOORD_1`), kept instead (one atlas);
 //! - [`lightmap`]: each texel's radiosity by the final gather at the texel's surface point
 //!   (exact direct light with shadow rays, the indirect from the radiosity solution), covered
-//!   texels dark, padding dilated.
+//!   texels dark, the indirect optionally denoised, padding dilated.
 //!
 //! The glTF that carries it (`MOZ_lightmap`, the atlas as PNG) is written by
 //! [`crate::export::bake::write_lightmap_gltf`]; the linear atlas by
@@ -24,7 +25,7 @@
 //! let map = bake(&scene, s.surfaces(), &vertex, &params).unwrap();
 //! assert_eq!((map.width(), map.height()), (64, 64));
 //! // Every texel is finite and non-negative.
-//! assert!(map.texels.iter().all(|b| b.r.is_finite() && b.r >= 0.0));
+//! assert!(map.texels.iter().flatten().all(|b| b.is_finite() && *b >= 0.0));
 //! ```
 
 pub mod given;

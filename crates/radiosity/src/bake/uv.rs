@@ -1,5 +1,5 @@
-//! The second UV set of a lightmap: charts that follow the geometry, packed into one atlas at
-//! a uniform texel density.
+//! The second UV set of a lightmap: charts that follow the geometry, packed into one or more
+//! atlases at a uniform texel density.
 //!
 //! **Charts.** The triangles and convex quads of the scene's pieces ([`MeshParams::Faces`]) are
 //! joined into a chart when they share an edge (both end points at the same position), have
@@ -15,6 +15,12 @@
 //! laid left to right, a new shelf when a row is full; Igarashi & Cosgrove's "next fit
 //! decreasing height"), into a given width. For a fixed atlas size the texel size is the
 //! smallest (found by bisection) whose packing fits.
+//!
+//! **Several atlases.** When the charts at a given texel size do not fit one atlas of the
+//! given side ([`Density::Both`]), or of [`MAX_ATLAS`] for a texel size alone, the shelves
+//! continue into a second atlas of the same side, and so on ([`Chart::atlas`]): a shelf that
+//! would cross the atlas's bottom starts the next one. The charts' order and sizes do not
+//! depend on where they land, so a chart's texels are the same in one atlas or in several.
 
 use crate::geom::{Aabb, Vec3};
 use crate::mesh::{Mesh, MeshParams};
@@ -51,7 +57,9 @@ pub struct Chart {
     pub axis_v: Vec3,
     /// Extent along `axis_u` and `axis_v`, scene units.
     pub extent: [f32; 2],
-    /// Its rectangle's first texel column and row in the atlas.
+    /// The atlas it lies in (0 when there is one).
+    pub atlas: u32,
+    /// Its rectangle's first texel column and row in its atlas.
     pub x0: u32,
     /// See `x0`.
     pub y0: u32,
@@ -91,23 +99,33 @@ pub struct Unwrap {
     pub chart_of: Vec<u32>,
     /// Texel size, scene units.
     pub texel: f32,
-    /// Atlas width and height, texels.
+    /// Width and height of each atlas, texels (all atlases have the same).
     pub width: u32,
     /// See `width`.
     pub height: u32,
-    /// `TEXCOORD_1` of each [`Unwrap::mesh`] vertex, in `[0, 1]²` (glTF: `(0, 0)` is the
-    /// image's top-left corner).
+    /// How many atlases the charts fill (1 unless they did not fit one).
+    pub atlases: u32,
+    /// `TEXCOORD_1` of each [`Unwrap::mesh`] vertex, in `[0, 1]²` of the atlas of its chart
+    /// (glTF: `(0, 0)` is the image's top-left corner).
     pub uv: Vec<[f32; 2]>,
+}
+
+impl Unwrap {
+    /// The atlas of a face ([`Unwrap::mesh`] patch).
+    pub fn atlas_of(&self, face: u32) -> u32 {
+        self.charts[self.chart_of[face as usize] as usize].atlas
+    }
 }
 
 /// How the atlas's density is chosen.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Density {
-    /// Texels of this size (scene units); the atlas as large as they need.
+    /// Texels of this size (scene units); the atlas as large as they need, several of
+    /// [`MAX_ATLAS`] a side when one that large does not hold them.
     TexelSize(f32),
     /// The finest density whose atlas fits this many texels a side.
     AtlasSize(u32),
-    /// Texels of this size in an atlas of this side (an error when they do not fit).
+    /// Texels of this size in atlases of this side: as many as they need.
     Both(f32, u32),
 }
 
@@ -123,7 +141,7 @@ pub enum UnwrapError {
     /// Nothing to map: no face with area.
     #[error("the scene has no surface with area to map")]
     NoArea,
-    /// The charts need a larger atlas than allowed.
+    /// The charts (or one chart alone) need a larger atlas than allowed.
     #[error(
         "at texel size {texel} the charts need an atlas of {need} texels a side, more than {limit}"
     )]
@@ -160,28 +178,19 @@ pub fn unwrap(scene: &Scene, density: Density) -> Result<Unwrap, UnwrapError> {
         return Err(UnwrapError::NoArea);
     }
     let mut charts = charts(&mesh);
-    let (texel, width, height) = match density {
+    let (texel, width, height, atlases) = match density {
         Density::TexelSize(l) => {
             let (w, h) = pack_square(&mut charts, l);
             if w.max(h) > MAX_ATLAS {
-                return Err(UnwrapError::TooLarge {
-                    texel: l,
-                    need: w.max(h),
-                    limit: MAX_ATLAS,
-                });
+                let atlases = pack_atlases(&mut charts, l, MAX_ATLAS)?;
+                (l, MAX_ATLAS, MAX_ATLAS, atlases)
+            } else {
+                (l, w, h, 1)
             }
-            (l, w, h)
         }
         Density::Both(l, n) => {
-            let h = pack(&mut charts, l, n);
-            if h > n {
-                return Err(UnwrapError::TooLarge {
-                    texel: l,
-                    need: h.max(n),
-                    limit: n,
-                });
-            }
-            (l, n, n)
+            let atlases = pack_atlases(&mut charts, l, n)?;
+            (l, n, n, atlases)
         }
         Density::AtlasSize(n) => {
             // Bisection on the texel size between one that cannot fit (area alone) and one
@@ -212,7 +221,7 @@ pub fn unwrap(scene: &Scene, density: Density) -> Result<Unwrap, UnwrapError> {
                 }
             }
             pack(&mut charts, hi, n);
-            (hi, n, n)
+            (hi, n, n, 1)
         }
     };
     let mut chart_of = vec![0u32; mesh.len()];
@@ -237,6 +246,7 @@ pub fn unwrap(scene: &Scene, density: Density) -> Result<Unwrap, UnwrapError> {
         texel,
         width,
         height,
+        atlases,
         uv,
     })
 }
@@ -307,6 +317,7 @@ fn charts(mesh: &Mesh) -> Vec<Chart> {
             out.push(Chart {
                 faces: Vec::new(),
                 material: p.material,
+                atlas: 0,
                 normal: p.normal,
                 origin: Vec3::ZERO,
                 axis_u: Vec3::ZERO,
@@ -411,6 +422,7 @@ fn pack(charts: &mut [Chart], l: f32, width: u32) -> u32 {
             x = 0;
             shelf = 0;
         }
+        c.atlas = 0;
         c.x0 = x as u32;
         c.y0 = y.min(u32::MAX as u64) as u32;
         x += c.width as u64;
@@ -422,6 +434,41 @@ fn pack(charts: &mut [Chart], l: f32, width: u32) -> u32 {
     } else {
         h
     }
+}
+
+/// Shelf packing into atlases of `n × n` texels, as [`pack`] but a shelf that would cross an
+/// atlas's bottom starts the next atlas; the number of atlases used. An error when a chart
+/// alone is larger than an atlas.
+fn pack_atlases(charts: &mut [Chart], l: f32, n: u32) -> Result<u32, UnwrapError> {
+    for c in charts.iter_mut() {
+        (c.width, c.height) = size(c, l);
+    }
+    charts.sort_by(|a, b| b.height.cmp(&a.height).then(b.width.cmp(&a.width)));
+    if let Some(c) = charts.iter().find(|c| c.width.max(c.height) > n) {
+        return Err(UnwrapError::TooLarge {
+            texel: l,
+            need: c.width.max(c.height),
+            limit: n,
+        });
+    }
+    let (mut atlas, mut x, mut y, mut shelf) = (0u32, 0u32, 0u32, 0u32);
+    for c in charts.iter_mut() {
+        if x + c.width > n && x > 0 {
+            y += shelf;
+            x = 0;
+            shelf = 0;
+        }
+        if y + c.height > n {
+            atlas += 1;
+            (x, y, shelf) = (0, 0, 0);
+        }
+        c.atlas = atlas;
+        c.x0 = x;
+        c.y0 = y;
+        x += c.width;
+        shelf = shelf.max(c.height);
+    }
+    Ok(atlas + 1)
 }
 
 /// Packing for a texel size alone: a width near the square root of the charts' total area (at

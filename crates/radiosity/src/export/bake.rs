@@ -126,27 +126,29 @@ fn corners(p: &Patch) -> usize {
     }
 }
 
-/// Per material: the patches that use it, and their vertices renumbered from 0.
+/// Per material (per material and atlas for a lightmap): the patches, and their vertices
+/// renumbered from 0.
 struct Group {
-    material: usize,
+    /// The group's key: the material, or `material · atlases + atlas`.
+    key: usize,
     vertices: Vec<u32>,
     triangles: Vec<[u32; 3]>,
 }
 
-fn groups(bake: &Bake) -> Vec<Group> {
-    let mesh = bake.mesh;
-    let mut by_material: Vec<Vec<usize>> = vec![Vec::new(); bake.scene.materials.len()];
-    for (i, p) in mesh.patches.iter().enumerate() {
-        by_material[p.material as usize].push(i);
+/// The patches of `mesh` grouped by `key` (below `keys`), groups in key order.
+fn groups(mesh: &Mesh, keys: usize, key: impl Fn(usize) -> usize) -> Vec<Group> {
+    let mut by_key: Vec<Vec<usize>> = vec![Vec::new(); keys];
+    for i in 0..mesh.patches.len() {
+        by_key[key(i)].push(i);
     }
     let mut local = vec![u32::MAX; mesh.vertices.len()];
     let mut out = Vec::new();
-    for (material, patches) in by_material.into_iter().enumerate() {
+    for (key, patches) in by_key.into_iter().enumerate() {
         if patches.is_empty() {
             continue;
         }
         let mut g = Group {
-            material,
+            key,
             vertices: Vec::new(),
             triangles: Vec::with_capacity(patches.len() * 2),
         };
@@ -189,8 +191,10 @@ fn look_rotation(forward: glam::Vec3, up: glam::Vec3) -> [f32; 4] {
 /// Write a baked glTF: binary (`.glb`) when `binary`, else JSON with an embedded buffer.
 pub fn write_gltf(path: &Path, bake: &Bake, binary: bool) -> Result<(), ExportError> {
     use serde_json::json;
-    let groups = groups(bake);
     let mesh = bake.mesh;
+    let groups = groups(mesh, bake.scene.materials.len(), |i| {
+        mesh.patches[i].material as usize
+    });
     let total: usize = groups.iter().map(|g| g.vertices.len()).sum();
     let tri_total: usize = groups.iter().map(|g| g.triangles.len()).sum();
     // Buffer: positions, colours, radiosities (each all groups in order), then indices.
@@ -247,7 +251,7 @@ pub fn write_gltf(path: &Path, bake: &Bake, binary: bool) -> Result<(), ExportEr
         );
         voff += n;
         ioff += g.triangles.len();
-        let m = &bake.scene.materials[g.material];
+        let m = &bake.scene.materials[g.key];
         primitives.push(json!({
             "attributes": {"POSITION": base, "COLOR_0": base + 1, "_RADIOSITY": base + 2},
             "indices": base + 3,
@@ -414,13 +418,14 @@ pub struct LightmapBake<'a> {
 /// shown in a vertex-colour bake.
 pub const LIGHTMAP_INTENSITY: f64 = std::f64::consts::PI;
 
-/// The atlas as 8-bit sRGB RGB bytes, rows top to bottom: `srgb(min(1, B · scale))`, the
+/// Atlas `atlas` as 8-bit sRGB RGB bytes, rows top to bottom: `srgb(min(1, B · scale))`, the
 /// display colour of our PNG pictures.
-pub fn lightmap_srgb8(map: &crate::bake::lightmap::Lightmap, scale: f32) -> Vec<u8> {
-    let mut out = Vec::with_capacity(map.texels.len() * 3);
-    for b in &map.texels {
-        for c in [b.r, b.g, b.b] {
-            let c = ((c as f32) * scale).clamp(0.0, 1.0);
+pub fn lightmap_srgb8(map: &crate::bake::lightmap::Lightmap, atlas: u32, scale: f32) -> Vec<u8> {
+    let texels = map.atlas_texels(atlas);
+    let mut out = Vec::with_capacity(texels.len() * 3);
+    for b in texels {
+        for c in *b {
+            let c = (c * scale).clamp(0.0, 1.0);
             out.push((srgb_encode(c) * 255.0 + 0.5) as u8);
         }
     }
@@ -430,17 +435,21 @@ pub fn lightmap_srgb8(map: &crate::bake::lightmap::Lightmap, scale: f32) -> Vec<
 /// Write a lightmapped glTF (binary `.glb` when `binary`, else `.gltf` with everything
 /// embedded).
 ///
-/// Layout: one mesh, one primitive per material, each with its own vertices: `POSITION`,
-/// `TEXCOORD_1` (float VEC2, the lightmap's UV set; [`crate::bake::uv`]; the same accessor is
-/// also `TEXCOORD_0`, since glTF's texture-coordinate sets must start at 0) and u32 triangle
-/// indices (quads split along their first diagonal). Every material is white, matte
-/// (metallic 0, roughness 1; not `KHR_materials_unlit`, which the Khronos validator warns may
-/// not combine with another extension), carries `extras.radiosity` as a vertex bake does, and
-/// `MOZ_lightmap: {"index": 0, "texCoord": 1, "intensity": π}` ([`LIGHTMAP_INTENSITY`]):
-/// texture 0 is the atlas, an 8-bit sRGB PNG embedded in the buffer, sampled linearly and
-/// clamped. The PNG holds the display colour `min(1, B · scale)` and the exposure `scale`
-/// rides in `extras.radiosity.lightmap_scale` of the material, so `B = texel / scale` below
-/// clipping; the unclipped linear `B` is what [`write_lightmap_exr`] writes.
+/// Layout: one mesh, one primitive per material and atlas, each with its own vertices:
+/// `POSITION`, `TEXCOORD_1` (float VEC2, the lightmap's UV set; [`crate::bake::uv`]; the same
+/// accessor is also `TEXCOORD_0`, since glTF's texture-coordinate sets must start at 0) and
+/// u32 triangle indices (quads split along their first diagonal). Every material is white,
+/// matte (metallic 0, roughness 1; not `KHR_materials_unlit`, which the Khronos validator
+/// warns may not combine with another extension), carries `extras.radiosity` as a vertex bake
+/// does, and `MOZ_lightmap: {"index": a, "texCoord": 1, "intensity": π}`
+/// ([`LIGHTMAP_INTENSITY`]): texture `a` is atlas `a`, an 8-bit sRGB PNG embedded in the
+/// buffer, sampled linearly and clamped. `MOZ_lightmap` belongs to a material, so with several
+/// atlases a scene material whose charts lie in several of them becomes one glTF material per
+/// atlas (the same name and `extras`, plus `extras.radiosity.lightmap_atlas`), each with the
+/// primitive of its faces in that atlas. The PNG holds the display colour `min(1, B · scale)`
+/// and the exposure `scale` rides in `extras.radiosity.lightmap_scale` of the material, so
+/// `B = texel / scale` below clipping; the unclipped linear `B` is what
+/// [`write_lightmap_exr`] writes.
 pub fn write_lightmap_gltf(
     path: &Path,
     bake: &LightmapBake,
@@ -448,34 +457,35 @@ pub fn write_lightmap_gltf(
 ) -> Result<(), ExportError> {
     use serde_json::json;
     let map = bake.lightmap;
-    let mesh = &map.unwrap.mesh;
-    let groups = groups(&Bake {
-        scene: bake.scene,
-        mesh,
-        vertex_radiosity: &[],
-        scale: bake.scale,
-        camera: None,
+    let u = &map.unwrap;
+    let mesh = &u.mesh;
+    let atlases = u.atlases as usize;
+    let groups = groups(mesh, bake.scene.materials.len() * atlases, |i| {
+        mesh.patches[i].material as usize * atlases + u.atlas_of(i as u32) as usize
     });
     let fail = |e: std::io::Error| OutputError {
         path: path.to_path_buf(),
         source: e,
     };
-    let mut png = Vec::new();
-    {
+    let mut pngs = Vec::with_capacity(atlases);
+    for a in 0..u.atlases {
+        let mut png = Vec::new();
         let enc = image::codecs::png::PngEncoder::new(&mut png);
         image::ImageEncoder::write_image(
             enc,
-            &lightmap_srgb8(map, bake.scale),
+            &lightmap_srgb8(map, a, bake.scale),
             map.width(),
             map.height(),
             image::ExtendedColorType::Rgb8,
         )
         .map_err(|e| fail(std::io::Error::other(e)))?;
+        pngs.push(png);
     }
     let total: usize = groups.iter().map(|g| g.vertices.len()).sum();
     let tri_total: usize = groups.iter().map(|g| g.triangles.len()).sum();
     let (pos_bytes, uv_bytes, index_bytes) = (total * 12, total * 8, tri_total * 12);
-    let mut buf: Vec<u8> = Vec::with_capacity(pos_bytes + uv_bytes + index_bytes + png.len() + 4);
+    let png_bytes: usize = pngs.iter().map(|p| p.len() + 4).sum();
+    let mut buf: Vec<u8> = Vec::with_capacity(pos_bytes + uv_bytes + index_bytes + png_bytes);
     for g in &groups {
         for &v in &g.vertices {
             push_f32s(&mut buf, &mesh.vertices[v as usize].to_array());
@@ -483,7 +493,7 @@ pub fn write_lightmap_gltf(
     }
     for g in &groups {
         for &v in &g.vertices {
-            push_f32s(&mut buf, &map.unwrap.uv[v as usize]);
+            push_f32s(&mut buf, &u.uv[v as usize]);
         }
     }
     for g in &groups {
@@ -493,8 +503,28 @@ pub fn write_lightmap_gltf(
             }
         }
     }
-    let png_offset = buf.len();
-    buf.extend_from_slice(&png);
+    let mut buffer_views = vec![
+        json!({"buffer": 0, "byteOffset": 0, "byteLength": pos_bytes, "byteStride": 12, "target": 34962}),
+        json!({"buffer": 0, "byteOffset": pos_bytes, "byteLength": uv_bytes, "byteStride": 8, "target": 34962}),
+        json!({"buffer": 0, "byteOffset": pos_bytes + uv_bytes, "byteLength": index_bytes, "target": 34963}),
+    ];
+    let (mut images, mut textures) = (Vec::new(), Vec::new());
+    for (a, png) in pngs.iter().enumerate() {
+        // Each image 4-byte aligned in the buffer.
+        while buf.len() % 4 != 0 {
+            buf.push(0);
+        }
+        let name = if atlases == 1 {
+            "lightmap".to_string()
+        } else {
+            format!("lightmap-{a}")
+        };
+        images
+            .push(json!({"name": name, "bufferView": buffer_views.len(), "mimeType": "image/png"}));
+        textures.push(json!({"name": name, "source": a, "sampler": 0}));
+        buffer_views.push(json!({"buffer": 0, "byteOffset": buf.len(), "byteLength": png.len()}));
+        buf.extend_from_slice(png);
+    }
     let mut accessors = Vec::new();
     let mut primitives = Vec::new();
     let mut materials = Vec::new();
@@ -517,22 +547,27 @@ pub fn write_lightmap_gltf(
         );
         voff += n;
         ioff += g.triangles.len();
-        let m = &bake.scene.materials[g.material];
+        let (material, atlas) = (g.key / atlases, g.key % atlases);
+        let m = &bake.scene.materials[material];
         primitives.push(json!({
             "attributes": {"POSITION": base, "TEXCOORD_0": base + 1, "TEXCOORD_1": base + 1},
             "indices": base + 2,
             "material": materials.len(),
             "mode": 4
         }));
+        let mut extras = json!({"reflectance": m.reflectance.to_array(),
+            "emission": m.emission.to_array(), "lightmap_scale": bake.scale});
+        if atlases > 1 {
+            extras["lightmap_atlas"] = json!(atlas);
+        }
         materials.push(json!({
             "name": m.name,
             "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0],
                 "metallicFactor": 0.0, "roughnessFactor": 1.0},
             "extensions": {
-                "MOZ_lightmap": {"index": 0, "texCoord": 1, "intensity": LIGHTMAP_INTENSITY}
+                "MOZ_lightmap": {"index": atlas, "texCoord": 1, "intensity": LIGHTMAP_INTENSITY}
             },
-            "extras": {"radiosity": {"reflectance": m.reflectance.to_array(),
-                "emission": m.emission.to_array(), "lightmap_scale": bake.scale}}
+            "extras": {"radiosity": extras}
         }));
     }
     let mut nodes = vec![json!({"name": bake.scene.name, "mesh": 0})];
@@ -555,15 +590,10 @@ pub fn write_lightmap_gltf(
         "meshes": [{"name": bake.scene.name, "primitives": primitives}],
         "materials": materials,
         "accessors": accessors,
-        "images": [{"name": "lightmap", "bufferView": 3, "mimeType": "image/png"}],
+        "images": images,
         "samplers": [{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}],
-        "textures": [{"name": "lightmap", "source": 0, "sampler": 0}],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": pos_bytes, "byteStride": 12, "target": 34962},
-            {"buffer": 0, "byteOffset": pos_bytes, "byteLength": uv_bytes, "byteStride": 8, "target": 34962},
-            {"buffer": 0, "byteOffset": pos_bytes + uv_bytes, "byteLength": index_bytes, "target": 34963},
-            {"buffer": 0, "byteOffset": png_offset, "byteLength": png.len()}
-        ],
+        "textures": textures,
+        "bufferViews": buffer_views,
     });
     if !cameras.is_empty() {
         root["cameras"] = json!(cameras);
@@ -571,30 +601,56 @@ pub fn write_lightmap_gltf(
     write_gltf_file(path, root, buf, binary)
 }
 
-/// Write the atlas as OpenEXR, linear 32-bit float RGB holding the radiosity B (W/m² per
-/// channel, scene units), rows top to bottom as in the glTF's texture, layer `radiosity`.
+/// The files [`write_lightmap_exr`] writes for `atlases` atlases at `path`: `path` itself for
+/// one; for several, `-0`, `-1`, … inserted before the extension (`x.exr` → `x-0.exr`,
+/// `x-1.exr`, …; the number is the `MOZ_lightmap` texture index of the glTF).
+pub fn lightmap_exr_paths(path: &Path, atlases: u32) -> Vec<std::path::PathBuf> {
+    if atlases == 1 {
+        return vec![path.to_path_buf()];
+    }
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    let ext = path.extension().map(|e| e.to_string_lossy().into_owned());
+    (0..atlases)
+        .map(|a| {
+            let name = match &ext {
+                Some(e) => format!("{stem}-{a}.{e}"),
+                None => format!("{stem}-{a}"),
+            };
+            path.with_file_name(name)
+        })
+        .collect()
+}
+
+/// Write the atlases as OpenEXR, linear 32-bit float RGB holding the radiosity B (W/m² per
+/// channel, scene units), rows top to bottom as in the glTF's textures, layer `radiosity`,
+/// one file per atlas named by [`lightmap_exr_paths`]; the files written.
 pub fn write_lightmap_exr(
     path: &Path,
     map: &crate::bake::lightmap::Lightmap,
-) -> Result<(), ExportError> {
+) -> Result<Vec<std::path::PathBuf>, ExportError> {
     use exr::prelude::*;
     let (w, h) = (map.width() as usize, map.height() as usize);
-    write_atomic(path, |out| {
-        let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
-            let b = map.texels[pos.y() * w + pos.x()];
-            (b.r as f32, b.g as f32, b.b as f32)
-        });
-        let layer = Layer::new(
-            (w, h),
-            LayerAttributes::named("radiosity"),
-            Encoding::FAST_LOSSLESS,
-            channels,
-        );
-        exr::image::Image::from_layer(layer)
-            .write()
-            .to_buffered(out)
-            .map_err(std::io::Error::other)
-    })
+    let paths = lightmap_exr_paths(path, map.atlases());
+    for (a, p) in paths.iter().enumerate() {
+        let texels = map.atlas_texels(a as u32);
+        write_atomic::<ExportError>(p, |out| {
+            let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+                let [r, g, b] = texels[pos.y() * w + pos.x()];
+                (r, g, b)
+            });
+            let layer = Layer::new(
+                (w, h),
+                LayerAttributes::named("radiosity"),
+                Encoding::FAST_LOSSLESS,
+                channels,
+            );
+            exr::image::Image::from_layer(layer)
+                .write()
+                .to_buffered(out)
+                .map_err(std::io::Error::other)
+        })?;
+    }
+    Ok(paths)
 }
 
 /// The bounds of `vertices` of `mesh`, as glTF's POSITION accessor must state them.
