@@ -122,6 +122,17 @@ fn kept_uvs(a: &SolveCmdArgs, scene: &Scene) -> Result<Option<Vec<[[f32; 2]; 3]>
     if with == 0 {
         return Ok(None);
     }
+    let mut textures: Vec<u32> = set.texture.iter().flatten().copied().collect();
+    textures.sort_unstable();
+    textures.dedup();
+    if textures.len() > 1 {
+        eprintln!(
+            "radiosity: warning: {}: its TEXCOORD_1 spans {} lightmap atlases (MOZ_lightmap textures), whose UV squares overlap; the lightmap gets a new UV set",
+            path.display(),
+            textures.len()
+        );
+        return Ok(None);
+    }
     if with < set.uv.len() {
         eprintln!(
             "radiosity: warning: {}: only {with} of {} triangles have TEXCOORD_1; the lightmap gets a new UV set",

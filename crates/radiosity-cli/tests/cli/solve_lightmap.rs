@@ -239,6 +239,31 @@ fn lightmap_in_several_atlases() {
     assert!(!dir.join("many.exr").exists());
     let report = crate::validator::validate_gltf_report(&[dir.join("many.glb")]);
     assert!(report.contains(": 0 errors, 0 warnings"), "{report}");
+    // Its TEXCOORD_1 spans several atlases whose UV squares overlap: a rebake warns and
+    // generates a new UV set instead of keeping it.
+    let again = run(
+        &[
+            "solve",
+            "many.glb",
+            "--patches",
+            "300",
+            "--out",
+            "again.glb",
+            "--bake",
+            "lightmap",
+            "--texel-size",
+            "12",
+            "--lightmap-indirect",
+            "16",
+        ],
+        &dir,
+    );
+    let (text, err) = (succeed(&again), stderr(&again));
+    assert!(
+        err.contains(&format!("spans {atlases} lightmap atlases")),
+        "{err}"
+    );
+    assert!(!text.contains("kept"), "{text}");
 }
 
 #[test]

@@ -567,6 +567,10 @@ pub struct LightmapSet {
     pub uv: Vec<Option<[[f32; 2]; 3]>>,
     /// Per polygon: index into [`LightmapSet::materials`] (`None`: no lightmap).
     pub material: Vec<Option<u32>>,
+    /// Per polygon: the glTF texture its material's `MOZ_lightmap` names (`None`: none), also
+    /// when the images are not decoded; polygons of different lightmap textures lie in
+    /// different atlases, whose UV sets overlap.
+    pub texture: Vec<Option<u32>>,
     /// The lightmapped materials.
     pub materials: Vec<LightmapMaterial>,
     /// The decoded images.
@@ -941,10 +945,11 @@ fn read_scene(
         image_means: HashMap::new(),
     };
     r.load_buffers(bin)?;
-    // MOZ_lightmap of each material (parsed only when the lightmaps are asked for).
+    // MOZ_lightmap of each material (parsed only when the lightmaps or their UVs are asked
+    // for: the UVs' reader needs each polygon's lightmap texture).
     let moz = match &lightmap {
-        Some((_, true)) => moz_lightmaps(path, json, doc.materials().count())?,
-        _ => Vec::new(),
+        Some(_) => moz_lightmaps(path, json, doc.materials().count())?,
+        None => Vec::new(),
     };
     // glTF material index → the lightmap set's material slot.
     let mut lightmap_slot: HashMap<usize, u32> = HashMap::new();
@@ -1123,6 +1128,7 @@ fn read_scene(
                 }
             };
             // The lightmap's UV set (and its material slot) when asked for.
+            let mut texture: Option<u32> = None;
             let (corner_uvs, slot): (Option<Vec<[f32; 2]>>, Option<u32>) = match &mut lightmap {
                 None => (None, None),
                 Some((set, textures)) => {
@@ -1130,6 +1136,7 @@ fn read_scene(
                         .material()
                         .index()
                         .and_then(|m| moz.get(m).copied().flatten().map(|z| (m, z)));
+                    texture = moz_of.map(|(_, z)| z.index.min(u32::MAX as usize) as u32);
                     let (set_index, slot) = match (*textures, moz_of) {
                         (false, _) => (Some(1), None),
                         (true, None) => (None, None),
@@ -1273,9 +1280,11 @@ fn read_scene(
                     }
                     set.uv.push(uv);
                     set.material.push(slot);
+                    set.texture.push(texture);
                     if back.is_some() {
                         set.uv.push(uv.map(|u| [u[2], u[1], u[0]]));
                         set.material.push(slot);
+                        set.texture.push(texture);
                     }
                 }
                 let reversed = back.map(|b| (v.iter().rev().copied().collect(), b));
