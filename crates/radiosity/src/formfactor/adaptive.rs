@@ -768,9 +768,11 @@ impl Prepared {
     }
 
     /// Split `parent` into its four quarters, each with its 2 × 2 Gauss value of the factor lost
-    /// to shadows, and each an equal share of the error estimate `|parent − Σ quarters| / 8`
-    /// (the composite rule's error falls 16-fold a halving where the integrand is smooth and
-    /// 8-fold along a penumbra's kink, so the difference over 8 bounds it in either case).
+    /// to shadows, and each an equal share (a quarter) of the error estimate
+    /// `|parent − Σ quarters|`: the whole difference, not a fraction of it, because along a
+    /// penumbra's kink the composite rule's error falls only about fourfold a halving (16-fold
+    /// where the integrand is smooth), so the difference bounds the quarters' error in either
+    /// case.
     fn split_cell(
         &self,
         omega: &[DVec3],
