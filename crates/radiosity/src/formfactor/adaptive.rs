@@ -1110,8 +1110,28 @@ fn split(
     inside: &mut Vec<DVec3>,
     outside: &mut Vec<DVec3>,
 ) {
+    cut(poly, m, x, eps, inside, Some(outside));
+}
+
+/// The part of the convex `poly` with `m · (p − x) ≥ 0` into `inside`, exactly as [`split`]
+/// makes it, without the other part.
+fn keep_inside(poly: &[DVec3], m: DVec3, x: DVec3, eps: f64, inside: &mut Vec<DVec3>) {
+    cut(poly, m, x, eps, inside, None);
+}
+
+/// [`split`]'s one pass over the edges, the outside part kept only when asked for.
+fn cut(
+    poly: &[DVec3],
+    m: DVec3,
+    x: DVec3,
+    eps: f64,
+    inside: &mut Vec<DVec3>,
+    mut outside: Option<&mut Vec<DVec3>>,
+) {
     inside.clear();
-    outside.clear();
+    if let Some(o) = outside.as_deref_mut() {
+        o.clear();
+    }
     let n = poly.len();
     let side = |p: DVec3| {
         let d = m.dot(p - x);
@@ -1131,52 +1151,26 @@ fn split(
             inside.push(a);
         }
         if da <= 0.0 {
-            outside.push(a);
+            if let Some(o) = outside.as_deref_mut() {
+                o.push(a);
+            }
         }
         if (da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0) {
             let p = a + (b - a) * (da / (da - db));
             inside.push(p);
-            outside.push(p);
+            if let Some(o) = outside.as_deref_mut() {
+                o.push(p);
+            }
         }
         d0 = db;
     }
     if inside.len() < 3 {
         inside.clear();
     }
-    if outside.len() < 3 {
-        outside.clear();
-    }
-}
-
-/// The part of the convex `poly` with `m · (p − x) ≥ 0` into `inside`, exactly as [`split`]
-/// makes it, without the other part.
-fn keep_inside(poly: &[DVec3], m: DVec3, x: DVec3, eps: f64, inside: &mut Vec<DVec3>) {
-    inside.clear();
-    let n = poly.len();
-    let side = |p: DVec3| {
-        let d = m.dot(p - x);
-        if d.abs() <= eps {
-            0.0
-        } else {
-            d
+    if let Some(o) = outside {
+        if o.len() < 3 {
+            o.clear();
         }
-    };
-    let mut d0 = side(poly[0]);
-    for k in 0..n {
-        let a = poly[k];
-        let b = poly[(k + 1) % n];
-        let da = d0;
-        let db = side(b);
-        if da >= 0.0 {
-            inside.push(a);
-        }
-        if (da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0) {
-            inside.push(a + (b - a) * (da / (da - db)));
-        }
-        d0 = db;
-    }
-    if inside.len() < 3 {
-        inside.clear();
     }
 }
 
