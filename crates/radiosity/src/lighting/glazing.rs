@@ -80,6 +80,18 @@ impl Glazing {
         })
     }
 
+    /// At incidence cosine `ci` (0 < ci ≤ 1): the Fresnel reflectances of one interface for
+    /// s and p polarisation, and the glass's internal transmittance along the refracted path.
+    fn interfaces(&self, ci: f64) -> (f64, f64, f64) {
+        let n = self.index;
+        let si = (1.0 - ci * ci).max(0.0).sqrt();
+        let st = si / n;
+        let ct = (1.0 - st * st).max(0.0).sqrt();
+        let rs = ((ci - n * ct) / (ci + n * ct)).powi(2);
+        let rp = ((n * ci - ct) / (n * ci + ct)).powi(2);
+        (rs, rp, self.absorption_pass.powf(1.0 / ct))
+    }
+
     /// The transmittance at incidence angle θ given by its cosine (either side; |cos θ|).
     pub fn transmittance(&self, cos_theta: f64) -> f64 {
         let ci = cos_theta.abs().min(1.0);
@@ -87,13 +99,7 @@ impl Glazing {
         if ci <= 1e-9 {
             return 0.0;
         }
-        let n = self.index;
-        let si = (1.0 - ci * ci).max(0.0).sqrt();
-        let st = si / n;
-        let ct = (1.0 - st * st).max(0.0).sqrt();
-        let rs = ((ci - n * ct) / (ci + n * ct)).powi(2);
-        let rp = ((n * ci - ct) / (n * ci + ct)).powi(2);
-        let a = self.absorption_pass.powf(1.0 / ct);
+        let (rs, rp, a) = self.interfaces(ci);
         let t = |r: f64| (1.0 - r) * (1.0 - r) * a / (1.0 - r * r * a * a);
         0.5 * (t(rs) + t(rp))
     }
@@ -105,13 +111,7 @@ impl Glazing {
         if ci <= 1e-9 {
             return 1.0;
         }
-        let n = self.index;
-        let si = (1.0 - ci * ci).max(0.0).sqrt();
-        let st = si / n;
-        let ct = (1.0 - st * st).max(0.0).sqrt();
-        let rs = ((ci - n * ct) / (ci + n * ct)).powi(2);
-        let rp = ((n * ci - ct) / (n * ci + ct)).powi(2);
-        let a = self.absorption_pass.powf(1.0 / ct);
+        let (rs, rp, a) = self.interfaces(ci);
         let r = |r: f64| r + (1.0 - r) * (1.0 - r) * r * a * a / (1.0 - r * r * a * a);
         0.5 * (r(rs) + r(rp))
     }
