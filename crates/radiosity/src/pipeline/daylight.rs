@@ -34,6 +34,7 @@
 
 use super::lighting::{luminance, LightingSettings};
 use super::panes::{End, Panes};
+use super::sun_cone::{Cone, SunCones};
 use super::{patch_system, MemoryCheck};
 use crate::accel::Bvh;
 use crate::color::Rgb;
@@ -570,7 +571,7 @@ impl Outside<'_> {
         }
         for (s, col) in suns.iter().zip(&mut out[nsky..]) {
             *col += ground * s.ground;
-            *col += s.scale * self.sun(origin, n, s.direction, sun_rays, rng);
+            *col += s.scale * self.sun(origin, n, s.direction, sun_rays, rng, None);
         }
     }
 
@@ -585,6 +586,7 @@ impl Outside<'_> {
         to_sun: [f64; 3],
         sun_rays: usize,
         rng: &mut crate::sampling::Rng64,
+        cones: Option<&SunCones>,
     ) -> f64 {
         let radius = (0.5 * SUN_DIAMETER_DEG).to_radians().tan() as f32;
         let m = ((sun_rays as f64).sqrt().ceil() as usize).max(1);
@@ -598,6 +600,17 @@ impl Outside<'_> {
         // and transmittance (cos θ over the disc averages to cos θ_c within (0.27°)² / 4 ≈
         // 5e-6).
         let cos_c = n.dot(c) as f64;
+        // The whole disc at once where no surface's edge crosses it (`sun_cone`): every
+        // sample would find what the centre finds.
+        if let Some(cones) = cones {
+            if n.dot(c) > cones.horizon_margin() {
+                match cones.classify(origin.as_dvec3(), c.as_dvec3()) {
+                    Cone::Blocked => return 0.0,
+                    Cone::Clear => return cos_c * self.through_glass(origin, c),
+                    Cone::Partial => {}
+                }
+            }
+        }
         let mut e = 0.0;
         let mut count = 0usize;
         for a in 0..m {
@@ -627,6 +640,8 @@ pub struct DirectSun {
     points: Vec<SensorPoint>,
     sun_rays: usize,
     seed: u64,
+    /// Whole-disc decisions (None: every point's disc is sampled).
+    cones: Option<SunCones>,
 }
 
 impl DirectSun {
@@ -641,14 +656,28 @@ impl DirectSun {
         scene.validate_geometry()?;
         let (opaque, glass) = split_panes(scene)?;
         let mesh = Mesh::build(&opaque, crate::mesh::MeshParams::Faces)?;
+        let cones = SunCones::new(
+            &mesh,
+            glass.as_ref().map(|g| g.mesh()),
+            (0.5 * SUN_DIAMETER_DEG).to_radians(),
+        );
         Ok(DirectSun {
             bvh: Bvh::build(&mesh),
+            cones: Some(cones),
             glass,
             frame: settings.frame,
             points: points.to_vec(),
             sun_rays: settings.sun_rays as usize,
             seed: settings.lighting.params.seed,
         })
+    }
+
+    /// Every point's disc sampled, none decided whole (the reference for the whole-disc
+    /// decisions).
+    #[cfg(test)]
+    fn sampled_only(mut self) -> DirectSun {
+        self.cones = None;
+        self
     }
 
     /// The illuminance at every point (lx) from a sun of 1 lx direct normal illuminance in
@@ -672,7 +701,7 @@ impl DirectSun {
                 0.0
             } else {
                 let origin = v(p.position) + n * self.bvh.ray_offset();
-                outside.sun(origin, n, to_sun, self.sun_rays, &mut rng)
+                outside.sun(origin, n, to_sun, self.sun_rays, &mut rng, self.cones.as_ref())
             };
         }
     }

@@ -16,6 +16,7 @@ mod panes;
 mod radiant;
 mod reference;
 mod solve;
+mod sun_cone;
 mod system;
 mod thermal;
 mod thermal_matrix_free;

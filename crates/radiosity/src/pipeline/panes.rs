@@ -81,6 +81,11 @@ impl Panes {
         Ok(Some(Panes { mesh, bvh, glazing }))
     }
 
+    /// The panes' mesh (one patch a polygon).
+    pub(crate) fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
     /// The pane a glass patch is, and its normal.
     fn pane(&self, patch: u32) -> (Glazing, Vec3) {
         let p = &self.mesh.patches[patch as usize];
