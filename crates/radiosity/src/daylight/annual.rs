@@ -34,7 +34,7 @@
 
 use super::epw::Epw;
 use super::metrics::{Accumulator, MetricParams, Metrics, Occupancy};
-use super::patches::SkyPatches;
+use super::patches::{PatchSamples, SkyPatches};
 use super::perez::{Condition, PerezSky, DEFAULT_DEW_POINT};
 use super::solar::{solar_position, Site};
 use super::DaylightError;
@@ -239,6 +239,17 @@ pub struct EpwSkies<'a> {
     patches: &'a SkyPatches,
     params: AnnualParams,
     site: Site,
+    /// The patches' sample directions, computed once (None past [`SAMPLE_TABLE_MAX`]
+    /// directions: each hour then computes its own).
+    samples: Option<PatchSamples>,
+}
+
+/// Most sample directions kept in a table (32 bytes each).
+const SAMPLE_TABLE_MAX: usize = 1 << 22;
+
+thread_local! {
+    /// Each thread's scratch for a sky's per-row gradation terms.
+    static ROWS: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 impl<'a> EpwSkies<'a> {
@@ -253,6 +264,11 @@ impl<'a> EpwSkies<'a> {
                 latitude: l.latitude,
                 longitude: l.longitude,
                 time_zone: l.time_zone,
+            },
+            samples: {
+                let sub = params.patch_samples.max(1);
+                (patches.sky_count().saturating_mul(sub * sub) <= SAMPLE_TABLE_MAX)
+                    .then(|| patches.samples(sub))
             },
         }
     }
@@ -330,7 +346,10 @@ impl SkySource for EpwSkies<'_> {
         };
         let sky = PerezSky::relative(&condition, pos.azimuth);
         let patches = self.patches;
-        patches.sky_means(&|d| sky.luminance(d), self.params.patch_samples, out);
+        match &self.samples {
+            Some(t) => ROWS.with_borrow_mut(|rows| sky.patch_means(t, rows, out)),
+            None => patches.sky_means(&|d| sky.luminance(d), self.params.patch_samples, out),
+        }
         let horizontal: f64 = (0..patches.sky_count())
             .map(|p| out[p] * patches.cosine_solid_angle(p))
             .sum();
@@ -566,21 +585,67 @@ pub fn write_hourly_header(w: &mut dyn std::io::Write, points: usize) -> std::io
 }
 
 /// The hourly CSV's rows of a block: an hour a row, its stamp from `skies`, then each
-/// point's illuminance in lx to 0.1 lx.
+/// point's illuminance in lx to 0.1 lx (as `{:.1}` prints it, but for a half-tenth tie,
+/// which may round either way). The rows are formatted in parallel, then written in order.
 pub fn write_hourly_rows(
     w: &mut dyn std::io::Write,
     skies: &dyn SkySource,
     b: &HourBlock,
 ) -> std::io::Result<()> {
-    for h in 0..b.hours {
-        let [m, d, hr] = skies.stamp(b.first + h);
-        write!(w, "{m},{d},{hr}")?;
-        for i in 0..b.points {
-            write!(w, ",{:.1}", b.total[i * b.hours + h])?;
-        }
-        writeln!(w)?;
+    let rows: Vec<Vec<u8>> = (0..b.hours)
+        .into_par_iter()
+        .map(|h| {
+            let [m, d, hr] = skies.stamp(b.first + h);
+            let mut row = Vec::with_capacity(16 + 10 * b.points);
+            let stamp = |v: u32, row: &mut Vec<u8>| push_integer(row, v as u64);
+            stamp(m, &mut row);
+            row.push(b',');
+            stamp(d, &mut row);
+            row.push(b',');
+            stamp(hr, &mut row);
+            for i in 0..b.points {
+                row.push(b',');
+                push_tenths(&mut row, b.total[i * b.hours + h]);
+            }
+            row.push(b'\n');
+            row
+        })
+        .collect();
+    for row in rows {
+        w.write_all(&row)?;
     }
     Ok(())
+}
+
+/// Append the decimal digits of `v`.
+fn push_integer(out: &mut Vec<u8>, mut v: u64) {
+    let mut digits = [0u8; 20];
+    let mut k = digits.len();
+    loop {
+        k -= 1;
+        digits[k] = b'0' + (v % 10) as u8;
+        v /= 10;
+        if v == 0 {
+            break;
+        }
+    }
+    out.extend_from_slice(&digits[k..]);
+}
+
+/// Append `v` to one decimal (`{:.1}`), by integer arithmetic on the tenths where they fit.
+fn push_tenths(out: &mut Vec<u8>, v: f64) {
+    let tenths = (v * 10.0).round();
+    if !(tenths.abs() < 1e15) {
+        out.extend_from_slice(format!("{v:.1}").as_bytes());
+        return;
+    }
+    if tenths < 0.0 {
+        out.push(b'-');
+    }
+    let t = tenths.abs() as u64;
+    push_integer(out, t / 10);
+    out.push(b'.');
+    out.push(b'0' + (t % 10) as u8);
 }
 
 /// Run [`annual`] writing every hour's illuminance to `path` as CSV, whole or not at all

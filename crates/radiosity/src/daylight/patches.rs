@@ -219,6 +219,50 @@ impl SkyPatches {
         }
     }
 
+    /// The sample directions of [`SkyPatches::sky_means`] at `sub` cells a side, computed
+    /// once for a run that takes the means of many skies ([`PatchSamples`]).
+    pub fn samples(&self, sub: usize) -> PatchSamples {
+        assert!(sub >= 1);
+        let mut s = PatchSamples {
+            directions: Vec::new(),
+            row: Vec::new(),
+            heights: Vec::new(),
+            ends: Vec::with_capacity(self.sky),
+        };
+        for b in &self.bands {
+            let (s0, s1) = (b.lo.sin(), b.hi.sin());
+            let (na, nz) = if b.count == 1 {
+                (4 * sub, sub)
+            } else {
+                (sub, sub)
+            };
+            let first_row = s.heights.len() as u32;
+            for iz in 0..nz {
+                s.heights.push(s0 + (s1 - s0) * (iz as f64 + 0.5) / nz as f64);
+            }
+            let w = TAU / b.count as f64;
+            for j in 0..b.count {
+                let a0 = (j as f64 - 0.5) * w;
+                for iz in 0..nz {
+                    let z = s.heights[first_row as usize + iz];
+                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    for ia in 0..na {
+                        let az = if b.count == 1 {
+                            TAU * (ia as f64 + 0.5) / na as f64
+                        } else {
+                            a0 + w * (ia as f64 + 0.5) / na as f64
+                        };
+                        let (sa, ca) = az.sin_cos();
+                        s.directions.push([r * sa, r * ca, z]);
+                        s.row.push(first_row + iz as u32);
+                    }
+                }
+                s.ends.push(s.directions.len() as u32);
+            }
+        }
+        s
+    }
+
     /// The 2-phase sun: add to `sky` (patch luminances, cd/m²) a sun of direct normal
     /// illuminance `direct_normal` (lx) towards unit `sun`, as a uniform luminance over the
     /// patch that contains it, E_n sin α / ∫ sin θ dω, so that an unobstructed horizontal
@@ -231,6 +275,43 @@ impl SkyPatches {
         let p = self.find(sun);
         sky[p] += direct_normal * sun[2] / self.cosine_solid_angle(p);
         Some(p)
+    }
+}
+
+/// The sample directions of [`SkyPatches::sky_means`], patch by patch, with the height
+/// (sin of the altitude) row each lies on, so that a function of the altitude alone is
+/// evaluated once a row ([`PatchSamples::means`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PatchSamples {
+    directions: Vec<[f64; 3]>,
+    /// Index into `heights` of each direction's row.
+    row: Vec<u32>,
+    heights: Vec<f64>,
+    /// End of each sky patch's directions (patch order).
+    ends: Vec<u32>,
+}
+
+impl PatchSamples {
+    /// The heights (sin of the altitude, z) of the rows of samples.
+    pub fn heights(&self) -> &[f64] {
+        &self.heights
+    }
+
+    /// Each sky patch's mean of `l(direction, row_value)` over its samples, into `out`, where
+    /// `row_value[k]` is any per-row quantity the caller computed from [`Self::heights`]:
+    /// [`SkyPatches::sky_means`] of the same function, in the same order of summation.
+    pub fn means(&self, row_value: &[f64], l: impl Fn([f64; 3], f64) -> f64, out: &mut [f64]) {
+        assert!(row_value.len() >= self.heights.len() && out.len() >= self.ends.len());
+        let mut start = 0usize;
+        for (o, &end) in out.iter_mut().zip(&self.ends) {
+            let end = end as usize;
+            let mut sum = 0.0;
+            for k in start..end {
+                sum += l(self.directions[k], row_value[self.row[k] as usize]);
+            }
+            *o = sum / (end - start) as f64;
+            start = end;
+        }
     }
 }
 
@@ -314,6 +395,26 @@ mod tests {
             .map(|i| out[i] * p.cosine_solid_angle(i))
             .sum();
         assert!((e - 2.0 * PI).abs() < 1e-12);
+    }
+
+    /// The sample table gives [`SkyPatches::sky_means`] bit for bit, with a per-row factor.
+    #[test]
+    fn sample_table_means_equal_sky_means() {
+        for n in [1, 2] {
+            let p = SkyPatches::reinhart(n).unwrap();
+            let f = |d: [f64; 3]| (1.0 + 0.3 * (-2.0 / d[2].max(0.01)).exp()) * (d[0] + 2.0);
+            let mut want = vec![0.0; p.len()];
+            p.sky_means(&f, 3, &mut want);
+            let t = p.samples(3);
+            let rows: Vec<f64> = t
+                .heights()
+                .iter()
+                .map(|&z| 1.0 + 0.3 * (-2.0 / z.max(0.01)).exp())
+                .collect();
+            let mut got = vec![0.0; p.len()];
+            t.means(&rows, |d, g| g * (d[0] + 2.0), &mut got);
+            assert_eq!(got[..p.sky_count()], want[..p.sky_count()]);
+        }
     }
 
     #[test]

@@ -240,6 +240,37 @@ impl PerezSky {
         }
     }
 
+    /// Each sky patch's mean luminance over the samples of `table` (as
+    /// [`SkyPatches::sky_means`](super::patches::SkyPatches::sky_means) of
+    /// [`PerezSky::luminance`], bit for bit), the gradation term 1 + a exp(b / cos ζ) taken
+    /// once a row of samples; `rows` is scratch of the table's row count.
+    pub fn patch_means(
+        &self,
+        table: &super::patches::PatchSamples,
+        rows: &mut Vec<f64>,
+        out: &mut [f64],
+    ) {
+        let [a, b, c, dd, e] = self.parameters;
+        rows.clear();
+        rows.extend(
+            table
+                .heights()
+                .iter()
+                .map(|&z| 1.0 + a * (b / z.max(0.01)).exp()),
+        );
+        let sun = self.sun;
+        table.means(
+            rows,
+            |d, gradation| {
+                let cos_gamma = (d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]).clamp(-1.0, 1.0);
+                let gamma = cos_gamma.acos();
+                let l = gradation * (1.0 + c * (dd * gamma).exp() + e * cos_gamma * cos_gamma);
+                self.scale * l.max(0.0)
+            },
+            out,
+        );
+    }
+
     /// Luminance (cd/m²) seen looking in unit direction `d` (z up); 0 below the horizon.
     pub fn luminance(&self, d: [f64; 3]) -> f64 {
         if d[2] < 0.0 {

@@ -24,7 +24,7 @@
 //! sun's light at `o` is then cos θ_c τ(c) or 0 exactly as every disc sample finds it, and
 //! only a **Partial** cone, a point in a penumbra, is sampled. The decision is the cone
 //! against each polygon, found by a binary hierarchy over the polygons' boxes whose slabs are
-//! widened by the cone's radius at the box's far corner (conservative). Polygons are the mesh
+//! widened by the cone's radius where it leaves the scene's box (conservative). Polygons are the mesh
 //! patches, a planar convex quad whole, any other patch as its two triangles (the ray
 //! caster's split), so a seam between two polygons is Partial along its shadow: sampled, not
 //! wrong.
@@ -141,16 +141,20 @@ impl SunCones {
         if c == DVec3::ZERO {
             return Cone::Partial;
         }
-        if self.nodes.is_empty() {
+        let Some(root) = self.nodes.first() else {
             return Cone::Clear;
-        }
+        };
+        // The cone's radius where it leaves the scene's box bounds its radius in every box.
+        let far = (o - root.lo).abs().max((root.hi - o).abs()).length();
+        let e = far * self.tan_a;
+        let inv = DVec3::new(1.0 / c.x, 1.0 / c.y, 1.0 / c.z);
         let mut stack = [0u32; STACK];
         let mut top = 1;
         let mut partial = false;
         while top > 0 {
             top -= 1;
             let node = &self.nodes[stack[top] as usize];
-            if !self.box_meets(node, o, c) {
+            if !box_meets(node, e, o, c, inv) {
                 continue;
             }
             if node.count == 0 {
@@ -179,55 +183,9 @@ impl SunCones {
         }
     }
 
-    /// Whether the cone may meet the node's box: the centre ray against the box widened by
-    /// the cone's radius at the box's farthest corner (a cone direction inside the box at
-    /// distance t lies within t tan α ≤ that radius of the centre ray's point at t).
-    fn box_meets(&self, node: &Node, o: DVec3, c: DVec3) -> bool {
-        let far = (o - node.lo).abs().max((node.hi - o).abs()).length();
-        let e = far * self.tan_a;
-        let (lo, hi) = (node.lo - e, node.hi + e);
-        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
-        for k in 0..3 {
-            if c[k] == 0.0 {
-                if o[k] < lo[k] || o[k] > hi[k] {
-                    return false;
-                }
-                continue;
-            }
-            let inv = 1.0 / c[k];
-            let (a, b) = ((lo[k] - o[k]) * inv, (hi[k] - o[k]) * inv);
-            let (a, b) = if a < b { (a, b) } else { (b, a) };
-            t0 = t0.max(a);
-            t1 = t1.min(b);
-            if t0 > t1 {
-                return false;
-            }
-        }
-        true
-    }
-
     /// The polygon against the cone (module documentation).
+    #[inline]
     fn meets(&self, p: &Convex, o: DVec3, c: DVec3) -> Meets {
-        let g = p.centre - o;
-        let mut partial = false;
-        for k in 0..p.count {
-            let a = p.corners[k] - o;
-            let b = p.corners[(k + 1) % p.count] - o;
-            let m = a.cross(b);
-            let len = m.length();
-            let side = m.dot(g);
-            if len <= 0.0 || side == 0.0 || !len.is_finite() {
-                partial = true;
-                continue;
-            }
-            let d = m.dot(c) / len * side.signum();
-            if d <= -self.sin_a {
-                return Meets::Miss;
-            }
-            if d < self.sin_a {
-                partial = true;
-            }
-        }
         let s0 = p.normal.dot(o - p.corners[0]);
         if s0 == 0.0 {
             return Meets::Partial;
@@ -238,11 +196,63 @@ impl SunCones {
         if cz * self.cos_a + sz * self.sin_a <= 0.0 {
             return Meets::Miss;
         }
-        if partial || cz * self.cos_a - sz * self.sin_a <= 0.0 {
-            return Meets::Partial;
+        let mut partial = cz * self.cos_a - sz * self.sin_a <= 0.0;
+        let g = p.centre - o;
+        let sin2 = self.sin_a * self.sin_a;
+        for k in 0..p.count {
+            let a = p.corners[k] - o;
+            let b = p.corners[(k + 1) % p.count] - o;
+            let m = a.cross(b);
+            let side = m.dot(g);
+            // The angle from c to the edge's plane against α, without a square root:
+            // d = m · c on the polygon's side; |d| ≥ sin α |m| decides.
+            let d = if side > 0.0 {
+                m.dot(c)
+            } else if side < 0.0 {
+                -m.dot(c)
+            } else {
+                partial = true;
+                continue;
+            };
+            let beyond = d * d >= sin2 * m.length_squared();
+            if d <= 0.0 && beyond {
+                return Meets::Miss;
+            }
+            if !(d > 0.0 && beyond) {
+                partial = true;
+            }
         }
-        Meets::Cover
+        if partial {
+            Meets::Partial
+        } else {
+            Meets::Cover
+        }
     }
+}
+
+/// Whether the cone may meet the node's box: the centre ray against the box widened by `e`,
+/// the cone's radius at the farthest point of the scene's box (a cone direction inside the
+/// box at distance t lies within t tan α ≤ `e` of the centre ray's point at t).
+#[inline]
+fn box_meets(node: &Node, e: f64, o: DVec3, c: DVec3, inv: DVec3) -> bool {
+    let (lo, hi) = (node.lo - e, node.hi + e);
+    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+    for k in 0..3 {
+        if c[k] == 0.0 {
+            if o[k] < lo[k] || o[k] > hi[k] {
+                return false;
+            }
+            continue;
+        }
+        let (a, b) = ((lo[k] - o[k]) * inv[k], (hi[k] - o[k]) * inv[k]);
+        let (a, b) = if a < b { (a, b) } else { (b, a) };
+        t0 = t0.max(a);
+        t1 = t1.min(b);
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
 }
 
 /// The convex polygon of `corners` (3 or 4, counter-clockwise about `normal`'s side), or None

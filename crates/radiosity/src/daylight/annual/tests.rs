@@ -341,3 +341,36 @@ fn csv_outputs() {
     assert!(!bad.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The hourly CSV's number formatting equals `{:.1}` but at half-tenth ties (where the
+/// product by 10 may round the other way), on a million values from 0 to 10⁶ lx and beyond
+/// the integer fast path.
+#[test]
+fn tenths_print_as_the_formatter_does() {
+    let mut diff = 0;
+    for k in 0..1_000_000u64 {
+        let v = match k % 4 {
+            0 => hash(k) * 1e6,
+            1 => hash(k) * 100.0,
+            2 => (k / 4) as f64 * 0.05,
+            _ => -hash(k) * 10.0,
+        };
+        let mut out = Vec::new();
+        super::push_tenths(&mut out, v);
+        let got = String::from_utf8(out).unwrap();
+        let want = format!("{v:.1}");
+        if got != want {
+            let frac = (v.abs() * 10.0).fract();
+            let tie = (frac - 0.5).abs() < 1e-6;
+            let zero = want == "-0.0" && got == "0.0";
+            assert!(tie || zero, "{v}: {got} against {want}");
+            diff += 1;
+        }
+    }
+    assert!(diff < 100_000, "{diff} ties");
+    for v in [1e20, -3e17, f64::NAN, f64::INFINITY] {
+        let mut out = Vec::new();
+        super::push_tenths(&mut out, v);
+        assert_eq!(String::from_utf8(out).unwrap(), format!("{v:.1}"));
+    }
+}
