@@ -67,6 +67,34 @@ impl SunCoefficients for ExactSun<'_> {
 
     fn sun_parts(&self, to_sun: [f64; 3], total: &mut [f64], direct: &mut [f64]) {
         self.direct.illuminance(to_sun, direct);
+        self.add_interreflection(to_sun, direct, total);
+    }
+
+    fn sun_block(&self, suns: &[Option<[f64; 3]>], total: &mut [f64], direct: &mut [f64]) {
+        let nh = suns.len();
+        let points = total.len() / nh.max(1);
+        // The direct sun point by point through the hours (its shadow cache), then hour-major.
+        let mut by_point = vec![0.0; points * nh];
+        self.direct.illuminance_many(suns, &mut by_point);
+        for (h, (t, d)) in total
+            .chunks_exact_mut(points)
+            .zip(direct.chunks_exact_mut(points))
+            .enumerate()
+        {
+            for (i, v) in d.iter_mut().enumerate() {
+                *v = by_point[i * nh + h];
+            }
+            match suns[h] {
+                Some(s) => self.add_interreflection(s, d, t),
+                None => t.fill(0.0),
+            }
+        }
+    }
+}
+
+impl ExactSun<'_> {
+    /// `total` = `direct` + the sun's interreflection taken from the patch that holds it.
+    fn add_interreflection(&self, to_sun: [f64; 3], direct: &[f64], total: &mut [f64]) {
         let p = self.patches.find(to_sun);
         let c = self.coefficients;
         let ns = c.sources;

@@ -131,6 +131,28 @@ pub trait SunCoefficients: Sync {
         self.sun(to_sun, total);
         direct.copy_from_slice(total);
     }
+
+    /// [`SunCoefficients::sun_parts`] for many hours at once, hour-major (`total[h * points
+    /// + i]`, `points = total.len() / suns.len()`); a `None` sun gives zeros. By default an
+    /// hour a task; an implementation that gains from taking a point through many hours
+    /// (a shadow cache) overrides it, with the same values.
+    fn sun_block(&self, suns: &[Option<[f64; 3]>], total: &mut [f64], direct: &mut [f64]) {
+        let points = total.len() / suns.len().max(1);
+        if points == 0 {
+            return;
+        }
+        total
+            .par_chunks_mut(points)
+            .zip(direct.par_chunks_mut(points))
+            .zip(suns.par_iter())
+            .for_each(|((t, d), s)| match s {
+                Some(s) => self.sun_parts(*s, t, d),
+                None => {
+                    t.fill(0.0);
+                    d.fill(0.0);
+                }
+            });
+    }
 }
 
 impl<F: Fn([f64; 3], &mut [f64]) + Sync> SunCoefficients for F {
@@ -453,6 +475,7 @@ pub fn annual(
     // The exact sun's whole contribution (`direct` holds its direct part for ASE).
     let mut sun_total = vec![0.0; block * points];
     let mut occupied = vec![false; block];
+    let mut suns: Vec<Option<[f64; 3]>> = vec![None; block];
     let mut acc = Accumulator::new(points, params.metrics);
     let mut lit_hours = 0;
     let mut first = 0;
@@ -469,15 +492,31 @@ pub fn annual(
                 *l = skies.sky(first + h, in_patch, sky)?;
                 d.iter_mut().for_each(|v| *v = 0.0);
                 t.iter_mut().for_each(|v| *v = 0.0);
-                if let Sun::Exact(c) = sun {
-                    if l.lit && l.direct_normal > 0.0 {
-                        c.sun_parts(l.sun, t, d);
-                        d.iter_mut().for_each(|v| *v *= l.direct_normal);
-                        t.iter_mut().for_each(|v| *v *= l.direct_normal);
-                    }
-                }
                 Ok(())
             })?;
+        // The exact sun's coefficients for the block's sunny hours, scaled by E_n.
+        if let Sun::Exact(c) = sun {
+            for (k, l) in light[..nb].iter().enumerate() {
+                suns[k] = (l.lit && l.direct_normal > 0.0).then_some(l.sun);
+            }
+            if suns[..nb].iter().any(Option::is_some) {
+                c.sun_block(
+                    &suns[..nb],
+                    &mut sun_total[..nb * points],
+                    &mut direct[..nb * points],
+                );
+                let l_ref = &light[..nb];
+                sun_total[..nb * points]
+                    .par_chunks_mut(points)
+                    .zip(direct[..nb * points].par_chunks_mut(points))
+                    .zip(l_ref.par_iter())
+                    .for_each(|((t, d), l)| {
+                        let e = if l.lit { l.direct_normal.max(0.0) } else { 0.0 };
+                        t.iter_mut().for_each(|v| *v *= e);
+                        d.iter_mut().for_each(|v| *v *= e);
+                    });
+            }
+        }
         // E = D S for the block's lit hours, points in chunks.
         let (s_ref, l_ref, d_ref) = (&s, &light[..nb], &sun_total);
         total[..points * nb]

@@ -34,7 +34,7 @@
 
 use super::lighting::{luminance, LightingSettings};
 use super::panes::{End, Panes};
-use super::sun_cone::{Cone, SunCones};
+use super::sun_cone::{Cone, SunCones, Viewpoint};
 use super::{patch_system, MemoryCheck};
 use crate::accel::Bvh;
 use crate::color::Rgb;
@@ -571,7 +571,40 @@ impl Outside<'_> {
         }
         for (s, col) in suns.iter().zip(&mut out[nsky..]) {
             *col += ground * s.ground;
-            *col += s.scale * self.sun(origin, n, s.direction, sun_rays, rng, None);
+            *col += s.scale * self.sun(origin, n, s.direction, sun_rays, rng);
+        }
+    }
+
+    /// The scene-frame direction of the sun's centre, in single precision as the rays take it.
+    fn sun_centre(&self, to_sun: [f64; 3]) -> Vec3 {
+        let centre = self.frame.to_scene(to_sun);
+        Vec3::new(centre[0] as f32, centre[1] as f32, centre[2] as f32)
+    }
+
+    /// [`Outside::sun`] where the whole disc is decided at once (`sun_cone`): every sample
+    /// would find what the centre finds, 0 where an opaque polygon covers the disc, cos θ_c τ
+    /// where nothing crosses it but whole panes; None when the disc must be sampled (a
+    /// penumbra, or the disc across the receiver's horizon). `view` is the point's (its
+    /// origin lifted off its surface) cache.
+    fn sun_whole(
+        &self,
+        cones: &SunCones,
+        view: &mut Viewpoint,
+        n: Vec3,
+        to_sun: [f64; 3],
+    ) -> Option<f64> {
+        let c = self.sun_centre(to_sun);
+        let cos_c = n.dot(c);
+        if cos_c <= 0.0 {
+            return Some(0.0);
+        }
+        if cos_c <= cones.horizon_margin() {
+            return None;
+        }
+        match cones.classify_from(view, c.as_dvec3()) {
+            Cone::Blocked => Some(0.0),
+            Cone::Clear(tau) => Some(cos_c as f64 * tau),
+            Cone::Partial => None,
         }
     }
 
@@ -586,12 +619,10 @@ impl Outside<'_> {
         to_sun: [f64; 3],
         sun_rays: usize,
         rng: &mut crate::sampling::Rng64,
-        cones: Option<&SunCones>,
     ) -> f64 {
         let radius = (0.5 * SUN_DIAMETER_DEG).to_radians().tan() as f32;
         let m = ((sun_rays as f64).sqrt().ceil() as usize).max(1);
-        let centre = self.frame.to_scene(to_sun);
-        let c = Vec3::new(centre[0] as f32, centre[1] as f32, centre[2] as f32);
+        let c = self.sun_centre(to_sun);
         if n.dot(c) <= 0.0 {
             return 0.0;
         }
@@ -600,17 +631,6 @@ impl Outside<'_> {
         // and transmittance (cos θ over the disc averages to cos θ_c within (0.27°)² / 4 ≈
         // 5e-6).
         let cos_c = n.dot(c) as f64;
-        // The whole disc at once where no surface's edge crosses it (`sun_cone`): every
-        // sample would find what the centre finds.
-        if let Some(cones) = cones {
-            if n.dot(c) > cones.horizon_margin() {
-                match cones.classify(origin.as_dvec3(), c.as_dvec3()) {
-                    Cone::Blocked => return 0.0,
-                    Cone::Clear => return cos_c * self.through_glass(origin, c),
-                    Cone::Partial => {}
-                }
-            }
-        }
         let mut e = 0.0;
         let mut count = 0usize;
         for a in 0..m {
@@ -658,7 +678,7 @@ impl DirectSun {
         let mesh = Mesh::build(&opaque, crate::mesh::MeshParams::Faces)?;
         let cones = SunCones::new(
             &mesh,
-            glass.as_ref().map(|g| g.mesh()),
+            glass.as_ref(),
             (0.5 * SUN_DIAMETER_DEG).to_radians(),
         );
         Ok(DirectSun {
@@ -685,25 +705,74 @@ impl DirectSun {
     /// are keyed by the point and the direction, so a value does not depend on the order or
     /// the threads of the calls.
     pub fn illuminance(&self, to_sun: [f64; 3], out: &mut [f64]) {
+        for (i, o) in out.iter_mut().enumerate().take(self.points.len()) {
+            *o = match self.receiver(i) {
+                Some((origin, n)) => {
+                    let mut view = Viewpoint::new(origin.as_dvec3());
+                    self.at(i, origin, n, to_sun, &mut view)
+                }
+                None => 0.0,
+            };
+        }
+    }
+
+    /// The illuminance at every point (lx) from a sun of 1 lx direct normal illuminance in
+    /// each of the sky-frame directions `suns` (None: no sun, 0), point-major into `out`
+    /// (`out[i * suns.len() + h]`): the points in parallel, each through every direction with
+    /// its own cache of what it sees ([`Viewpoint`]). The values are
+    /// [`DirectSun::illuminance`]'s.
+    pub fn illuminance_many(&self, suns: &[Option<[f64; 3]>], out: &mut [f64]) {
+        let nh = suns.len();
+        if nh == 0 {
+            return;
+        }
+        out.par_chunks_mut(nh)
+            .take(self.points.len())
+            .enumerate()
+            .for_each(|(i, row)| {
+                let Some((origin, n)) = self.receiver(i) else {
+                    row.fill(0.0);
+                    return;
+                };
+                let mut view = Viewpoint::new(origin.as_dvec3());
+                for (o, s) in row.iter_mut().zip(suns) {
+                    *o = match s {
+                        Some(d) => self.at(i, origin, n, *d, &mut view),
+                        None => 0.0,
+                    };
+                }
+            });
+    }
+
+    /// Point `i`'s ray origin (lifted off its surface) and unit normal; None for a point
+    /// without a direction.
+    fn receiver(&self, i: usize) -> Option<(Vec3, Vec3)> {
+        let p = &self.points[i];
+        let v = |a: [f64; 3]| Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32);
+        let n = v(p.normal).normalize_or_zero();
+        (n != Vec3::ZERO).then(|| (v(p.position) + n * self.bvh.ray_offset(), n))
+    }
+
+    /// Point `i`'s illuminance from a sun of 1 lx in direction `to_sun`, from `origin` facing
+    /// `n`; `view` its cache. The random stream (made only when the disc is sampled) is keyed
+    /// by the point and the direction, so a value does not depend on the order or the threads
+    /// of the calls.
+    fn at(&self, i: usize, origin: Vec3, n: Vec3, to_sun: [f64; 3], view: &mut Viewpoint) -> f64 {
         let outside = Outside {
             bvh: &self.bvh,
             glass: self.glass.as_ref(),
             frame: self.frame,
         };
+        if let Some(cones) = &self.cones {
+            if let Some(e) = outside.sun_whole(cones, view, n, to_sun) {
+                return e;
+            }
+        }
         let key = to_sun
             .iter()
             .fold(0u64, |h, v| h.rotate_left(21) ^ v.to_bits());
-        for (i, (p, o)) in self.points.iter().zip(out.iter_mut()).enumerate() {
-            let mut rng = stream(self.seed, 0x0053_554E, i as u64, key);
-            let v = |a: [f64; 3]| Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32);
-            let n = v(p.normal).normalize_or_zero();
-            *o = if n == Vec3::ZERO {
-                0.0
-            } else {
-                let origin = v(p.position) + n * self.bvh.ray_offset();
-                outside.sun(origin, n, to_sun, self.sun_rays, &mut rng, self.cones.as_ref())
-            };
-        }
+        let mut rng = stream(self.seed, 0x0053_554E, i as u64, key);
+        outside.sun(origin, n, to_sun, self.sun_rays, &mut rng)
     }
 }
 

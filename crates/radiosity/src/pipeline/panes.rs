@@ -86,6 +86,11 @@ impl Panes {
         &self.mesh
     }
 
+    /// The pane of scene material `material` (a material of a pane patch).
+    pub(crate) fn glazing(&self, material: u32) -> Glazing {
+        self.glazing[material as usize].expect("pane patches have a pane")
+    }
+
     /// The pane a glass patch is, and its normal.
     fn pane(&self, patch: u32) -> (Glazing, Vec3) {
         let p = &self.mesh.patches[patch as usize];

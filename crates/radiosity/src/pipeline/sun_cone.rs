@@ -33,15 +33,18 @@
 //! the apex and edges, is the shadow-volume test of Nishita & Nakamae (1985) and the
 //! umbra/penumbra split of Teller (1992), applied here to the sun's narrow cone.
 
+use super::panes::Panes;
+use crate::lighting::glazing::Glazing;
 use crate::mesh::Mesh;
 use glam::DVec3;
 
 /// What the cone of directions from a point to the sun's disc meets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Cone {
     /// No opaque polygon meets the cone and every pane it meets covers it whole: every
-    /// direction of the disc fares as its centre.
-    Clear,
+    /// direction of the disc fares as its centre, which crosses panes of this product of
+    /// transmittances τ(θ) (1 when none).
+    Clear(f64),
     /// An opaque polygon covers the whole cone in front of the point.
     Blocked,
     /// Some polygon meets part of the cone: the disc must be sampled.
@@ -63,7 +66,8 @@ struct Convex {
     count: usize,
     normal: DVec3,
     centre: DVec3,
-    opaque: bool,
+    /// The pane it is, None for an opaque polygon.
+    pane: Option<Glazing>,
 }
 
 /// A node of the hierarchy: its box, and either two children (`count == 0`, the first at
@@ -97,11 +101,11 @@ impl SunCones {
     /// The patches of `opaque` (opaque) and `panes` (seen through) for cones of half-angle
     /// `half_angle` radians (widened by [`MARGIN`]). Degenerate patches (no area) are left
     /// out: rays do not meet them.
-    pub(crate) fn new(opaque: &Mesh, panes: Option<&Mesh>, half_angle: f64) -> SunCones {
+    pub(crate) fn new(opaque: &Mesh, panes: Option<&Panes>, half_angle: f64) -> SunCones {
         let mut polygons = Vec::new();
-        add_mesh(opaque, true, &mut polygons);
+        add_mesh(opaque, &|_| None, &mut polygons);
         if let Some(p) = panes {
-            add_mesh(p, false, &mut polygons);
+            add_mesh(p.mesh(), &|m| Some(p.glazing(m)), &mut polygons);
         }
         SunCones::of(polygons, half_angle)
     }
@@ -136,14 +140,32 @@ impl SunCones {
     }
 
     /// What the cone from `o` about the direction `c` (normalised here) meets. No allocation.
+    #[cfg(test)]
     pub(crate) fn classify(&self, o: DVec3, c: DVec3) -> Cone {
+        self.classify_from(&mut Viewpoint::new(o), c)
+    }
+
+    /// What the cone from the viewpoint's point about the direction `c` (normalised here)
+    /// meets, trying first the opaque polygons that blocked the point's latest cones (a
+    /// shadow cache, Haines & Greenberg 1986) and taking each polygon's set-up from the
+    /// viewpoint. The answer is the same whatever the viewpoint holds: a cone is Blocked as
+    /// soon as any opaque polygon covers it, and each polygon is decided by the same
+    /// arithmetic. No allocation.
+    pub(crate) fn classify_from(&self, v: &mut Viewpoint, c: DVec3) -> Cone {
         let c = c.normalize_or_zero();
         if c == DVec3::ZERO {
             return Cone::Partial;
         }
+        for k in 0..BLOCKERS {
+            let b = v.blockers[k];
+            if b != NONE && self.meets(v, b, c) == Meets::Cover {
+                return Cone::Blocked;
+            }
+        }
         let Some(root) = self.nodes.first() else {
-            return Cone::Clear;
+            return Cone::Clear(1.0);
         };
+        let o = v.o;
         // The cone's radius where it leaves the scene's box bounds its radius in every box.
         let far = (o - root.lo).abs().max((root.hi - o).abs()).length();
         let e = far * self.tan_a;
@@ -151,6 +173,7 @@ impl SunCones {
         let mut stack = [0u32; STACK];
         let mut top = 1;
         let mut partial = false;
+        let mut tau = 1.0;
         while top > 0 {
             top -= 1;
             let node = &self.nodes[stack[top] as usize];
@@ -166,59 +189,54 @@ impl SunCones {
                 top += 2;
                 continue;
             }
-            let (a, b) = (node.first as usize, (node.first + node.count) as usize);
-            for p in &self.polygons[a..b] {
-                match self.meets(p, o, c) {
-                    Meets::Miss => {}
-                    Meets::Cover if p.opaque => return Cone::Blocked,
-                    Meets::Cover => {}
-                    Meets::Partial => partial = true,
+            for k in node.first..node.first + node.count {
+                let p = &self.polygons[k as usize];
+                match (self.meets(v, k, c), p.pane) {
+                    (Meets::Miss, _) => {}
+                    (Meets::Cover, None) => {
+                        v.blockers.copy_within(0..BLOCKERS - 1, 1);
+                        v.blockers[0] = k;
+                        return Cone::Blocked;
+                    }
+                    (Meets::Cover, Some(g)) => tau *= g.transmittance(p.normal.dot(c)),
+                    (Meets::Partial, _) => partial = true,
                 }
             }
         }
         if partial {
             Cone::Partial
         } else {
-            Cone::Clear
+            Cone::Clear(tau)
         }
     }
 
-    /// The polygon against the cone (module documentation).
+    /// Polygon `k` against the cone about `c` from the viewpoint (module documentation),
+    /// its set-up taken from or put into the viewpoint's cache.
     #[inline]
-    fn meets(&self, p: &Convex, o: DVec3, c: DVec3) -> Meets {
-        let s0 = p.normal.dot(o - p.corners[0]);
-        if s0 == 0.0 {
+    fn meets(&self, v: &mut Viewpoint, k: u32, c: DVec3) -> Meets {
+        let slot = k as usize % WAYS;
+        if v.keys[slot] != k {
+            v.pre[slot] = Pre::of(&self.polygons[k as usize], v.o);
+            v.keys[slot] = k;
+        }
+        let pre = &v.pre[slot];
+        if pre.dead {
             return Meets::Partial;
         }
-        // cos β: the centre against the normal that faces the plane from `o`.
-        let cz = if s0 > 0.0 { -p.normal.dot(c) } else { p.normal.dot(c) };
+        // cos β: the centre against the normal that faces the plane from the point.
+        let cz = pre.toward.dot(c);
         let sz = (1.0 - cz * cz).max(0.0).sqrt();
         if cz * self.cos_a + sz * self.sin_a <= 0.0 {
             return Meets::Miss;
         }
-        let mut partial = cz * self.cos_a - sz * self.sin_a <= 0.0;
-        let g = p.centre - o;
-        let sin2 = self.sin_a * self.sin_a;
-        for k in 0..p.count {
-            let a = p.corners[k] - o;
-            let b = p.corners[(k + 1) % p.count] - o;
-            let m = a.cross(b);
-            let side = m.dot(g);
-            // The angle from c to the edge's plane against α, without a square root:
-            // d = m · c on the polygon's side; |d| ≥ sin α |m| decides.
-            let d = if side > 0.0 {
-                m.dot(c)
-            } else if side < 0.0 {
-                -m.dot(c)
-            } else {
-                partial = true;
-                continue;
-            };
-            let beyond = d * d >= sin2 * m.length_squared();
-            if d <= 0.0 && beyond {
+        let mut partial = pre.partial || cz * self.cos_a - sz * self.sin_a <= 0.0;
+        for m in &pre.edges[..pre.count as usize] {
+            // The angle from c to the edge's plane against α, on the polygon's side.
+            let d = m.dot(c);
+            if d <= -self.sin_a {
                 return Meets::Miss;
             }
-            if !(d > 0.0 && beyond) {
+            if d < self.sin_a {
                 partial = true;
             }
         }
@@ -226,6 +244,78 @@ impl SunCones {
             Meets::Partial
         } else {
             Meets::Cover
+        }
+    }
+}
+
+/// Entries of a viewpoint's cache of polygon set-ups (direct-mapped by polygon index).
+const WAYS: usize = 32;
+/// Latest blockers a viewpoint tries first.
+const BLOCKERS: usize = 4;
+/// No polygon.
+const NONE: u32 = u32::MAX;
+
+/// A polygon seen from a point: the normal facing its plane from the point, and its edges'
+/// planes through the point as unit normals pointing into the polygon's wedge.
+#[derive(Clone, Copy, Debug, Default)]
+struct Pre {
+    toward: DVec3,
+    edges: [DVec3; 4],
+    count: u8,
+    /// An edge's plane holds the polygon's centre (the point is on the edge's line): no
+    /// cone is covered.
+    partial: bool,
+    /// The point lies in the polygon's plane: every cone not missed otherwise is Partial.
+    dead: bool,
+}
+
+impl Pre {
+    fn of(p: &Convex, o: DVec3) -> Pre {
+        let mut pre = Pre {
+            count: p.count as u8,
+            ..Pre::default()
+        };
+        let s0 = p.normal.dot(o - p.corners[0]);
+        if s0 == 0.0 {
+            pre.dead = true;
+            return pre;
+        }
+        pre.toward = if s0 > 0.0 { -p.normal } else { p.normal };
+        let g = p.centre - o;
+        for k in 0..p.count {
+            let a = p.corners[k] - o;
+            let b = p.corners[(k + 1) % p.count] - o;
+            let m = a.cross(b);
+            let side = m.dot(g);
+            let len = m.length();
+            if side == 0.0 || !(len > 0.0) || !len.is_finite() {
+                pre.partial = true;
+                pre.edges[k] = DVec3::ZERO;
+                continue;
+            }
+            pre.edges[k] = m * (side.signum() / len);
+        }
+        pre
+    }
+}
+
+/// The cones from one point: its polygons' set-ups and its latest blockers (see
+/// [`SunCones::classify_from`]). About 4 KiB; make one a point and reuse it for all its cones.
+pub(crate) struct Viewpoint {
+    o: DVec3,
+    keys: [u32; WAYS],
+    pre: [Pre; WAYS],
+    blockers: [u32; BLOCKERS],
+}
+
+impl Viewpoint {
+    /// The cones from `o`.
+    pub(crate) fn new(o: DVec3) -> Viewpoint {
+        Viewpoint {
+            o,
+            keys: [NONE; WAYS],
+            pre: [Pre::default(); WAYS],
+            blockers: [NONE; BLOCKERS],
         }
     }
 }
@@ -257,7 +347,7 @@ fn box_meets(node: &Node, e: f64, o: DVec3, c: DVec3, inv: DVec3) -> bool {
 
 /// The convex polygon of `corners` (3 or 4, counter-clockwise about `normal`'s side), or None
 /// when it has no area or is not planar and convex.
-fn convex(corners: &[DVec3], opaque: bool) -> Option<Convex> {
+fn convex(corners: &[DVec3], pane: Option<Glazing>) -> Option<Convex> {
     let count = corners.len();
     // Newell's normal.
     let mut n = DVec3::ZERO;
@@ -299,23 +389,25 @@ fn convex(corners: &[DVec3], opaque: bool) -> Option<Convex> {
         count,
         normal,
         centre: corners.iter().copied().sum::<DVec3>() / count as f64,
-        opaque,
+        pane,
     })
 }
 
-/// The mesh's patches as convex polygons, appended to `out`.
-fn add_mesh(mesh: &Mesh, opaque: bool, out: &mut Vec<Convex>) {
+/// The mesh's patches as convex polygons, each with the pane `pane(material)` gives,
+/// appended to `out`.
+fn add_mesh(mesh: &Mesh, pane: &dyn Fn(u32) -> Option<Glazing>, out: &mut Vec<Convex>) {
     let v = |i: u32| mesh.vertices[i as usize].as_dvec3();
     for p in &mesh.patches {
+        let g = pane(p.material);
         if !p.is_triangle() {
             let q = p.vertices.map(v);
-            if let Some(c) = convex(&q, opaque) {
+            if let Some(c) = convex(&q, g) {
                 out.push(c);
                 continue;
             }
         }
         for t in p.triangles() {
-            if let Some(c) = convex(&t.map(v), opaque) {
+            if let Some(c) = convex(&t.map(v), g) {
                 out.push(c);
             }
         }

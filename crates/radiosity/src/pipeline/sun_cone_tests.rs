@@ -85,7 +85,7 @@ fn decisions_agree_with_sampled_directions() {
         if trial % 4 < 2 {
             poly.reverse();
         }
-        let Some(p) = convex(&poly, true) else {
+        let Some(p) = convex(&poly, None) else {
             // Only a degenerate draw is refused.
             let area = (poly[1] - poly[0]).cross(poly[2] - poly[0]).length();
             assert!(area < 1e-9, "a convex polygon refused: {poly:?}");
@@ -99,7 +99,7 @@ fn decisions_agree_with_sampled_directions() {
                 counts[0] += 1;
                 assert_eq!(met, dirs.len(), "Blocked but a direction misses: {trial}");
             }
-            Cone::Clear => {
+            Cone::Clear(_) => {
                 counts[1] += 1;
                 assert_eq!(met, 0, "Clear but a direction meets it: {trial}");
             }
@@ -138,16 +138,27 @@ fn panes_seams_and_the_hierarchy() {
     let alpha = (0.5 * 0.533f64).to_radians();
     let o = v(0.3, 0.0, 0.0);
     let up = v(0.0, 0.0, 1.0);
-    let pane = convex(&square(1.0, -1.0, 1.0), false).unwrap();
-    let roof = convex(&square(2.0, -1.0, 1.0), true).unwrap();
-    assert_eq!(SunCones::of(vec![pane], alpha).classify(o, up), Cone::Clear);
+    let glass = Glazing::new(0.8, crate::lighting::glazing::GLASS_INDEX).unwrap();
+    let pane = convex(&square(1.0, -1.0, 1.0), Some(glass)).unwrap();
+    let roof = convex(&square(2.0, -1.0, 1.0), None).unwrap();
+    let clear = |c: Cone| match c {
+        Cone::Clear(t) => t,
+        other => panic!("{other:?}"),
+    };
+    assert!((clear(SunCones::of(vec![pane], alpha).classify(o, up)) - 0.8).abs() < 1e-12);
+    let tilted = (up + DVec3::new(0.3, 0.0, 0.0)).normalize();
+    assert_eq!(
+        SunCones::of(vec![pane, pane], alpha).classify(o, tilted),
+        Cone::Clear(glass.transmittance(tilted.z).powi(2))
+    );
     assert_eq!(SunCones::of(vec![pane, roof], alpha).classify(o, up), Cone::Blocked);
     let halves = vec![
-        convex(&square(1.0, -1.0, 0.3), false).unwrap(),
-        convex(&square(1.0, 0.3, 1.0), false).unwrap(),
+        convex(&square(1.0, -1.0, 0.3), Some(glass)).unwrap(),
+        convex(&square(1.0, 0.3, 1.0), Some(glass)).unwrap(),
     ];
     assert_eq!(SunCones::of(halves.clone(), alpha).classify(o, up), Cone::Partial);
-    assert_eq!(SunCones::of(halves, alpha).classify(v(0.0, 0.0, 0.0), up), Cone::Clear);
+    let t = clear(SunCones::of(halves, alpha).classify(v(0.0, 0.0, 0.0), up));
+    assert!((t - 0.8).abs() < 1e-12);
     // 400 small opaque tiles on a grid: the hierarchy's answer equals the brute answer of
     // each tile alone, for cones from many places.
     let mut tiles = Vec::new();
@@ -157,7 +168,7 @@ fn panes_seams_and_the_hierarchy() {
             tiles.push(
                 convex(
                     &[v(x, y, 3.0), v(x + 0.2, y, 3.0), v(x + 0.2, y + 0.2, 3.0), v(x, y + 0.2, 3.0)],
-                    true,
+                    None,
                 )
                 .unwrap(),
             );
@@ -166,10 +177,11 @@ fn panes_seams_and_the_hierarchy() {
     let all = SunCones::of(tiles.clone(), alpha);
     let mut rng = stream(3, 3, 3, 3);
     let mut seen = [0usize; 3];
+
     for _ in 0..5_000 {
         let o = v(uniform(&mut rng) as f64 * 6.0, uniform(&mut rng) as f64 * 6.0, 0.0);
         let c = (v(uniform(&mut rng) as f64 - 0.5, uniform(&mut rng) as f64 - 0.5, 1.0)).normalize();
-        let mut brute = Cone::Clear;
+        let mut brute = Cone::Clear(1.0);
         for t in &tiles {
             match SunCones::of(vec![*t], alpha).classify(o, c) {
                 Cone::Blocked => {
@@ -177,12 +189,16 @@ fn panes_seams_and_the_hierarchy() {
                     break;
                 }
                 Cone::Partial => brute = Cone::Partial,
-                Cone::Clear => {}
+                Cone::Clear(_) => {}
             }
         }
         let got = all.classify(o, c);
         assert_eq!(got, brute);
-        seen[got as usize] += 1;
+        seen[match got {
+            Cone::Blocked => 0,
+            Cone::Clear(_) => 1,
+            Cone::Partial => 2,
+        }] += 1;
     }
     assert!(seen.iter().all(|&k| k > 50), "{seen:?}");
 }
