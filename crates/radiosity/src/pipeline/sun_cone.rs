@@ -93,7 +93,6 @@ pub(crate) struct SunCones {
     polygons: Vec<Convex>,
     nodes: Vec<Node>,
     sin_a: f64,
-    cos_a: f64,
     tan_a: f64,
 }
 
@@ -128,7 +127,6 @@ impl SunCones {
             polygons,
             nodes,
             sin_a: half_angle.sin(),
-            cos_a: half_angle.cos(),
             tan_a: half_angle.tan(),
         }
     }
@@ -223,13 +221,14 @@ impl SunCones {
         if pre.dead {
             return Meets::Partial;
         }
-        // cos β: the centre against the normal that faces the plane from the point.
+        // cos β: the centre against the normal that faces the plane from the point. Every
+        // direction runs parallel to or away from the plane when cos(β − α) ≤ 0, that is
+        // cos β ≤ −sin α; some do when cos(β + α) ≤ 0, cos β ≤ sin α.
         let cz = pre.toward.dot(c);
-        let sz = (1.0 - cz * cz).max(0.0).sqrt();
-        if cz * self.cos_a + sz * self.sin_a <= 0.0 {
+        if cz <= -self.sin_a {
             return Meets::Miss;
         }
-        let mut partial = pre.partial || cz * self.cos_a - sz * self.sin_a <= 0.0;
+        let mut partial = pre.partial || cz <= self.sin_a;
         for m in &pre.edges[..pre.count as usize] {
             // The angle from c to the edge's plane against α, on the polygon's side.
             let d = m.dot(c);
