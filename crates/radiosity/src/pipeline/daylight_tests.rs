@@ -444,6 +444,28 @@ fn whole_disc_decisions_match_the_sampled_disc() {
     }
     let n = 30 * points.len();
     assert!(lit > n / 20, "{lit} of {n} points lit");
+    // Point by point through many suns (each point's cache carried from sun to sun) gives
+    // every value of the sun-by-sun calls, bit for bit; a missing sun gives 0.
+    let suns: Vec<Option<[f64; 3]>> = (0..12)
+        .map(|k| {
+            (k % 5 != 4).then(|| {
+                SunPosition::new(30.0 + 4.0 * k as f64, 100.0 + 13.0 * k as f64)
+                    .unwrap()
+                    .direction()
+            })
+        })
+        .collect();
+    let mut many = vec![1.0; points.len() * suns.len()];
+    ds.illuminance_many(&suns, &mut many);
+    for (h, s) in suns.iter().enumerate() {
+        match s {
+            Some(d) => ds.illuminance(*d, &mut a),
+            None => a.fill(0.0),
+        }
+        for (i, x) in a.iter().enumerate() {
+            assert_eq!(many[i * suns.len() + h], *x, "point {i}, sun {h}");
+        }
+    }
     // Unlit points decided whole are exactly 0; the rest differ by τ's spread only.
     assert!(same > n / 2, "{same} of {n}");
 }

@@ -168,6 +168,11 @@ impl SunCones {
         let far = (o - root.lo).abs().max((root.hi - o).abs()).length();
         let e = far * self.tan_a;
         let inv = DVec3::new(1.0 / c.x, 1.0 / c.y, 1.0 / c.z);
+        if box_entry(root, e, o, c, inv).is_none() {
+            return Cone::Clear(1.0);
+        }
+        // Nodes whose boxes the cone may meet; children pushed farther first, so that the
+        // polygons near the point, which block most cones, are met first.
         let mut stack = [0u32; STACK];
         let mut top = 1;
         let mut partial = false;
@@ -175,16 +180,30 @@ impl SunCones {
         while top > 0 {
             top -= 1;
             let node = &self.nodes[stack[top] as usize];
-            if !box_meets(node, e, o, c, inv) {
-                continue;
-            }
             if node.count == 0 {
                 if top + 2 > STACK {
                     return Cone::Partial;
                 }
-                stack[top] = node.first;
-                stack[top + 1] = node.first + 1;
-                top += 2;
+                let (a, b) = (node.first, node.first + 1);
+                let ta = box_entry(&self.nodes[a as usize], e, o, c, inv);
+                let tb = box_entry(&self.nodes[b as usize], e, o, c, inv);
+                match (ta, tb) {
+                    (Some(x), Some(y)) => {
+                        let (near, far) = if x <= y { (a, b) } else { (b, a) };
+                        stack[top] = far;
+                        stack[top + 1] = near;
+                        top += 2;
+                    }
+                    (Some(_), None) => {
+                        stack[top] = a;
+                        top += 1;
+                    }
+                    (None, Some(_)) => {
+                        stack[top] = b;
+                        top += 1;
+                    }
+                    (None, None) => {}
+                }
                 continue;
             }
             for k in node.first..node.first + node.count {
@@ -319,17 +338,18 @@ impl Viewpoint {
     }
 }
 
-/// Whether the cone may meet the node's box: the centre ray against the box widened by `e`,
-/// the cone's radius at the farthest point of the scene's box (a cone direction inside the
-/// box at distance t lies within t tan α ≤ `e` of the centre ray's point at t).
+/// Where the centre ray enters the node's box widened by `e`, the cone's radius at the
+/// farthest point of the scene's box (a cone direction inside the box at distance t lies
+/// within t tan α ≤ `e` of the centre ray's point at t); None when it does not, and then no
+/// direction of the cone meets the box.
 #[inline]
-fn box_meets(node: &Node, e: f64, o: DVec3, c: DVec3, inv: DVec3) -> bool {
+fn box_entry(node: &Node, e: f64, o: DVec3, c: DVec3, inv: DVec3) -> Option<f64> {
     let (lo, hi) = (node.lo - e, node.hi + e);
     let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
     for k in 0..3 {
         if c[k] == 0.0 {
             if o[k] < lo[k] || o[k] > hi[k] {
-                return false;
+                return None;
             }
             continue;
         }
@@ -338,10 +358,10 @@ fn box_meets(node: &Node, e: f64, o: DVec3, c: DVec3, inv: DVec3) -> bool {
         t0 = t0.max(a);
         t1 = t1.min(b);
         if t0 > t1 {
-            return false;
+            return None;
         }
     }
-    true
+    Some(t0)
 }
 
 /// The convex polygon of `corners` (3 or 4, counter-clockwise about `normal`'s side), or None
