@@ -6,8 +6,9 @@
 use crate::args::{LightingArgs, SunMethod};
 use anyhow::{bail, Context, Result};
 use radiosity::daylight::annual::{
-    annual, write_hourly_header, write_hourly_rows, write_metrics_csv, AnnualParams,
-    DaylightMatrix, EpwSkies, HourBlock, Sun, SunCoefficients,
+    annual, write_hourly_header, write_hourly_npy_header, write_hourly_npy_rows,
+    write_hourly_rows, write_metrics_csv, AnnualParams,
+    DaylightMatrix, EpwSkies, HourBlock, SkySource, Sun, SunCoefficients,
 };
 use radiosity::daylight::epw::read_epw;
 use radiosity::daylight::metrics::{MetricParams, Occupancy, PointMetrics};
@@ -113,6 +114,13 @@ impl ExactSun<'_> {
             *t = d + scale * inter;
         }
     }
+}
+
+/// Whether `--hourly` names a NumPy `.npy` file (else CSV).
+fn is_npy(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
 }
 
 /// An output path: `.csv`, writable, not another input or output.
@@ -241,7 +249,13 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     let metrics = metric_params(&a)?;
     check_csv("--annual", out, &a)?;
     if let Some(h) = &a.hourly {
-        check_csv("--hourly", h, &a)?;
+        if !is_npy(h) {
+            check_csv("--hourly", h, &a)?;
+        } else if a.grid.iter().any(|g| g == h) || a.weather.as_deref() == Some(h) {
+            bail!("--hourly {}: an output would overwrite an input", h.display());
+        } else {
+            crate::settings::check_output(h)?;
+        }
         if h == out {
             bail!("--hourly {}: the same file as --annual", h.display());
         }
@@ -345,10 +359,20 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
             let mut outcome = None;
             staged
                 .write::<OutputError>(h, |w| {
-                    write_hourly_header(w, n)?;
+                    let npy = is_npy(h);
+                    if npy {
+                        write_hourly_npy_header(w, skies.hours(), n)?;
+                    } else {
+                        write_hourly_header(w, n)?;
+                    }
                     let mut failed: Option<std::io::Error> = None;
                     let mut sink = |b: &HourBlock| {
-                        write_hourly_rows(w, &skies, b).map_err(|e| {
+                        let written = if npy {
+                            write_hourly_npy_rows(w, b)
+                        } else {
+                            write_hourly_rows(w, &skies, b)
+                        };
+                        written.map_err(|e| {
                             let msg = e.to_string();
                             failed = Some(e);
                             radiosity::daylight::DaylightError::Parameter(format!(

@@ -485,8 +485,10 @@ pub struct LightingArgs {
     /// (8:00–18:00); replaces --out. Needs --weather.
     #[arg(long, value_name = "OUT.csv", help_heading = DAYLIGHT)]
     pub annual: Option<PathBuf>,
-    /// Annual daylight: every hour's illuminance too, `month,day,hour,p0,p1,…` (lx).
-    #[arg(long, value_name = "hourly.csv", help_heading = DAYLIGHT)]
+    /// Annual daylight: every hour's illuminance too (lx): `.csv` with rows
+    /// `month,day,hour,p0,p1,…`, or `.npy`, a NumPy hours × points float32 matrix (hours in
+    /// the weather file's order).
+    #[arg(long, value_name = "hourly.csv|.npy", help_heading = DAYLIGHT)]
     pub hourly: Option<PathBuf>,
     /// Annual daylight: the sky's patches, Reinhart's MF:N (1 = Tregenza's 145, 2 = 577,
     /// 144 N² + 1; at most 16); one daylight coefficient a patch and point.

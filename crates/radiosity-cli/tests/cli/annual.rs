@@ -574,3 +574,51 @@ fn an_annual_run_draws_its_daylight_autonomy() {
     let svg = read(&pics, "desk-daylight-autonomy.svg");
     assert!(svg.contains("daylight autonomy") && svg.contains("sDA"));
 }
+
+/// `--hourly h.npy` writes NumPy's format: a `(8760, points)` float32 matrix whose values are
+/// the CSV's (to its 0.1 lx steps), hour for hour and point for point.
+#[test]
+fn hourly_npy_holds_the_csvs_values() {
+    let dir = scratch("annual-npy");
+    open_floor(&dir);
+    let (_, _, _, _) = year(&dir, 100.0);
+    let (_, rows) = read_csv(&dir.join("hourly.csv"));
+    run_ok(
+        &[
+            "lighting",
+            "floor.obj",
+            "--weather",
+            "year.epw",
+            "--grid",
+            "points.pts",
+            "--annual",
+            "annual2.csv",
+            "--hourly",
+            "hourly.npy",
+            "--patches",
+            "4",
+        ],
+        &dir,
+    );
+    let bytes = std::fs::read(dir.join("hourly.npy")).unwrap();
+    assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
+    let len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let dict = std::str::from_utf8(&bytes[10..10 + len]).unwrap();
+    let points = rows[0].len() - 3;
+    assert!(
+        dict.contains(&format!("'shape': (8760, {points})")) && dict.contains("'<f4'"),
+        "{dict}"
+    );
+    let data: Vec<f32> = bytes[10 + len..]
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    assert_eq!(data.len(), 8760 * points);
+    for (h, row) in rows.iter().enumerate() {
+        for (i, v) in row[3..].iter().enumerate() {
+            let csv: f64 = v.parse().unwrap();
+            let npy = data[h * points + i] as f64;
+            assert!((csv - npy).abs() <= 0.05 + 1e-6 * npy, "hour {h}, point {i}: {csv} {npy}");
+        }
+    }
+}

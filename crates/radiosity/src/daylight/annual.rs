@@ -656,6 +656,40 @@ pub fn write_hourly_rows(
     Ok(())
 }
 
+/// The hourly matrix as NumPy's `.npy` format (version 1.0): the header of a C-order
+/// `hours × points` array of little-endian `float32`, lux. A row an hour, in the weather
+/// file's order; [`write_hourly_npy_rows`] then writes the rows.
+pub fn write_hourly_npy_header(
+    w: &mut dyn std::io::Write,
+    hours: usize,
+    points: usize,
+) -> std::io::Result<()> {
+    let mut dict =
+        format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({hours}, {points}), }}");
+    // Magic (6) + version (2) + length (2) + the dict and its padding end on a multiple of 64,
+    // the last byte a newline.
+    let total = (10 + dict.len() + 1).div_ceil(64) * 64;
+    dict.extend(std::iter::repeat_n(' ', total - 10 - dict.len() - 1));
+    dict.push('\n');
+    w.write_all(b"\x93NUMPY\x01\x00")?;
+    w.write_all(&(dict.len() as u16).to_le_bytes())?;
+    w.write_all(dict.as_bytes())
+}
+
+/// The `.npy` rows of a block (after [`write_hourly_npy_header`]): an hour a row, each
+/// point's illuminance as a little-endian `float32`.
+pub fn write_hourly_npy_rows(w: &mut dyn std::io::Write, b: &HourBlock) -> std::io::Result<()> {
+    let mut row = Vec::with_capacity(4 * b.points);
+    for h in 0..b.hours {
+        row.clear();
+        for i in 0..b.points {
+            row.extend_from_slice(&(b.total[i * b.hours + h] as f32).to_le_bytes());
+        }
+        w.write_all(&row)?;
+    }
+    Ok(())
+}
+
 /// Append the decimal digits of `v`.
 fn push_integer(out: &mut Vec<u8>, mut v: u64) {
     let mut digits = [0u8; 20];

@@ -374,3 +374,31 @@ fn tenths_print_as_the_formatter_does() {
         assert_eq!(String::from_utf8(out).unwrap(), format!("{v:.1}"));
     }
 }
+
+/// The `.npy` hourly matrix: NumPy's version 1.0 header (magic, length, the dict padded to a
+/// multiple of 64 bytes ending in a newline) and the rows as little-endian `float32`.
+#[test]
+fn hourly_npy_is_numpys_format() {
+    let total = [1.0, 2.5, 3.25, 4.0, 5.0, 6.0]; // 2 points × 3 hours, point-major
+    let b = HourBlock {
+        first: 0,
+        hours: 3,
+        points: 2,
+        total: &total,
+    };
+    let mut out = Vec::new();
+    super::write_hourly_npy_header(&mut out, 3, 2).unwrap();
+    super::write_hourly_npy_rows(&mut out, &b).unwrap();
+    assert_eq!(&out[..8], b"\x93NUMPY\x01\x00");
+    let len = u16::from_le_bytes([out[8], out[9]]) as usize;
+    assert_eq!((10 + len) % 64, 0);
+    let dict = std::str::from_utf8(&out[10..10 + len]).unwrap();
+    assert!(dict.starts_with("{'descr': '<f4', 'fortran_order': False, 'shape': (3, 2), }"));
+    assert!(dict.ends_with('\n'));
+    let data: Vec<f32> = out[10 + len..]
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    // Hour-major rows: hour 0 is (point 0, point 1) = (1.0, 4.0).
+    assert_eq!(data, [1.0, 4.0, 2.5, 5.0, 3.25, 6.0]);
+}
