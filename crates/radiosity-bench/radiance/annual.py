@@ -8,8 +8,8 @@ take precipitable water 2 cm, which is exp(0.07 × 11 − 0.075) in Perez' model
 skies see the same atmosphere. `epw2wea` makes Radiance's year.wea from it.
 
 - ours: `radiosity lighting office.obj --glazing glass=0.8 --weather year.epw --grid annual.pts
-  --annual annual.csv --hourly hourly.csv` (Tregenza's 145 patches + the ground, the Perez sky,
-  the sun in its patch).
+  --annual annual.csv --hourly hourly.npy` (Tregenza's 145 patches + the ground, the Perez sky,
+  the sun at its true position unless `--sun-method patch`).
 - Radiance 2-phase: `gendaymtx -m 1 -of year.wea > sky.mtx` (146 rows: the ground, then the 145
   Reinhart MF:1 patches; the sun spread over its nearest patches), `rfluxmtx -I+ -y 1000 -ab AB
   -ad AD -lw LW -faf - skyrf.rad office.rad < annual.pts > dc.mtx` (skyrf.rad: the ground glow
@@ -59,8 +59,8 @@ groundglow source ground 0 0 4 0 0 -1 180
 # rfluxmtx settings: (-ab, -ad, -lw).
 TWO_PHASE = [(4, 1024, 1e-3), (6, 4096, 2.5e-4), (8, 16384, 6e-5)]
 # Ours: the default set; `--ours` replaces it ("A;B": settings separated by semicolons).
-OURS = ["", "--patches 2500", "--patches 2500 --sky-rays 4096", "--sun-method exact",
-        "--sun-method exact --patches 2500"]
+OURS = ["", "--patches 600 --sky-rays 8192 --sky-refine 4", "--patches 600 --sky-rays 4096",
+        "--patches 600 --sky-rays 1024", "--sun-method patch"]
 # The sampled hours split by the direct normal irradiance: the sun's discretisation (in its
 # patch, or over its nearest patches) dominates the error where there is direct sun.
 SUNLESS = 50.0  # W/m²
@@ -109,17 +109,15 @@ def write_inputs(d, epw):
 def ours_year(d, options):
     cmd = [radiosity_binary(), "lighting", "office.obj", "--glazing", "glass=0.8", "--weather",
            "year.epw", "--grid", "annual.pts", "--annual", "annual.csv", "--hourly",
-           "hourly.csv"] + options
+           "hourly.npy"] + options
     with Clock() as clock:
         run(cmd, d)
     return clock, " ".join(cmd[1:])
 
 
 def read_ours(d):
-    """Hourly lux, (hours, points)."""
-    with open(os.path.join(d, "hourly.csv")) as f:
-        f.readline()
-        return np.array([np.array(line.split(",")[3:], dtype=float) for line in f])
+    """Hourly lux, (hours, points): the float32 matrix `--hourly hourly.npy` writes."""
+    return np.load(os.path.join(d, "hourly.npy")).astype(float)
 
 
 def two_phase_year(d, ab, ad, lw, npts):

@@ -311,6 +311,7 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     let settings = DaylightSettings {
         lighting: crate::lighting::lighting_settings(&a),
         point_rays: a.sky_rays,
+        point_refine: a.sky_refine,
         sun_rays: a.sun_rays,
         ground_reflectance: a.ground_reflectance,
         frame: SkyFrame::new(matches!(up, Up::Y), a.north).context("--north")?,

@@ -70,6 +70,7 @@ pub(crate) fn prepare(
     let settings = DaylightSettings {
         lighting,
         point_rays: a.sky_rays,
+        point_refine: a.sky_refine,
         sun_rays: a.sun_rays,
         ground_reflectance: a.ground_reflectance,
         frame,

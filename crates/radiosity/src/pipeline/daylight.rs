@@ -63,6 +63,10 @@ pub struct DaylightSettings {
     /// sampling of a visibility edge errs about N^(−3/4): 16,384 keep a 10 % opening's sky
     /// component to a few tenths of a per cent.
     pub point_rays: u32,
+    /// Refinement F of the points' sky strata (1: off): strata are traced F × F to a ray
+    /// first, and only those near what sees outside at the full density (see
+    /// `Outside::receive`): openings keep `point_rays` strata, walls get 1/F² of them.
+    pub point_refine: u32,
     /// Sky rays at each patch's centre (its first shot; the same stratification).
     pub patch_rays: u32,
     /// Shadow rays to the sun's disc per receiver (stratified over the disc).
@@ -78,6 +82,7 @@ impl Default for DaylightSettings {
         Self {
             lighting: LightingSettings::default(),
             point_rays: 16_384,
+            point_refine: 1,
             patch_rays: 1_024,
             sun_rays: 16,
             ground_reflectance: 0.2,
@@ -109,6 +114,12 @@ impl DaylightSettings {
                     "{what} {n}: must be 1 … 16777216"
                 )));
             }
+        }
+        if !(1..=16).contains(&self.point_refine) {
+            return Err(LightingError::Parameter(format!(
+                "sky refinement {}: must be 1 … 16",
+                self.point_refine
+            )));
         }
         Ok(())
     }
@@ -486,13 +497,19 @@ impl Outside<'_> {
 
     /// The light from outside arriving at `x` facing `n` (scene frame), added into `out`
     /// (sky columns, then suns; lux per unit of each): `k × k` stratified sky rays and
-    /// `sun_rays` shadow rays to each sun's disc.
+    /// `sun_rays` shadow rays to each sun's disc. With `refine` F > 1 the strata are first
+    /// traced F × F at a time (one ray a coarse stratum of the ⌈k/F⌉ grid); every coarse
+    /// stratum whose ray, or a neighbour's, saw outside (escaped, or met a pane) is then
+    /// traced at the full density, F × F rays in place of its coarse one (whose light is taken
+    /// back), so openings get k × k strata and walls ⌈k/F⌉². A point's hits carry their weight
+    /// relative to a stratum of the k × k grid.
     #[allow(clippy::too_many_arguments)]
     fn receive(
         &self,
         x: Vec3,
         n: Vec3,
         k: usize,
+        refine: usize,
         sun_rays: usize,
         sky: &dyn SkyColumns,
         suns: &[SunColumn],
@@ -506,62 +523,50 @@ impl Outside<'_> {
         }
         let origin = x + n * self.bvh.ray_offset();
         let (t, b) = orthonormal_basis(n);
-        let w = PI / (k * k) as f64;
         let mut ground = 0.0;
-        for i in 0..k {
-            for j in 0..k {
-                let u1 = (i as f32 + uniform(rng)) / k as f32;
-                let u2 = (j as f32 + uniform(rng)) / k as f32;
+        let refine = refine.clamp(1, k.max(1));
+        let kc = k.div_ceil(refine);
+        // Hits' weights are relative to a stratum of the k × k grid (1 without refinement).
+        let hc = (k * k) as f64 / (kc * kc) as f64;
+        let wc = PI / (kc * kc) as f64;
+        let mut coarse: Vec<(f32, f32)> = Vec::with_capacity(if refine > 1 { kc * kc } else { 0 });
+        let mut seen: Vec<bool> = Vec::with_capacity(coarse.capacity());
+        for i in 0..kc {
+            for j in 0..kc {
+                let u1 = (i as f32 + uniform(rng)) / kc as f32;
+                let u2 = (j as f32 + uniform(rng)) / kc as f32;
                 let d = concentric_cosine(n, t, b, u1, u2);
-                if let Some(panes) = &self.glass {
-                    // Every branch through and off the panes to its end.
-                    let frame = &self.frame;
-                    let hits = &mut hits;
-                    let out = &mut *out;
-                    let ground = &mut ground;
-                    panes.follow(self.bvh, origin, d, &mut |end, tau| match end {
-                        End::Front(p) => {
-                            if let Some(list) = hits.as_deref_mut() {
-                                list.push((p, tau));
-                            }
-                        }
-                        End::Back => {}
-                        End::Escape(e) => {
-                            let ds = frame.to_sky(e.as_dvec3().to_array());
-                            if ds[2] > 0.0 {
-                                if let Some((c, l)) = sky.bin(ds) {
-                                    out[c] += w * tau * l;
-                                }
-                            } else {
-                                *ground += w * tau;
-                            }
-                        }
-                    });
-                    continue;
+                let outside =
+                    self.shoot(origin, d, wc, hc, sky, out, &mut ground, hits.as_deref_mut());
+                if refine > 1 {
+                    coarse.push((u1, u2));
+                    seen.push(outside);
                 }
-                let ray = Ray::new(origin, d);
-                match hits.as_deref_mut() {
-                    Some(list) => {
-                        if let Some(h) = self.bvh.closest_hit(&ray, f32::INFINITY) {
-                            if h.front {
-                                list.push((h.patch, 1.0));
-                            }
-                            continue;
+            }
+        }
+        if refine > 1 {
+            let kf = kc * refine;
+            let wf = PI / (kf * kf) as f64;
+            let hf = (k * k) as f64 / (kf * kf) as f64;
+            for i in 0..kc {
+                for j in 0..kc {
+                    let near = (i.saturating_sub(1)..(i + 2).min(kc))
+                        .any(|a| (j.saturating_sub(1)..(j + 2).min(kc)).any(|c| seen[a * kc + c]));
+                    if !near {
+                        continue;
+                    }
+                    // Take the coarse ray back, then the stratum's fine rays.
+                    let (u1, u2) = coarse[i * kc + j];
+                    let d = concentric_cosine(n, t, b, u1, u2);
+                    self.shoot(origin, d, -wc, -hc, sky, out, &mut ground, hits.as_deref_mut());
+                    for a in 0..refine {
+                        for c in 0..refine {
+                            let u1 = ((i * refine + a) as f32 + uniform(rng)) / kf as f32;
+                            let u2 = ((j * refine + c) as f32 + uniform(rng)) / kf as f32;
+                            let d = concentric_cosine(n, t, b, u1, u2);
+                            self.shoot(origin, d, wf, hf, sky, out, &mut ground, hits.as_deref_mut());
                         }
                     }
-                    None => {
-                        if self.bvh.occluded(&ray, f32::INFINITY) {
-                            continue;
-                        }
-                    }
-                }
-                let ds = self.frame.to_sky(d.as_dvec3().to_array());
-                if ds[2] > 0.0 {
-                    if let Some((c, l)) = sky.bin(ds) {
-                        out[c] += w * l;
-                    }
-                } else {
-                    ground += w;
                 }
             }
         }
@@ -573,6 +578,76 @@ impl Outside<'_> {
             *col += ground * s.ground;
             *col += s.scale * self.sun(origin, n, s.direction, sun_rays, rng);
         }
+    }
+
+    /// One sky ray of solid-angle weight `w` (negative to take a ray back): the sky and
+    /// ground it reaches through the panes added into `out` and `ground`, the patches it hits
+    /// into `hits` with weight τ `hit` (`hit` being `w` over a k × k stratum's). Returns
+    /// whether it saw outside (escaped, or met a pane).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn shoot(
+        &self,
+        origin: Vec3,
+        d: Vec3,
+        w: f64,
+        hit: f64,
+        sky: &dyn SkyColumns,
+        out: &mut [f64],
+        ground: &mut f64,
+        mut hits: Option<&mut Vec<(u32, f64)>>,
+    ) -> bool {
+        if let Some(panes) = &self.glass {
+            // Every branch through and off the panes to its end.
+            let frame = &self.frame;
+            let mut outside = false;
+            panes.follow(self.bvh, origin, d, &mut |end, tau| match end {
+                End::Front(p) => {
+                    outside |= tau < 1.0;
+                    if let Some(list) = hits.as_deref_mut() {
+                        list.push((p, tau * hit));
+                    }
+                }
+                End::Back => outside |= tau < 1.0,
+                End::Escape(e) => {
+                    outside = true;
+                    let ds = frame.to_sky(e.as_dvec3().to_array());
+                    if ds[2] > 0.0 {
+                        if let Some((c, l)) = sky.bin(ds) {
+                            out[c] += w * tau * l;
+                        }
+                    } else {
+                        *ground += w * tau;
+                    }
+                }
+            });
+            return outside;
+        }
+        let ray = Ray::new(origin, d);
+        match hits {
+            Some(list) => {
+                if let Some(h) = self.bvh.closest_hit(&ray, f32::INFINITY) {
+                    if h.front {
+                        list.push((h.patch, hit));
+                    }
+                    return false;
+                }
+            }
+            None => {
+                if self.bvh.occluded(&ray, f32::INFINITY) {
+                    return false;
+                }
+            }
+        }
+        let ds = self.frame.to_sky(d.as_dvec3().to_array());
+        if ds[2] > 0.0 {
+            if let Some((c, l)) = sky.bin(ds) {
+                out[c] += w * l;
+            }
+        } else {
+            *ground += w;
+        }
+        true
     }
 
     /// The scene-frame direction of the sun's centre, in single precision as the rays take it.
@@ -870,6 +945,7 @@ fn solve_columns(
                 patch.centre,
                 patch.normal,
                 kp,
+                1,
                 sun_rays,
                 sky,
                 suns,
@@ -896,6 +972,7 @@ fn solve_columns(
                 v(p.position),
                 v(p.normal),
                 kx,
+                settings.point_refine as usize,
                 sun_rays,
                 sky,
                 suns,
