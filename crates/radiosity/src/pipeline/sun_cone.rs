@@ -81,7 +81,7 @@ struct Node {
 }
 
 /// Most polygons in a leaf.
-const LEAF: usize = 4;
+const LEAF: usize = 2;
 /// Depth of the traversal stack; a deeper hierarchy's query answers Partial (sampled).
 const STACK: usize = 64;
 /// Widening of the cone (radians) so that the single-precision rays of the disc samples, which
