@@ -474,7 +474,7 @@ pub struct LightingArgs {
     /// Refinement F of the points' sky strata (1 … 16; 1: off): one ray per F × F strata
     /// first, then the full --sky-rays density only where a ray or its neighbour saw outside
     /// (an opening or a pane), so walls cost 1/F² of the rays.
-    #[arg(long, value_name = "F", default_value_t = 1, requires = "daylight", help_heading = DAYLIGHT)]
+    #[arg(long, value_name = "F", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16), requires = "daylight", help_heading = DAYLIGHT)]
     pub sky_refine: u32,
     /// Shadow rays to the sun's disc (0.533°, stratified) at each point and patch, for each
     /// sun: `--sun`'s, and every hour's in an annual run with the exact sun.
