@@ -59,7 +59,7 @@ groundglow source ground 0 0 4 0 0 -1 180
 # rfluxmtx settings: (-ab, -ad, -lw).
 TWO_PHASE = [(4, 1024, 1e-3), (6, 4096, 2.5e-4), (8, 16384, 6e-5)]
 # Ours: the default set; `--ours` replaces it ("A;B": settings separated by semicolons).
-OURS = ["", "--patches 600 --sky-rays 8192 --sky-refine 4", "--patches 600 --sky-rays 4096",
+OURS = ["", "--patches 300 --sky-rays 8192 --sky-refine 4", "--patches 600 --sky-rays 8192 --sky-refine 4",
         "--patches 600 --sky-rays 1024", "--sun-method patch"]
 # The sampled hours split by the direct normal irradiance: the sun's discretisation (in its
 # patch, or over its nearest patches) dominates the error where there is direct sun.
