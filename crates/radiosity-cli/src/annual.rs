@@ -6,9 +6,9 @@
 use crate::args::{LightingArgs, SunMethod};
 use anyhow::{bail, Context, Result};
 use radiosity::daylight::annual::{
-    annual, write_hourly_header, write_hourly_npy_header, write_hourly_npy_rows,
-    write_hourly_rows, write_metrics_csv, AnnualParams,
-    DaylightMatrix, EpwSkies, HourBlock, SkySource, Sun, SunCoefficients,
+    annual, write_hourly_header, write_hourly_npy_header, write_hourly_npy_rows, write_hourly_rows,
+    write_metrics_csv, AnnualParams, DaylightMatrix, EpwSkies, HourBlock, SkySource, Sun,
+    SunCoefficients,
 };
 use radiosity::daylight::epw::read_epw;
 use radiosity::daylight::metrics::{MetricParams, Occupancy, PointMetrics};
@@ -252,7 +252,10 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
         if !is_npy(h) {
             check_csv("--hourly", h, &a)?;
         } else if a.grid.iter().any(|g| g == h) || a.weather.as_deref() == Some(h) {
-            bail!("--hourly {}: an output would overwrite an input", h.display());
+            bail!(
+                "--hourly {}: an output would overwrite an input",
+                h.display()
+            );
         } else {
             crate::settings::check_output(h)?;
         }

@@ -618,7 +618,10 @@ fn hourly_npy_holds_the_csvs_values() {
         for (i, v) in row[3..].iter().enumerate() {
             let csv: f64 = v.parse().unwrap();
             let npy = data[h * points + i] as f64;
-            assert!((csv - npy).abs() <= 0.05 + 1e-6 * npy, "hour {h}, point {i}: {csv} {npy}");
+            assert!(
+                (csv - npy).abs() <= 0.05 + 1e-6 * npy,
+                "hour {h}, point {i}: {csv} {npy}"
+            );
         }
     }
 }

@@ -132,8 +132,8 @@ pub trait SunCoefficients: Sync {
         direct.copy_from_slice(total);
     }
 
-    /// [`SunCoefficients::sun_parts`] for many hours at once, hour-major (`total[h * points
-    /// + i]`, `points = total.len() / suns.len()`); a `None` sun gives zeros. By default an
+    /// [`SunCoefficients::sun_parts`] for many hours at once, hour-major (`total[h × points +
+    /// i]`, points = `total.len() / suns.len()`); a `None` sun gives zeros. By default an
     /// hour a task; an implementation that gains from taking a point through many hours
     /// (a shadow cache) overrides it, with the same values.
     fn sun_block(&self, suns: &[Option<[f64; 3]>], total: &mut [f64], direct: &mut [f64]) {
@@ -708,7 +708,7 @@ fn push_integer(out: &mut Vec<u8>, mut v: u64) {
 /// Append `v` to one decimal (`{:.1}`), by integer arithmetic on the tenths where they fit.
 fn push_tenths(out: &mut Vec<u8>, v: f64) {
     let tenths = (v * 10.0).round();
-    if !(tenths.abs() < 1e15) {
+    if !tenths.is_finite() || tenths.abs() >= 1e15 {
         out.extend_from_slice(format!("{v:.1}").as_bytes());
         return;
     }

@@ -238,7 +238,8 @@ impl SkyPatches {
             };
             let first_row = s.heights.len() as u32;
             for iz in 0..nz {
-                s.heights.push(s0 + (s1 - s0) * (iz as f64 + 0.5) / nz as f64);
+                s.heights
+                    .push(s0 + (s1 - s0) * (iz as f64 + 0.5) / nz as f64);
             }
             let w = TAU / b.count as f64;
             for j in 0..b.count {

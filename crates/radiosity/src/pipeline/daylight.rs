@@ -536,8 +536,16 @@ impl Outside<'_> {
                 let u1 = (i as f32 + uniform(rng)) / kc as f32;
                 let u2 = (j as f32 + uniform(rng)) / kc as f32;
                 let d = concentric_cosine(n, t, b, u1, u2);
-                let outside =
-                    self.shoot(origin, d, wc, hc, sky, out, &mut ground, hits.as_deref_mut());
+                let outside = self.shoot(
+                    origin,
+                    d,
+                    wc,
+                    hc,
+                    sky,
+                    out,
+                    &mut ground,
+                    hits.as_deref_mut(),
+                );
                 if refine > 1 {
                     coarse.push((u1, u2));
                     seen.push(outside);
@@ -558,13 +566,31 @@ impl Outside<'_> {
                     // Take the coarse ray back, then the stratum's fine rays.
                     let (u1, u2) = coarse[i * kc + j];
                     let d = concentric_cosine(n, t, b, u1, u2);
-                    self.shoot(origin, d, -wc, -hc, sky, out, &mut ground, hits.as_deref_mut());
+                    self.shoot(
+                        origin,
+                        d,
+                        -wc,
+                        -hc,
+                        sky,
+                        out,
+                        &mut ground,
+                        hits.as_deref_mut(),
+                    );
                     for a in 0..refine {
                         for c in 0..refine {
                             let u1 = ((i * refine + a) as f32 + uniform(rng)) / kf as f32;
                             let u2 = ((j * refine + c) as f32 + uniform(rng)) / kf as f32;
                             let d = concentric_cosine(n, t, b, u1, u2);
-                            self.shoot(origin, d, wf, hf, sky, out, &mut ground, hits.as_deref_mut());
+                            self.shoot(
+                                origin,
+                                d,
+                                wf,
+                                hf,
+                                sky,
+                                out,
+                                &mut ground,
+                                hits.as_deref_mut(),
+                            );
                         }
                     }
                 }
@@ -751,11 +777,7 @@ impl DirectSun {
         scene.validate_geometry()?;
         let (opaque, glass) = split_panes(scene)?;
         let mesh = Mesh::build(&opaque, crate::mesh::MeshParams::Faces)?;
-        let cones = SunCones::new(
-            &mesh,
-            glass.as_ref(),
-            (0.5 * SUN_DIAMETER_DEG).to_radians(),
-        );
+        let cones = SunCones::new(&mesh, glass.as_ref(), (0.5 * SUN_DIAMETER_DEG).to_radians());
         Ok(DirectSun {
             bvh: Bvh::build(&mesh),
             cones: Some(cones),

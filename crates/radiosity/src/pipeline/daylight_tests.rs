@@ -155,7 +155,11 @@ fn refined_sky_strata_keep_the_sky_component() {
                 continue;
             }
             let want = PI * sky.zenith_luminance * cf([p.position[0], p.position[1]], hole, h);
-            assert!((b - want).abs() < 0.01 * want, "{:?}: {b} {want}", p.position);
+            assert!(
+                (b - want).abs() < 0.01 * want,
+                "{:?}: {b} {want}",
+                p.position
+            );
             rms_plain += ((a - want) / want).powi(2);
             rms_refined += ((b - want) / want).powi(2);
         }

@@ -306,7 +306,7 @@ impl Pre {
             let m = a.cross(b);
             let side = m.dot(g);
             let len = m.length();
-            if side == 0.0 || !(len > 0.0) || !len.is_finite() {
+            if side == 0.0 || len <= 0.0 || !len.is_finite() {
                 pre.partial = true;
                 pre.edges[k] = DVec3::ZERO;
                 continue;
@@ -379,7 +379,7 @@ fn convex(corners: &[DVec3], pane: Option<Glazing>) -> Option<Convex> {
         );
     }
     let len = n.length();
-    if !(len > 0.0) {
+    if len.is_nan() || len <= 0.0 {
         return None;
     }
     let normal = n / len;
@@ -463,9 +463,8 @@ fn build(polygons: &mut [Convex], first: usize, end: usize, at: usize, nodes: &m
         2
     };
     let mid = first + n / 2;
-    polygons[first..end].select_nth_unstable_by(n / 2, |a, b| {
-        a.centre[axis].total_cmp(&b.centre[axis])
-    });
+    polygons[first..end]
+        .select_nth_unstable_by(n / 2, |a, b| a.centre[axis].total_cmp(&b.centre[axis]));
     let child = nodes.len();
     let blank = Node {
         lo,

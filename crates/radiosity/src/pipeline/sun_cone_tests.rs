@@ -53,7 +53,12 @@ fn random_polygon(rng: &mut crate::sampling::Rng64) -> Vec<DVec3> {
     if uniform(rng) < 0.5 {
         vec![centre, centre + u, centre + v]
     } else {
-        vec![centre - u - v, centre + u - v, centre + u + v, centre - u + v]
+        vec![
+            centre - u - v,
+            centre + u - v,
+            centre + u + v,
+            centre - u + v,
+        ]
     }
 }
 
@@ -134,7 +139,9 @@ fn decisions_agree_with_sampled_directions() {
 #[test]
 fn panes_seams_and_the_hierarchy() {
     let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
-    let square = |z: f64, x0: f64, x1: f64| vec![v(x0, -1.0, z), v(x1, -1.0, z), v(x1, 1.0, z), v(x0, 1.0, z)];
+    let square = |z: f64, x0: f64, x1: f64| {
+        vec![v(x0, -1.0, z), v(x1, -1.0, z), v(x1, 1.0, z), v(x0, 1.0, z)]
+    };
     let alpha = (0.5 * 0.533f64).to_radians();
     let o = v(0.3, 0.0, 0.0);
     let up = v(0.0, 0.0, 1.0);
@@ -151,12 +158,18 @@ fn panes_seams_and_the_hierarchy() {
         SunCones::of(vec![pane, pane], alpha).classify(o, tilted),
         Cone::Clear(glass.transmittance(tilted.z).powi(2))
     );
-    assert_eq!(SunCones::of(vec![pane, roof], alpha).classify(o, up), Cone::Blocked);
+    assert_eq!(
+        SunCones::of(vec![pane, roof], alpha).classify(o, up),
+        Cone::Blocked
+    );
     let halves = vec![
         convex(&square(1.0, -1.0, 0.3), Some(glass)).unwrap(),
         convex(&square(1.0, 0.3, 1.0), Some(glass)).unwrap(),
     ];
-    assert_eq!(SunCones::of(halves.clone(), alpha).classify(o, up), Cone::Partial);
+    assert_eq!(
+        SunCones::of(halves.clone(), alpha).classify(o, up),
+        Cone::Partial
+    );
     let t = clear(SunCones::of(halves, alpha).classify(v(0.0, 0.0, 0.0), up));
     assert!((t - 0.8).abs() < 1e-12);
     // 400 small opaque tiles on a grid: the hierarchy's answer equals the brute answer of
@@ -167,7 +180,12 @@ fn panes_seams_and_the_hierarchy() {
             let (x, y) = (i as f64 * 0.3, j as f64 * 0.3);
             tiles.push(
                 convex(
-                    &[v(x, y, 3.0), v(x + 0.2, y, 3.0), v(x + 0.2, y + 0.2, 3.0), v(x, y + 0.2, 3.0)],
+                    &[
+                        v(x, y, 3.0),
+                        v(x + 0.2, y, 3.0),
+                        v(x + 0.2, y + 0.2, 3.0),
+                        v(x, y + 0.2, 3.0),
+                    ],
                     None,
                 )
                 .unwrap(),
@@ -179,8 +197,17 @@ fn panes_seams_and_the_hierarchy() {
     let mut seen = [0usize; 3];
 
     for _ in 0..5_000 {
-        let o = v(uniform(&mut rng) as f64 * 6.0, uniform(&mut rng) as f64 * 6.0, 0.0);
-        let c = (v(uniform(&mut rng) as f64 - 0.5, uniform(&mut rng) as f64 - 0.5, 1.0)).normalize();
+        let o = v(
+            uniform(&mut rng) as f64 * 6.0,
+            uniform(&mut rng) as f64 * 6.0,
+            0.0,
+        );
+        let c = (v(
+            uniform(&mut rng) as f64 - 0.5,
+            uniform(&mut rng) as f64 - 0.5,
+            1.0,
+        ))
+        .normalize();
         let mut brute = Cone::Clear(1.0);
         for t in &tiles {
             match SunCones::of(vec![*t], alpha).classify(o, c) {
