@@ -816,7 +816,7 @@ impl DirectSun {
     /// The illuminance at every point (lx) from a sun of 1 lx direct normal illuminance in
     /// each of the sky-frame directions `suns` (None: no sun, 0), point-major into `out`
     /// (`out[i * suns.len() + h]`): the points in parallel, each through every direction with
-    /// its own cache of what it sees ([`Viewpoint`]). The values are
+    /// its own cache of what it sees (`sun_cone::Viewpoint`). The values are
     /// [`DirectSun::illuminance`]'s.
     pub fn illuminance_many(&self, suns: &[Option<[f64; 3]>], out: &mut [f64]) {
         let nh = suns.len();
