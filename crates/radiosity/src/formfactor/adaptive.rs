@@ -397,8 +397,23 @@ impl Prepared {
                     }
                     let margin = DVec3::splat(1e-6 * (hi - lo).length());
                     let (lo, hi) = (lo - margin, hi + margin);
+                    let cands = &t.candidates[start as usize..(start + len) as usize];
+                    // A candidate that hides all of one patch from all of the other meets
+                    // every segment between them, so it is one the shaft keeps: asked first,
+                    // it spares the shaft of a hidden pair.
+                    for &k in cands {
+                        let (bl, bh) = self.occluders.bounds(k);
+                        if bh.cmplt(lo).any() || bl.cmpgt(hi).any() {
+                            continue;
+                        }
+                        if self.hides_pair(k, a, b, eps, size, s) {
+                            s.stats.occluded += 1;
+                            s.stats.occluded_hidden += 1;
+                            return 0.0;
+                        }
+                    }
                     let mut built = false;
-                    for &k in &t.candidates[start as usize..(start + len) as usize] {
+                    for &k in cands {
                         let (bl, bh) = self.occluders.bounds(k);
                         if bh.cmplt(lo).any() || bl.cmpgt(hi).any() {
                             continue;
@@ -449,6 +464,74 @@ impl Prepared {
         }
         s.stats.occluded += 1;
         self.occluded(ia, ib, straddle, size, bvh, s)
+    }
+
+    /// Whether occluder `k` alone hides all of `s.pb` (in patch `b`'s plane) from all of
+    /// `s.pa` (in `a`'s), by [`umbra`] on `k` clipped to the space between the two planes (as
+    /// [`Prepared::occluded`] asks it). The umbra needs the two on opposite sides of `k`'s
+    /// plane; that is checked first on the whole occluder, with a slack wider than the
+    /// umbra's, so that only an occluder standing between the two is clipped.
+    fn hides_pair(
+        &self,
+        k: u32,
+        a: &Patch,
+        b: &Patch,
+        eps: f64,
+        size: f64,
+        s: &mut Scratch,
+    ) -> bool {
+        let poly = self.occluders.polygon(k);
+        let no = self.occluders.normal(k);
+        let ho = no.dot(poly[0]);
+        let slack = 2.0 * eps;
+        let range = |p: &[DVec3]| {
+            p.iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                    let d = no.dot(*x) - ho;
+                    (lo.min(d), hi.max(d))
+                })
+        };
+        let (alo, ahi) = range(&s.pa);
+        let (blo, bhi) = range(&s.pb);
+        let apart = (blo >= -slack && ahi < slack) || (bhi <= slack && alo > -slack);
+        if !apart {
+            return false;
+        }
+        // The segment between the two centres must cross the occluder (well inside, as
+        // the umbra's every segment does; the slack only keeps borderline ones).
+        let ca = s.pa.iter().copied().sum::<DVec3>() / s.pa.len() as f64;
+        let cb = s.pb.iter().copied().sum::<DVec3>() / s.pb.len() as f64;
+        let (da, db) = (no.dot(ca) - ho, no.dot(cb) - ho);
+        if da == db {
+            return false;
+        }
+        let x = ca + (cb - ca) * (da / (da - db));
+        let m = poly.len();
+        let tol = 1e-6 * size;
+        for i in 0..m {
+            let (p, q) = (poly[i], poly[(i + 1) % m]);
+            let e = q - p;
+            // Outward distance of x from edge pq, in the occluder's plane (ccw about no).
+            if e.cross(x - p).dot(no) < -tol * e.length() {
+                return false;
+            }
+        }
+        let flat = |n: DVec3, o: DVec3| poly.iter().all(|p| n.dot(*p - o).abs() <= eps);
+        if flat(a.normal, a.v[0]) || flat(b.normal, b.v[0]) {
+            return false;
+        }
+        clip(poly, a.v[0], a.normal, 0.0, &mut s.tmp);
+        clip(&s.tmp, b.v[0], b.normal, 0.0, &mut s.inside);
+        if s.inside.len() < 3 || polygon_area(&s.inside) <= 1e-14 * size * size {
+            return false;
+        }
+        s.occ.clear();
+        s.occ.extend_from_slice(&s.inside);
+        s.occ_range.clear();
+        s.occ_range.push((0, s.inside.len() as u32));
+        s.occ_normal.clear();
+        s.occ_normal.push(no);
+        umbra(0, eps, s)
     }
 
     /// The exchange area of an unoccluded pair to the relative accuracy.
