@@ -406,7 +406,17 @@ impl Prepared {
                         if bh.cmplt(lo).any() || bl.cmpgt(hi).any() {
                             continue;
                         }
-                        if self.hides_pair(k, a, b, eps, size, s) {
+                        let planes = [(a.normal, a.v[0]), (b.normal, b.v[0])];
+                        if self.hides_pair(
+                            k,
+                            planes,
+                            &s.pa,
+                            &s.pb,
+                            eps,
+                            size,
+                            &mut s.tmp,
+                            &mut s.inside,
+                        ) {
                             s.stats.occluded += 1;
                             s.stats.occluded_hidden += 1;
                             return 0.0;
@@ -466,19 +476,23 @@ impl Prepared {
         self.occluded(ia, ib, straddle, size, bvh, s)
     }
 
-    /// Whether occluder `k` alone hides all of `s.pb` (in patch `b`'s plane) from all of
-    /// `s.pa` (in `a`'s), by [`umbra`] on `k` clipped to the space between the two planes (as
-    /// [`Prepared::occluded`] asks it). The umbra needs the two on opposite sides of `k`'s
-    /// plane; that is checked first on the whole occluder, with a slack wider than the
-    /// umbra's, so that only an occluder standing between the two is clipped.
+    /// Whether occluder `k` alone hides all of `rec` (in the plane `(nb, ob)`: normal, point)
+    /// from all of `outer` (in `(na, oa)`), by [`umbra_of`] on `k` clipped to the space between
+    /// the two planes (as [`Prepared::occluded`] asks it). Two necessary conditions come first,
+    /// on the whole occluder and with slacks wider than the umbra's, so that only an occluder
+    /// that may hide is clipped: the two polygons on opposite sides of its plane, and the
+    /// segment between their centres through it.
+    #[allow(clippy::too_many_arguments)]
     fn hides_pair(
         &self,
         k: u32,
-        a: &Patch,
-        b: &Patch,
+        [(na, oa), (nb, ob)]: [(DVec3, DVec3); 2],
+        outer: &[DVec3],
+        rec: &[DVec3],
         eps: f64,
         size: f64,
-        s: &mut Scratch,
+        tmp: &mut Vec<DVec3>,
+        inside: &mut Vec<DVec3>,
     ) -> bool {
         let poly = self.occluders.polygon(k);
         let no = self.occluders.normal(k);
@@ -491,47 +505,40 @@ impl Prepared {
                     (lo.min(d), hi.max(d))
                 })
         };
-        let (alo, ahi) = range(&s.pa);
-        let (blo, bhi) = range(&s.pb);
+        let (alo, ahi) = range(outer);
+        let (blo, bhi) = range(rec);
         let apart = (blo >= -slack && ahi < slack) || (bhi <= slack && alo > -slack);
         if !apart {
             return false;
         }
-        // The segment between the two centres must cross the occluder (well inside, as
-        // the umbra's every segment does; the slack only keeps borderline ones).
-        let ca = s.pa.iter().copied().sum::<DVec3>() / s.pa.len() as f64;
-        let cb = s.pb.iter().copied().sum::<DVec3>() / s.pb.len() as f64;
+        // The segment between the two centres crosses the occluder (well inside, as every
+        // segment does for the umbra; the slack only keeps borderline ones).
+        let ca = outer.iter().copied().sum::<DVec3>() / outer.len() as f64;
+        let cb = rec.iter().copied().sum::<DVec3>() / rec.len() as f64;
         let (da, db) = (no.dot(ca) - ho, no.dot(cb) - ho);
         if da == db {
             return false;
         }
         let x = ca + (cb - ca) * (da / (da - db));
-        let m = poly.len();
         let tol = 1e-6 * size;
-        for i in 0..m {
-            let (p, q) = (poly[i], poly[(i + 1) % m]);
+        for (p, q) in edge_pairs(poly) {
             let e = q - p;
-            // Outward distance of x from edge pq, in the occluder's plane (ccw about no).
+            // Distance of x outside the edge, in the occluder's plane (counter-clockwise
+            // about `no`), times the edge's length.
             if e.cross(x - p).dot(no) < -tol * e.length() {
                 return false;
             }
         }
         let flat = |n: DVec3, o: DVec3| poly.iter().all(|p| n.dot(*p - o).abs() <= eps);
-        if flat(a.normal, a.v[0]) || flat(b.normal, b.v[0]) {
+        if flat(na, oa) || flat(nb, ob) {
             return false;
         }
-        clip(poly, a.v[0], a.normal, 0.0, &mut s.tmp);
-        clip(&s.tmp, b.v[0], b.normal, 0.0, &mut s.inside);
-        if s.inside.len() < 3 || polygon_area(&s.inside) <= 1e-14 * size * size {
+        clip(poly, oa, na, 0.0, tmp);
+        clip(tmp, ob, nb, 0.0, inside);
+        if inside.len() < 3 || polygon_area(inside) <= 1e-14 * size * size {
             return false;
         }
-        s.occ.clear();
-        s.occ.extend_from_slice(&s.inside);
-        s.occ_range.clear();
-        s.occ_range.push((0, s.inside.len() as u32));
-        s.occ_normal.clear();
-        s.occ_normal.push(no);
-        umbra(0, eps, s)
+        umbra_of(inside, no, outer, rec, eps)
     }
 
     /// The exchange area of an unoccluded pair to the relative accuracy.
@@ -760,8 +767,14 @@ impl Prepared {
         // and the receiver (B) lie each wholly on one side, on opposite sides: then the plane,
         // normalised and facing S, bounds the region. Stops at the first corner that shows it
         // is not.
-        let consider = |m: DVec3, h: f64, slack: f64, planes: &mut Vec<(DVec3, f64)>| {
-            // Side of S: +1 above, -1 below, 0 within the slack so far.
+        let consider = |m: DVec3,
+                        h: f64,
+                        l: f64,
+                        slack: f64,
+                        [first, second]: [&[DVec3]; 2],
+                        occ_first: bool,
+                        planes: &mut Vec<(DVec3, f64)>| {
+            // Side of a polygon: whether a corner lies above, and one below, by the slack.
             let side_of = |p: &[DVec3]| {
                 let (mut above, mut below) = (false, false);
                 for x in p {
@@ -774,13 +787,15 @@ impl Prepared {
                 }
                 Some((above, below))
             };
-            let Some((so_above, so_below)) = side_of(occ) else {
+            let Some(f) = side_of(first) else {
                 return;
             };
-            let Some((sr_above, sr_below)) = side_of(rec) else {
+            let Some(g) = side_of(second) else {
                 return;
             };
-            let inv = 1.0 / m.length();
+            let ((so_above, so_below), (sr_above, sr_below)) =
+                if occ_first { (f, g) } else { (g, f) };
+            let inv = 1.0 / l;
             if !so_above && !sr_below {
                 // Occluder below (or on), receiver above (or on): the shadowing side is below.
                 planes.push((-m * inv, -h * inv));
@@ -789,15 +804,26 @@ impl Prepared {
             }
         };
         let tiny = 1e-24 * (eps * 1e9).powi(4);
-        for (edges, corners) in [(occ, rec.as_slice()), (rec.as_slice(), occ)] {
-            let en = edges.len();
-            for k in 0..en {
-                let (p, q) = (edges[k], edges[(k + 1) % en]);
+        // The polygon of the plane's corner is asked first: the one of its edge lies on one
+        // side (but for the slack), so it is the other that usually straddles.
+        for (edges, corners, occ_corners) in
+            [(occ, rec.as_slice(), false), (rec.as_slice(), occ, true)]
+        {
+            for (p, q) in edge_pairs(edges) {
                 for &v in corners.iter() {
                     let m = (q - p).cross(v - p);
                     let l2 = m.length_squared();
                     if l2 > tiny {
-                        consider(m, m.dot(p), eps * l2.sqrt(), &mut s.planes);
+                        let l = l2.sqrt();
+                        consider(
+                            m,
+                            m.dot(p),
+                            l,
+                            eps * l,
+                            [corners, edges],
+                            occ_corners,
+                            &mut s.planes,
+                        );
                     }
                 }
             }
@@ -837,9 +863,7 @@ impl Prepared {
         // A sliver a few slacks wide (an occluder that only touches the pair's hull, kept by
         // the clipping's slack) loses nothing measurable, but would stretch Ω over the whole
         // patch and thin the points where the real shadows are.
-        let perimeter: f64 = (0..s.pa.len())
-            .map(|k| (s.pa[(k + 1) % s.pa.len()] - s.pa[k]).length())
-            .sum();
+        let perimeter: f64 = edge_pairs(&s.pa).map(|(p, q)| (q - p).length()).sum();
         if polygon_area(&s.inside) <= 16.0 * eps * perimeter {
             s.planes.truncate(first_plane);
             return false;
@@ -955,8 +979,8 @@ impl Prepared {
             s.cone.clear();
             let occ = &s.occ[start as usize..(start + len) as usize];
             let mut orient = 0.0;
-            for k in 0..occ.len() {
-                let m = (occ[k] - x).cross(occ[(k + 1) % occ.len()] - x);
+            for (p, q) in edge_pairs(occ) {
+                let m = (p - x).cross(q - x);
                 let l = m.length();
                 let m = if l > 0.0 { m / l } else { DVec3::ZERO };
                 orient += m.dot(w);
@@ -1029,9 +1053,8 @@ impl Prepared {
 /// between `x` and the receiver, as the occluders of a pair are clipped to be).
 fn hides(x: DVec3, occ: &[DVec3], rec: &[DVec3], eps: f64) -> bool {
     let c = occ.iter().copied().sum::<DVec3>() / occ.len() as f64;
-    let n = occ.len();
-    (0..n).all(|k| {
-        let m = (occ[k] - x).cross(occ[(k + 1) % n] - x);
+    edge_pairs(occ).all(|(p, q)| {
+        let m = (p - x).cross(q - x);
         let l = m.length();
         if l <= 0.0 {
             return false;
@@ -1050,20 +1073,26 @@ fn hides(x: DVec3, occ: &[DVec3], rec: &[DVec3], eps: f64) -> bool {
 fn umbra(o: usize, eps: f64, s: &Scratch) -> bool {
     let (start, len) = s.occ_range[o];
     let occ = &s.occ[start as usize..(start + len) as usize];
-    let (no, ho) = (s.occ_normal[o], s.occ_normal[o].dot(occ[0]));
+    umbra_of(occ, s.occ_normal[o], &s.pa, &s.pb, eps)
+}
+
+/// [`umbra`] of the occluder `occ` (unit normal `no`), the outer patch `outer` and the
+/// receiver `rec`.
+fn umbra_of(occ: &[DVec3], no: DVec3, outer: &[DVec3], rec: &[DVec3], eps: f64) -> bool {
+    let ho = no.dot(occ[0]);
     // The receiver wholly on one side of the occluder's plane, every outer corner strictly on
     // the other (from a point in the plane the pyramid is flat).
     let side = |p: &DVec3| no.dot(*p) - ho;
-    let receiver_above = s.pb.iter().all(|p| side(p) >= -eps);
-    let receiver_below = s.pb.iter().all(|p| side(p) <= eps);
+    let receiver_above = rec.iter().all(|p| side(p) >= -eps);
+    let receiver_below = rec.iter().all(|p| side(p) <= eps);
     let beyond = if receiver_above {
-        s.pa.iter().all(|p| side(p) < -eps)
+        outer.iter().all(|p| side(p) < -eps)
     } else if receiver_below {
-        s.pa.iter().all(|p| side(p) > eps)
+        outer.iter().all(|p| side(p) > eps)
     } else {
         false
     };
-    beyond && s.pa.iter().all(|&x| hides(x, occ, &s.pb, eps))
+    beyond && outer.iter().all(|&x| hides(x, occ, rec, eps))
 }
 
 /// The convex hull of `points` (lying in a plane with unit normal `n`), counter-clockwise
@@ -1154,6 +1183,12 @@ fn map(poly: &[DVec3], region: u8, u: f64, v: f64) -> (DVec3, f64) {
     }
 }
 
+/// The edges `(p_k, p_{k+1})` of a polygon, `k = 0, …, n − 1`, the last closing it.
+fn edge_pairs(p: &[DVec3]) -> impl Iterator<Item = (DVec3, DVec3)> + '_ {
+    let n = p.len();
+    (0..n).map(move |k| (p[k], p[if k + 1 == n { 0 } else { k + 1 }]))
+}
+
 /// Area of a planar polygon (Newell).
 fn polygon_area(p: &[DVec3]) -> f64 {
     let mut s = DVec3::ZERO;
@@ -1215,7 +1250,6 @@ fn cut(
     if let Some(o) = outside.as_deref_mut() {
         o.clear();
     }
-    let n = poly.len();
     let side = |p: DVec3| {
         let d = m.dot(p - x);
         if d.abs() <= eps {
@@ -1224,6 +1258,7 @@ fn cut(
             d
         }
     };
+    let n = poly.len();
     let mut d0 = side(poly[0]);
     for k in 0..n {
         let a = poly[k];
@@ -1265,11 +1300,10 @@ fn cut(
 /// the sum is negated.
 pub fn point_polygon(x: DVec3, n: DVec3, p: &[DVec3]) -> f64 {
     let mut sum = 0.0;
-    let m = p.len();
     let mut r2 = p[0] - x;
-    for k in 0..m {
+    for (_, q) in edge_pairs(p) {
         let r1 = r2;
-        r2 = p[(k + 1) % m] - x;
+        r2 = q - x;
         let g = r1.cross(r2);
         // An edge whose plane through x contains the normal adds nothing (a wall's
         // vertical edge seen from the floor): no angle needed.
