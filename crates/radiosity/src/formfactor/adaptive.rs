@@ -1048,6 +1048,40 @@ impl Prepared {
     }
 }
 
+/// Whether every segment from a corner of `outer` to a corner of `rec` (on opposite sides of
+/// the plane of the convex occluder `occ`, unit normal `no`) crosses `occ` more than `eps`
+/// inside each of its edges. The crossing of the segment `a b` is `(a d_b − b d_a) / (d_b −
+/// d_a)` (`d` the signed distances to the plane), so each edge's test is a sign with no
+/// division.
+fn corners_cross(occ: &[DVec3], no: DVec3, outer: &[DVec3], rec: &[DVec3], eps: f64) -> bool {
+    const MAX: usize = 16;
+    if occ.len() > MAX {
+        return outer.iter().all(|&x| hides(x, occ, rec, eps));
+    }
+    let ho = no.dot(occ[0]);
+    // Each edge's inward normal in the plane, and its offset moved `eps` inwards.
+    let turn: f64 = edge_pairs(occ).map(|(p, q)| p.cross(q).dot(no)).sum();
+    let sign = if turn < 0.0 { -1.0 } else { 1.0 };
+    let mut edges = [(DVec3::ZERO, 0.0); MAX];
+    for (e, (p, q)) in edges.iter_mut().zip(edge_pairs(occ)) {
+        let g = no.cross(q - p) * sign;
+        *e = (g, g.dot(p) + eps * g.length());
+    }
+    let edges = &edges[..occ.len()];
+    outer.iter().all(|&a| {
+        let da = no.dot(a) - ho;
+        rec.iter().all(|&b| {
+            let db = no.dot(b) - ho;
+            let (x, d) = if db > da {
+                (a * db - b * da, db - da)
+            } else {
+                (b * da - a * db, da - db)
+            };
+            edges.iter().all(|&(g, c)| g.dot(x) - d * c > 0.0)
+        })
+    })
+}
+
 /// Whether the convex occluder `occ` hides every corner of the convex receiver `rec` from the
 /// point `x`: each corner strictly inside the pyramid from `x` over `occ` (the occluder being
 /// between `x` and the receiver, as the occluders of a pair are clipped to be).
@@ -1069,7 +1103,8 @@ fn hides(x: DVec3, occ: &[DVec3], rec: &[DVec3], eps: f64) -> bool {
 /// receiver, is convex (the intersection over the receiver's points of the convex regions
 /// behind the occluder seen from each), so it holds the outer patch when it holds its corners;
 /// it holds a corner beyond the occluder's plane when the receiver's corners all lie inside
-/// the pyramid over the occluder from it.
+/// the pyramid over the occluder from it, that is when the segments from it to them all cross
+/// the occluder ([`corners_cross`]).
 fn umbra(o: usize, eps: f64, s: &Scratch) -> bool {
     let (start, len) = s.occ_range[o];
     let occ = &s.occ[start as usize..(start + len) as usize];
@@ -1092,7 +1127,7 @@ fn umbra_of(occ: &[DVec3], no: DVec3, outer: &[DVec3], rec: &[DVec3], eps: f64) 
     } else {
         false
     };
-    beyond && outer.iter().all(|&x| hides(x, occ, rec, eps))
+    beyond && corners_cross(occ, no, outer, rec, eps)
 }
 
 /// The convex hull of `points` (lying in a plane with unit normal `n`), counter-clockwise
