@@ -211,7 +211,7 @@ pub struct Scratch {
     next_ranges: Vec<(u32, u32)>,
     inside: Vec<DVec3>,
     outside: Vec<DVec3>,
-    cone: Vec<DVec3>,
+    cone: Vec<(DVec3, f64)>,
     cells: Vec<Cell>,
     /// Occluders that shadow the receiver from part of the outer patch, the separating
     /// planes bounding each one's region, their corners (Ω's points) and Ω.
@@ -972,28 +972,30 @@ impl Prepared {
             let (start, len) = s.occ_range[o];
             let w = s.occ_centre[o] - x;
             // x in the occluder's plane: its pyramid is flat and hides nothing.
-            if s.occ_normal[o].dot(w).abs() <= 1e-12 * w.length() {
+            let dw = s.occ_normal[o].dot(w);
+            if dw * dw <= 1e-24 * w.length_squared() {
                 continue;
             }
-            // The pyramid's side planes through x, normals pointing inwards.
+            // The pyramid's side planes through x, normals pointing inwards, unnormalised,
+            // each with the slack `eps` times its normal's length.
             s.cone.clear();
             let occ = &s.occ[start as usize..(start + len) as usize];
             let mut orient = 0.0;
             for (p, q) in edge_pairs(occ) {
                 let m = (p - x).cross(q - x);
                 let l = m.length();
-                let m = if l > 0.0 { m / l } else { DVec3::ZERO };
+                // All of one sign but for rounding (x is off the occluder's plane).
                 orient += m.dot(w);
-                s.cone.push(m);
+                s.cone.push((m, eps * l));
             }
             if orient < 0.0 {
                 for m in &mut s.cone {
-                    *m = -*m;
+                    m.0 = -m.0;
                 }
             }
-            let outside = |poly: &[DVec3], cone: &[DVec3]| {
+            let outside = |poly: &[DVec3], cone: &[(DVec3, f64)]| {
                 cone.iter()
-                    .any(|m| poly.iter().all(|p| m.dot(*p - x) <= eps))
+                    .any(|&(m, e)| poly.iter().all(|p| m.dot(*p - x) <= e))
             };
             // Subtract the pyramid from every piece; what lies inside it is lost.
             s.next.clear();
@@ -1012,16 +1014,16 @@ impl Prepared {
                 s.inside.clear();
                 s.inside.extend_from_slice(piece);
                 for k in 0..s.cone.len() {
-                    let m = s.cone[k];
+                    let (m, e) = s.cone[k];
                     if keep {
-                        split(&s.inside, m, x, eps, &mut s.tmp, &mut s.outside);
+                        split(&s.inside, m, x, e, &mut s.tmp, &mut s.outside);
                         if s.outside.len() >= 3 {
                             let at = s.next.len() as u32;
                             s.next.extend_from_slice(&s.outside);
                             s.next_ranges.push((at, s.outside.len() as u32));
                         }
                     } else {
-                        keep_inside(&s.inside, m, x, eps, &mut s.tmp);
+                        keep_inside(&s.inside, m, x, e, &mut s.tmp);
                     }
                     std::mem::swap(&mut s.inside, &mut s.tmp);
                     if s.inside.len() < 3 {
@@ -1252,9 +1254,9 @@ fn clip(poly: &[DVec3], origin: DVec3, normal: DVec3, slack: f64, out: &mut Vec<
     }
 }
 
-/// Split the convex `poly` by the plane through `x` with unit normal `m`: the part with
-/// `m · (p − x) ≥ 0` into `inside`, the rest into `outside` (points within `eps` of the plane
-/// go to both).
+/// Split the convex `poly` by the plane through `x` with normal `m`: the part with
+/// `m · (p − x) ≥ 0` into `inside`, the rest into `outside` (points with `|m · (p − x)| ≤ eps`,
+/// within `eps / |m|` of the plane, go to both).
 fn split(
     poly: &[DVec3],
     m: DVec3,
