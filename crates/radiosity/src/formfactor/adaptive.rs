@@ -224,6 +224,8 @@ pub struct Scratch {
     analytic: analytic::Scratch,
     /// Which of the lost and the seen parts the points of the current pair must measure.
     need: Need,
+    /// Whether each occluder may hold a patch facing the current row's patch.
+    facing: Vec<bool>,
     stats: Stats,
 }
 
@@ -539,6 +541,22 @@ impl Prepared {
             return false;
         }
         umbra_of(inside, no, outer, rec, eps)
+    }
+
+    /// Which occluders (groups) may hold a patch that faces patch `i`, into `out`: not those
+    /// wholly behind `i`'s plane, nor those with `i` wholly behind theirs. A patch lies in
+    /// its group's polygon and plane, so a pair of `i` and a patch of such a group has one
+    /// polygon behind the other's plane but for rounding, far below the slack of
+    /// [`Prepared::exchange`]'s test, which gives it 0.
+    fn facing_groups(&self, i: usize, out: &mut Vec<bool>) {
+        let p = &self.patches[i];
+        out.clear();
+        out.extend((0..self.occluders.len() as u32).map(|g| {
+            let (poly, n) = (self.occluders.polygon(g), self.occluders.normal(g));
+            let behind_i = poly.iter().all(|v| p.normal.dot(*v - p.v[0]) <= 0.0);
+            let i_behind = p.corners().iter().all(|v| n.dot(*v - poly[0]) <= 0.0);
+            !(behind_i || i_behind)
+        }));
     }
 
     /// The exchange area of an unoccluded pair to the relative accuracy.
@@ -1477,8 +1495,10 @@ pub(super) fn row(est: &Estimator, i: usize, scratch: &mut super::Scratch) {
         .as_ref()
         .expect("prepared for the adaptive method");
     let ai = prep.patches[i].area;
+    let mut facing = std::mem::take(&mut scratch.adaptive.facing);
+    prep.facing_groups(i, &mut facing);
     for j in 0..prep.patches.len() {
-        if j == i {
+        if j == i || !facing[prep.occluders.group[j] as usize] {
             continue;
         }
         // Rounded as the whole matrix rounds it, so the two give the same bits.
@@ -1487,6 +1507,7 @@ pub(super) fn row(est: &Estimator, i: usize, scratch: &mut super::Scratch) {
             scratch.add(j as u32, g as f64 / ai);
         }
     }
+    scratch.adaptive.facing = facing;
     prep.flush(&mut scratch.adaptive.stats);
 }
 
@@ -1505,12 +1526,18 @@ pub(super) fn matrix(est: &Estimator, storage: Storage, observer: &dyn Observer)
         .into_par_iter()
         .map_init(Scratch::default, |s, i| {
             let mut row = Vec::new();
+            let mut facing = std::mem::take(&mut s.facing);
+            prep.facing_groups(i, &mut facing);
             for j in i + 1..n {
+                if !facing[prep.occluders.group[j] as usize] {
+                    continue;
+                }
                 let g = prep.exchange(i, j, est.bvh, s);
                 if g > 0.0 {
                     row.push((j as u32, g as f32));
                 }
             }
+            s.facing = facing;
             prep.flush(&mut s.stats);
             observer.event(Event::Progress {
                 stage: Stage::FormFactors,
