@@ -1011,9 +1011,23 @@ impl Prepared {
                     m.0 = -m.0;
                 }
             }
-            let outside = |poly: &[DVec3], cone: &[(DVec3, f64)]| {
-                cone.iter()
-                    .any(|&(m, e)| poly.iter().all(|p| m.dot(*p - x) <= e))
+            // Wholly outside one side plane (within the slack), or wholly inside them all
+            // (beyond the slack, so that cutting would give the piece back unchanged).
+            let classify = |poly: &[DVec3], cone: &[(DVec3, f64)]| {
+                let mut inside = true;
+                for &(m, e) in cone {
+                    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+                    for p in poly {
+                        let d = m.dot(*p - x);
+                        lo = lo.min(d);
+                        hi = hi.max(d);
+                    }
+                    if hi <= e {
+                        return Some(false);
+                    }
+                    inside &= lo > e;
+                }
+                inside.then_some(true)
             };
             // Subtract the pyramid from every piece; what lies inside it is lost.
             s.next.clear();
@@ -1021,13 +1035,22 @@ impl Prepared {
             for r in 0..s.ranges.len() {
                 let (ps, pl) = s.ranges[r];
                 let piece = &s.pieces[ps as usize..(ps + pl) as usize];
-                if outside(piece, &s.cone) {
-                    if keep {
-                        let at = s.next.len() as u32;
-                        s.next.extend_from_slice(piece);
-                        s.next_ranges.push((at, pl));
+                match classify(piece, &s.cone) {
+                    Some(false) => {
+                        if keep {
+                            let at = s.next.len() as u32;
+                            s.next.extend_from_slice(piece);
+                            s.next_ranges.push((at, pl));
+                        }
+                        continue;
                     }
-                    continue;
+                    Some(true) => {
+                        if want_lost {
+                            lost += point_polygon(x, n, piece);
+                        }
+                        continue;
+                    }
+                    None => {}
                 }
                 s.inside.clear();
                 s.inside.extend_from_slice(piece);
