@@ -198,6 +198,8 @@ pub struct Scratch {
     tmp: Vec<DVec3>,
     shaft: Shaft,
     stack: Vec<u32>,
+    /// Candidates of the pair whose boxes meet its box, and those its shaft keeps.
+    near: Vec<u32>,
     found: Vec<u32>,
     /// Occluders of the pair clipped to the space between the planes: corners and ranges.
     occ: Vec<DVec3>,
@@ -370,8 +372,18 @@ impl Prepared {
             return 0.0;
         }
         let straddle = amin < -eps || bmin < -eps;
-        clip(a.corners(), b.v[0], b.normal, 0.0, &mut s.pa);
-        clip(b.corners(), a.v[0], a.normal, 0.0, &mut s.pb);
+        // Each in front of the other's plane (a polygon wholly in front is its own clip: the
+        // sides are the ones `clip` computes).
+        let front = |p: &Patch, q: &Patch, lo: f64, out: &mut Vec<DVec3>| {
+            if lo >= 0.0 {
+                out.clear();
+                out.extend_from_slice(p.corners());
+            } else {
+                clip(p.corners(), q.v[0], q.normal, 0.0, out);
+            }
+        };
+        front(a, b, amin, &mut s.pa);
+        front(b, a, bmin, &mut s.pb);
         if s.pa.len() < 3 || s.pb.len() < 3 {
             return 0.0;
         }
@@ -403,11 +415,13 @@ impl Prepared {
                     // A candidate that hides all of one patch from all of the other meets
                     // every segment between them, so it is one the shaft keeps: asked first,
                     // it spares the shaft of a hidden pair.
+                    s.near.clear();
                     for &k in cands {
                         let (bl, bh) = self.occluders.bounds(k);
                         if bh.cmplt(lo).any() || bl.cmpgt(hi).any() {
                             continue;
                         }
+                        s.near.push(k);
                         let planes = [(a.normal, a.v[0]), (b.normal, b.v[0])];
                         if self.hides_pair(
                             k,
@@ -424,18 +438,12 @@ impl Prepared {
                             return 0.0;
                         }
                     }
-                    let mut built = false;
-                    for &k in cands {
-                        let (bl, bh) = self.occluders.bounds(k);
-                        if bh.cmplt(lo).any() || bl.cmpgt(hi).any() {
-                            continue;
-                        }
-                        if !built {
-                            s.shaft.set(&s.pa, a.normal, &s.pb, b.normal);
-                            built = true;
-                        }
-                        if !s.shaft.excludes_polygon(self.occluders.polygon(k)) {
-                            s.found.push(k);
+                    if !s.near.is_empty() {
+                        s.shaft.set(&s.pa, a.normal, &s.pb, b.normal);
+                        for &k in &s.near {
+                            if !s.shaft.excludes_polygon(self.occluders.polygon(k)) {
+                                s.found.push(k);
+                            }
                         }
                     }
                 }
