@@ -879,7 +879,12 @@ impl Prepared {
         s.inside.extend_from_slice(&s.pa);
         for k in first_plane..s.planes.len() {
             let (m, h) = s.planes[k];
-            clip(&s.inside, m * h, m, eps, &mut s.tmp);
+            // Wholly on the plane's side: `clip` would give it back unchanged.
+            let o = m * h;
+            if s.inside.iter().all(|p| (*p - o).dot(m) + eps >= 0.0) {
+                continue;
+            }
+            clip(&s.inside, o, m, eps, &mut s.tmp);
             std::mem::swap(&mut s.inside, &mut s.tmp);
             if s.inside.len() < 3 {
                 s.planes.truncate(first_plane);
