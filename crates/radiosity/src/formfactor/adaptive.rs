@@ -467,8 +467,12 @@ impl Prepared {
                 // In the plane of either patch: no segment between them crosses it.
                 continue;
             }
-            clip(poly, a.v[0], a.normal, 0.0, &mut s.tmp);
-            clip(&s.tmp, b.v[0], b.normal, 0.0, &mut s.inside);
+            clip_between(
+                poly,
+                [(a.v[0], a.normal), (b.v[0], b.normal)],
+                &mut s.tmp,
+                &mut s.inside,
+            );
             if s.inside.len() < 3 || polygon_area(&s.inside) <= 1e-14 * size * size {
                 continue;
             }
@@ -543,8 +547,7 @@ impl Prepared {
         if flat(na, oa) || flat(nb, ob) {
             return false;
         }
-        clip(poly, oa, na, 0.0, tmp);
-        clip(tmp, ob, nb, 0.0, inside);
+        clip_between(poly, [(oa, na), (ob, nb)], tmp, inside);
         if inside.len() < 3 || polygon_area(inside) <= 1e-14 * size * size {
             return false;
         }
@@ -1308,6 +1311,30 @@ fn clip(poly: &[DVec3], origin: DVec3, normal: DVec3, slack: f64, out: &mut Vec<
     }
 }
 
+/// `poly` clipped to the front of two planes (each an origin and a normal, no slack), into
+/// `out` (`tmp` between), as [`clip`] twice; a plane that has `poly` wholly in front is
+/// skipped (`clip` would give it back unchanged).
+fn clip_between(
+    poly: &[DVec3],
+    [(oa, na), (ob, nb)]: [(DVec3, DVec3); 2],
+    tmp: &mut Vec<DVec3>,
+    out: &mut Vec<DVec3>,
+) {
+    let front = |p: &[DVec3], o: DVec3, n: DVec3| p.iter().all(|a| (*a - o).dot(n) + 0.0 >= 0.0);
+    let src: &[DVec3] = if front(poly, oa, na) {
+        poly
+    } else {
+        clip(poly, oa, na, 0.0, tmp);
+        tmp
+    };
+    if front(src, ob, nb) {
+        out.clear();
+        out.extend_from_slice(src);
+    } else {
+        clip(src, ob, nb, 0.0, out);
+    }
+}
+
 /// Split the convex `poly` by the plane through `x` with normal `m`: the part with
 /// `m · (p − x) ≥ 0` into `inside`, the rest into `outside` (points with `|m · (p − x)| ≤ eps`,
 /// within `eps / |m|` of the plane, go to both).
@@ -1441,8 +1468,7 @@ fn group_shadows(occ: &Occluders, na: DVec3, nb: DVec3, s: &mut Scratch) -> bool
         if flat(na, oa) || flat(nb, ob) {
             continue;
         }
-        clip(poly, oa, na, 0.0, &mut s.tmp);
-        clip(&s.tmp, ob, nb, 0.0, &mut s.inside);
+        clip_between(poly, [(oa, na), (ob, nb)], &mut s.tmp, &mut s.inside);
         if s.inside.len() < 3 || polygon_area(&s.inside) <= 1e-14 * size * size {
             continue;
         }
