@@ -1027,11 +1027,13 @@ impl Prepared {
                     m.0 = -m.0;
                 }
             }
-            // Wholly outside one side plane (within the slack), or wholly inside them all
-            // (beyond the slack, so that cutting would give the piece back unchanged).
+            // Wholly outside one side plane (within the slack): `None`. Otherwise the side
+            // planes the piece lies wholly inside, beyond the slack (bit k for plane k), which
+            // cutting would give back unchanged: the piece is lost whole when that is all of
+            // them, and the parts cut from it stay inside them too (but for rounding).
             let classify = |poly: &[DVec3], cone: &[(DVec3, f64)]| {
-                let mut inside = true;
-                for &(m, e) in cone {
+                let mut inside = 0u64;
+                for (k, &(m, e)) in cone.iter().enumerate() {
                     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
                     for p in poly {
                         let d = m.dot(*p - x);
@@ -1039,11 +1041,13 @@ impl Prepared {
                         hi = hi.max(d);
                     }
                     if hi <= e {
-                        return Some(false);
+                        return None;
                     }
-                    inside &= lo > e;
+                    if lo > e && k < 64 {
+                        inside |= 1 << k;
+                    }
                 }
-                inside.then_some(true)
+                Some(inside)
             };
             // Subtract the pyramid from every piece; what lies inside it is lost.
             s.next.clear();
@@ -1051,8 +1055,14 @@ impl Prepared {
             for r in 0..s.ranges.len() {
                 let (ps, pl) = s.ranges[r];
                 let piece = &s.pieces[ps as usize..(ps + pl) as usize];
-                match classify(piece, &s.cone) {
-                    Some(false) => {
+                let all = if s.cone.len() >= 64 {
+                    0
+                } else {
+                    (1u64 << s.cone.len()) - 1
+                };
+                let inside = classify(piece, &s.cone);
+                match inside {
+                    None => {
                         if keep {
                             let at = s.next.len() as u32;
                             s.next.extend_from_slice(piece);
@@ -1060,17 +1070,21 @@ impl Prepared {
                         }
                         continue;
                     }
-                    Some(true) => {
+                    Some(k) if k == all && all != 0 => {
                         if want_lost {
                             lost += point_polygon(x, n, piece);
                         }
                         continue;
                     }
-                    None => {}
+                    Some(_) => {}
                 }
+                let inside = inside.unwrap_or(0);
                 s.inside.clear();
                 s.inside.extend_from_slice(piece);
                 for k in 0..s.cone.len() {
+                    if k < 64 && inside >> k & 1 == 1 {
+                        continue;
+                    }
                     let (m, e) = s.cone[k];
                     if keep {
                         split(&s.inside, m, x, e, &mut s.tmp, &mut s.outside);
