@@ -21,7 +21,9 @@
 //!   then moves slowly with the outer point, and the sharp features near an occluder standing
 //!   on a patch fall in the exact inner integral). For each candidate S two exact questions come
 //!   first. Does S hide all of the receiver from all of the outer patch? The umbra is convex,
-//!   so its corners decide: then the pair is 0. From where does S shadow the receiver at all?
+//!   so its corners decide (every segment from a corner of one patch to a corner of the other
+//!   crosses S): then the pair is 0, and this is asked before the pair's shaft is built, as
+//!   such an S meets every segment. From where does S shadow the receiver at all?
 //!   From the points on S's side of every plane that separates S from the receiver; those
 //!   through an edge of one and a corner of the other, and S's own plane, bound that region
 //!   (Nishita & Nakamae 1985; Teller 1992), and clipping the outer patch by them gives it. If
@@ -554,20 +556,24 @@ impl Prepared {
         umbra_of(inside, no, outer, rec, eps)
     }
 
-    /// Which occluders (groups) may hold a patch that faces patch `i`, into `out`: not those
-    /// wholly behind `i`'s plane, nor those with `i` wholly behind theirs. A patch lies in
-    /// its group's polygon and plane, so a pair of `i` and a patch of such a group has one
-    /// polygon behind the other's plane but for rounding, far below the slack of
-    /// [`Prepared::exchange`]'s test, which gives it 0.
-    fn facing_groups(&self, i: usize, out: &mut Vec<bool>) {
+    /// Whether occluder (group) `g` may hold a patch that faces patch `i`: not when it lies
+    /// wholly behind `i`'s plane, nor when `i` lies wholly behind its plane. A patch lies in
+    /// its group's polygon and plane, so such a pair has one polygon behind the other's plane
+    /// (but for rounding: [`Prepared::exchange`] would give it 0, or a few roundings' worth
+    /// where the two are coplanar in f32 corners). The pair `(i, j)`, `i < j`, is skipped by
+    /// `group_faces(i, group(j))` whichever row asks, so a row alone equals the matrix's.
+    fn group_faces(&self, i: usize, g: u32) -> bool {
         let p = &self.patches[i];
+        let (poly, n) = (self.occluders.polygon(g), self.occluders.normal(g));
+        let behind_i = poly.iter().all(|v| p.normal.dot(*v - p.v[0]) <= 0.0);
+        let i_behind = p.corners().iter().all(|v| n.dot(*v - poly[0]) <= 0.0);
+        !(behind_i || i_behind)
+    }
+
+    /// [`Prepared::group_faces`] of patch `i` and every group, into `out`.
+    fn facing_groups(&self, i: usize, out: &mut Vec<bool>) {
         out.clear();
-        out.extend((0..self.occluders.len() as u32).map(|g| {
-            let (poly, n) = (self.occluders.polygon(g), self.occluders.normal(g));
-            let behind_i = poly.iter().all(|v| p.normal.dot(*v - p.v[0]) <= 0.0);
-            let i_behind = p.corners().iter().all(|v| n.dot(*v - poly[0]) <= 0.0);
-            !(behind_i || i_behind)
-        }));
+        out.extend((0..self.occluders.len() as u32).map(|g| self.group_faces(i, g)));
     }
 
     /// The exchange area of an unoccluded pair to the relative accuracy.
@@ -1573,8 +1579,15 @@ pub(super) fn row(est: &Estimator, i: usize, scratch: &mut super::Scratch) {
     let ai = prep.patches[i].area;
     let mut facing = std::mem::take(&mut scratch.adaptive.facing);
     prep.facing_groups(i, &mut facing);
+    let gi = prep.occluders.group[i];
     for j in 0..prep.patches.len() {
-        if j == i || !facing[prep.occluders.group[j] as usize] {
+        // The pair's skip as the matrix decides it: from the lower index's side.
+        let faces = match j.cmp(&i) {
+            std::cmp::Ordering::Less => prep.group_faces(j, gi),
+            std::cmp::Ordering::Equal => false,
+            std::cmp::Ordering::Greater => facing[prep.occluders.group[j] as usize],
+        };
+        if !faces {
             continue;
         }
         // Rounded as the whole matrix rounds it, so the two give the same bits.
