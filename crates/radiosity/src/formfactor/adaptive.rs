@@ -21,7 +21,9 @@
 //!   then moves slowly with the outer point, and the sharp features near an occluder standing
 //!   on a patch fall in the exact inner integral). For each candidate S two exact questions come
 //!   first. Does S hide all of the receiver from all of the outer patch? The umbra is convex,
-//!   so its corners decide: then the pair is 0. From where does S shadow the receiver at all?
+//!   so its corners decide (every segment from a corner of one patch to a corner of the other
+//!   crosses S): then the pair is 0, and this is asked before the pair's shaft is built, as
+//!   such an S meets every segment. From where does S shadow the receiver at all?
 //!   From the points on S's side of every plane that separates S from the receiver; those
 //!   through an edge of one and a corner of the other, and S's own plane, bound that region
 //!   (Nishita & Nakamae 1985; Teller 1992), and clipping the outer patch by them gives it. If
@@ -198,6 +200,8 @@ pub struct Scratch {
     tmp: Vec<DVec3>,
     shaft: Shaft,
     stack: Vec<u32>,
+    /// Candidates of the pair whose boxes meet its box, and those its shaft keeps.
+    near: Vec<u32>,
     found: Vec<u32>,
     /// Occluders of the pair clipped to the space between the planes: corners and ranges.
     occ: Vec<DVec3>,
@@ -211,7 +215,7 @@ pub struct Scratch {
     next_ranges: Vec<(u32, u32)>,
     inside: Vec<DVec3>,
     outside: Vec<DVec3>,
-    cone: Vec<DVec3>,
+    cone: Vec<(DVec3, f64)>,
     cells: Vec<Cell>,
     /// Occluders that shadow the receiver from part of the outer patch, the separating
     /// planes bounding each one's region, their corners (Ω's points) and Ω.
@@ -224,6 +228,8 @@ pub struct Scratch {
     analytic: analytic::Scratch,
     /// Which of the lost and the seen parts the points of the current pair must measure.
     need: Need,
+    /// Whether each occluder may hold a patch facing the current row's patch.
+    facing: Vec<bool>,
     stats: Stats,
 }
 
@@ -368,8 +374,18 @@ impl Prepared {
             return 0.0;
         }
         let straddle = amin < -eps || bmin < -eps;
-        clip(a.corners(), b.v[0], b.normal, 0.0, &mut s.pa);
-        clip(b.corners(), a.v[0], a.normal, 0.0, &mut s.pb);
+        // Each in front of the other's plane (a polygon wholly in front is its own clip: the
+        // sides are the ones `clip` computes).
+        let front = |p: &Patch, q: &Patch, lo: f64, out: &mut Vec<DVec3>| {
+            if lo >= 0.0 {
+                out.clear();
+                out.extend_from_slice(p.corners());
+            } else {
+                clip(p.corners(), q.v[0], q.normal, 0.0, out);
+            }
+        };
+        front(a, b, amin, &mut s.pa);
+        front(b, a, bmin, &mut s.pb);
         if s.pa.len() < 3 || s.pb.len() < 3 {
             return 0.0;
         }
@@ -397,18 +413,39 @@ impl Prepared {
                     }
                     let margin = DVec3::splat(1e-6 * (hi - lo).length());
                     let (lo, hi) = (lo - margin, hi + margin);
-                    let mut built = false;
-                    for &k in &t.candidates[start as usize..(start + len) as usize] {
+                    let cands = &t.candidates[start as usize..(start + len) as usize];
+                    // A candidate that hides all of one patch from all of the other meets
+                    // every segment between them, so it is one the shaft keeps: asked first,
+                    // it spares the shaft of a hidden pair.
+                    s.near.clear();
+                    for &k in cands {
                         let (bl, bh) = self.occluders.bounds(k);
                         if bh.cmplt(lo).any() || bl.cmpgt(hi).any() {
                             continue;
                         }
-                        if !built {
-                            s.shaft.set(&s.pa, a.normal, &s.pb, b.normal);
-                            built = true;
+                        s.near.push(k);
+                        let planes = [(a.normal, a.v[0]), (b.normal, b.v[0])];
+                        if self.hides_pair(
+                            k,
+                            planes,
+                            &s.pa,
+                            &s.pb,
+                            eps,
+                            size,
+                            &mut s.tmp,
+                            &mut s.inside,
+                        ) {
+                            s.stats.occluded += 1;
+                            s.stats.occluded_hidden += 1;
+                            return 0.0;
                         }
-                        if !s.shaft.excludes_polygon(self.occluders.polygon(k)) {
-                            s.found.push(k);
+                    }
+                    if !s.near.is_empty() {
+                        s.shaft.set(&s.pa, a.normal, &s.pb, b.normal);
+                        for &k in &s.near {
+                            if !s.shaft.excludes_polygon(self.occluders.polygon(k)) {
+                                s.found.push(k);
+                            }
                         }
                     }
                 }
@@ -432,8 +469,12 @@ impl Prepared {
                 // In the plane of either patch: no segment between them crosses it.
                 continue;
             }
-            clip(poly, a.v[0], a.normal, 0.0, &mut s.tmp);
-            clip(&s.tmp, b.v[0], b.normal, 0.0, &mut s.inside);
+            clip_between(
+                poly,
+                [(a.v[0], a.normal), (b.v[0], b.normal)],
+                &mut s.tmp,
+                &mut s.inside,
+            );
             if s.inside.len() < 3 || polygon_area(&s.inside) <= 1e-14 * size * size {
                 continue;
             }
@@ -449,6 +490,90 @@ impl Prepared {
         }
         s.stats.occluded += 1;
         self.occluded(ia, ib, straddle, size, bvh, s)
+    }
+
+    /// Whether occluder `k` alone hides all of `rec` (in the plane `(nb, ob)`: normal, point)
+    /// from all of `outer` (in `(na, oa)`), by [`umbra_of`] on `k` clipped to the space between
+    /// the two planes (as [`Prepared::occluded`] asks it). Two necessary conditions come first,
+    /// on the whole occluder and with slacks wider than the umbra's, so that only an occluder
+    /// that may hide is clipped: the two polygons on opposite sides of its plane, and the
+    /// segment between their centres through it.
+    #[allow(clippy::too_many_arguments)]
+    fn hides_pair(
+        &self,
+        k: u32,
+        [(na, oa), (nb, ob)]: [(DVec3, DVec3); 2],
+        outer: &[DVec3],
+        rec: &[DVec3],
+        eps: f64,
+        size: f64,
+        tmp: &mut Vec<DVec3>,
+        inside: &mut Vec<DVec3>,
+    ) -> bool {
+        let poly = self.occluders.polygon(k);
+        let no = self.occluders.normal(k);
+        let ho = no.dot(poly[0]);
+        let slack = 2.0 * eps;
+        let range = |p: &[DVec3]| {
+            p.iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                    let d = no.dot(*x) - ho;
+                    (lo.min(d), hi.max(d))
+                })
+        };
+        let (alo, ahi) = range(outer);
+        let (blo, bhi) = range(rec);
+        let apart = (blo >= -slack && ahi < slack) || (bhi <= slack && alo > -slack);
+        if !apart {
+            return false;
+        }
+        // The segment between the two centres crosses the occluder (well inside, as every
+        // segment does for the umbra; the slack only keeps borderline ones).
+        let ca = outer.iter().copied().sum::<DVec3>() / outer.len() as f64;
+        let cb = rec.iter().copied().sum::<DVec3>() / rec.len() as f64;
+        let (da, db) = (no.dot(ca) - ho, no.dot(cb) - ho);
+        if da == db {
+            return false;
+        }
+        let x = ca + (cb - ca) * (da / (da - db));
+        let tol = 1e-6 * size;
+        for (p, q) in edge_pairs(poly) {
+            let e = q - p;
+            // Distance of x outside the edge, in the occluder's plane (counter-clockwise
+            // about `no`), times the edge's length.
+            if e.cross(x - p).dot(no) < -tol * e.length() {
+                return false;
+            }
+        }
+        let flat = |n: DVec3, o: DVec3| poly.iter().all(|p| n.dot(*p - o).abs() <= eps);
+        if flat(na, oa) || flat(nb, ob) {
+            return false;
+        }
+        clip_between(poly, [(oa, na), (ob, nb)], tmp, inside);
+        if inside.len() < 3 || polygon_area(inside) <= 1e-14 * size * size {
+            return false;
+        }
+        umbra_of(inside, no, outer, rec, eps)
+    }
+
+    /// Whether occluder (group) `g` may hold a patch that faces patch `i`: not when it lies
+    /// wholly behind `i`'s plane, nor when `i` lies wholly behind its plane. A patch lies in
+    /// its group's polygon and plane, so such a pair has one polygon behind the other's plane
+    /// (but for rounding: [`Prepared::exchange`] would give it 0, or a few roundings' worth
+    /// where the two are coplanar in f32 corners). The pair `(i, j)`, `i < j`, is skipped by
+    /// `group_faces(i, group(j))` whichever row asks, so a row alone equals the matrix's.
+    fn group_faces(&self, i: usize, g: u32) -> bool {
+        let p = &self.patches[i];
+        let (poly, n) = (self.occluders.polygon(g), self.occluders.normal(g));
+        let behind_i = poly.iter().all(|v| p.normal.dot(*v - p.v[0]) <= 0.0);
+        let i_behind = p.corners().iter().all(|v| n.dot(*v - poly[0]) <= 0.0);
+        !(behind_i || i_behind)
+    }
+
+    /// [`Prepared::group_faces`] of patch `i` and every group, into `out`.
+    fn facing_groups(&self, i: usize, out: &mut Vec<bool>) {
+        out.clear();
+        out.extend((0..self.occluders.len() as u32).map(|g| self.group_faces(i, g)));
     }
 
     /// The exchange area of an unoccluded pair to the relative accuracy.
@@ -677,8 +802,14 @@ impl Prepared {
         // and the receiver (B) lie each wholly on one side, on opposite sides: then the plane,
         // normalised and facing S, bounds the region. Stops at the first corner that shows it
         // is not.
-        let consider = |m: DVec3, h: f64, slack: f64, planes: &mut Vec<(DVec3, f64)>| {
-            // Side of S: +1 above, -1 below, 0 within the slack so far.
+        let consider = |m: DVec3,
+                        h: f64,
+                        l: f64,
+                        slack: f64,
+                        [first, second]: [&[DVec3]; 2],
+                        occ_first: bool,
+                        planes: &mut Vec<(DVec3, f64)>| {
+            // Side of a polygon: whether a corner lies above, and one below, by the slack.
             let side_of = |p: &[DVec3]| {
                 let (mut above, mut below) = (false, false);
                 for x in p {
@@ -691,13 +822,15 @@ impl Prepared {
                 }
                 Some((above, below))
             };
-            let Some((so_above, so_below)) = side_of(occ) else {
+            let Some(f) = side_of(first) else {
                 return;
             };
-            let Some((sr_above, sr_below)) = side_of(rec) else {
+            let Some(g) = side_of(second) else {
                 return;
             };
-            let inv = 1.0 / m.length();
+            let ((so_above, so_below), (sr_above, sr_below)) =
+                if occ_first { (f, g) } else { (g, f) };
+            let inv = 1.0 / l;
             if !so_above && !sr_below {
                 // Occluder below (or on), receiver above (or on): the shadowing side is below.
                 planes.push((-m * inv, -h * inv));
@@ -706,15 +839,26 @@ impl Prepared {
             }
         };
         let tiny = 1e-24 * (eps * 1e9).powi(4);
-        for (edges, corners) in [(occ, rec.as_slice()), (rec.as_slice(), occ)] {
-            let en = edges.len();
-            for k in 0..en {
-                let (p, q) = (edges[k], edges[(k + 1) % en]);
+        // The polygon of the plane's corner is asked first: the one of its edge lies on one
+        // side (but for the slack), so it is the other that usually straddles.
+        for (edges, corners, occ_corners) in
+            [(occ, rec.as_slice(), false), (rec.as_slice(), occ, true)]
+        {
+            for (p, q) in edge_pairs(edges) {
                 for &v in corners.iter() {
                     let m = (q - p).cross(v - p);
                     let l2 = m.length_squared();
                     if l2 > tiny {
-                        consider(m, m.dot(p), eps * l2.sqrt(), &mut s.planes);
+                        let l = l2.sqrt();
+                        consider(
+                            m,
+                            m.dot(p),
+                            l,
+                            eps * l,
+                            [corners, edges],
+                            occ_corners,
+                            &mut s.planes,
+                        );
                     }
                 }
             }
@@ -744,7 +888,12 @@ impl Prepared {
         s.inside.extend_from_slice(&s.pa);
         for k in first_plane..s.planes.len() {
             let (m, h) = s.planes[k];
-            clip(&s.inside, m * h, m, eps, &mut s.tmp);
+            // Wholly on the plane's side: `clip` would give it back unchanged.
+            let o = m * h;
+            if s.inside.iter().all(|p| (*p - o).dot(m) + eps >= 0.0) {
+                continue;
+            }
+            clip(&s.inside, o, m, eps, &mut s.tmp);
             std::mem::swap(&mut s.inside, &mut s.tmp);
             if s.inside.len() < 3 {
                 s.planes.truncate(first_plane);
@@ -754,9 +903,7 @@ impl Prepared {
         // A sliver a few slacks wide (an occluder that only touches the pair's hull, kept by
         // the clipping's slack) loses nothing measurable, but would stretch Ω over the whole
         // patch and thin the points where the real shadows are.
-        let perimeter: f64 = (0..s.pa.len())
-            .map(|k| (s.pa[(k + 1) % s.pa.len()] - s.pa[k]).length())
-            .sum();
+        let perimeter: f64 = edge_pairs(&s.pa).map(|(p, q)| (q - p).length()).sum();
         if polygon_area(&s.inside) <= 16.0 * eps * perimeter {
             s.planes.truncate(first_plane);
             return false;
@@ -865,28 +1012,48 @@ impl Prepared {
             let (start, len) = s.occ_range[o];
             let w = s.occ_centre[o] - x;
             // x in the occluder's plane: its pyramid is flat and hides nothing.
-            if s.occ_normal[o].dot(w).abs() <= 1e-12 * w.length() {
+            let dw = s.occ_normal[o].dot(w);
+            if dw * dw <= 1e-24 * w.length_squared() {
                 continue;
             }
-            // The pyramid's side planes through x, normals pointing inwards.
+            // The pyramid's side planes through x, normals pointing inwards, unnormalised,
+            // each with the slack `eps` times its normal's length.
             s.cone.clear();
             let occ = &s.occ[start as usize..(start + len) as usize];
             let mut orient = 0.0;
-            for k in 0..occ.len() {
-                let m = (occ[k] - x).cross(occ[(k + 1) % occ.len()] - x);
+            for (p, q) in edge_pairs(occ) {
+                let m = (p - x).cross(q - x);
                 let l = m.length();
-                let m = if l > 0.0 { m / l } else { DVec3::ZERO };
+                // All of one sign but for rounding (x is off the occluder's plane).
                 orient += m.dot(w);
-                s.cone.push(m);
+                s.cone.push((m, eps * l));
             }
             if orient < 0.0 {
                 for m in &mut s.cone {
-                    *m = -*m;
+                    m.0 = -m.0;
                 }
             }
-            let outside = |poly: &[DVec3], cone: &[DVec3]| {
-                cone.iter()
-                    .any(|m| poly.iter().all(|p| m.dot(*p - x) <= eps))
+            // Wholly outside one side plane (within the slack): `None`. Otherwise the side
+            // planes the piece lies wholly inside, beyond the slack (bit k for plane k), which
+            // cutting would give back unchanged: the piece is lost whole when that is all of
+            // them, and the parts cut from it stay inside them too (but for rounding).
+            let classify = |poly: &[DVec3], cone: &[(DVec3, f64)]| {
+                let mut inside = 0u64;
+                for (k, &(m, e)) in cone.iter().enumerate() {
+                    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+                    for p in poly {
+                        let d = m.dot(*p - x);
+                        lo = lo.min(d);
+                        hi = hi.max(d);
+                    }
+                    if hi <= e {
+                        return None;
+                    }
+                    if lo > e && k < 64 {
+                        inside |= 1 << k;
+                    }
+                }
+                Some(inside)
             };
             // Subtract the pyramid from every piece; what lies inside it is lost.
             s.next.clear();
@@ -894,27 +1061,46 @@ impl Prepared {
             for r in 0..s.ranges.len() {
                 let (ps, pl) = s.ranges[r];
                 let piece = &s.pieces[ps as usize..(ps + pl) as usize];
-                if outside(piece, &s.cone) {
-                    if keep {
-                        let at = s.next.len() as u32;
-                        s.next.extend_from_slice(piece);
-                        s.next_ranges.push((at, pl));
+                let all = if s.cone.len() >= 64 {
+                    0
+                } else {
+                    (1u64 << s.cone.len()) - 1
+                };
+                let inside = classify(piece, &s.cone);
+                match inside {
+                    None => {
+                        if keep {
+                            let at = s.next.len() as u32;
+                            s.next.extend_from_slice(piece);
+                            s.next_ranges.push((at, pl));
+                        }
+                        continue;
                     }
-                    continue;
+                    Some(k) if k == all && all != 0 => {
+                        if want_lost {
+                            lost += point_polygon(x, n, piece);
+                        }
+                        continue;
+                    }
+                    Some(_) => {}
                 }
+                let inside = inside.unwrap_or(0);
                 s.inside.clear();
                 s.inside.extend_from_slice(piece);
                 for k in 0..s.cone.len() {
-                    let m = s.cone[k];
+                    if k < 64 && inside >> k & 1 == 1 {
+                        continue;
+                    }
+                    let (m, e) = s.cone[k];
                     if keep {
-                        split(&s.inside, m, x, eps, &mut s.tmp, &mut s.outside);
+                        split(&s.inside, m, x, e, &mut s.tmp, &mut s.outside);
                         if s.outside.len() >= 3 {
                             let at = s.next.len() as u32;
                             s.next.extend_from_slice(&s.outside);
                             s.next_ranges.push((at, s.outside.len() as u32));
                         }
                     } else {
-                        keep_inside(&s.inside, m, x, eps, &mut s.tmp);
+                        keep_inside(&s.inside, m, x, e, &mut s.tmp);
                     }
                     std::mem::swap(&mut s.inside, &mut s.tmp);
                     if s.inside.len() < 3 {
@@ -941,14 +1127,47 @@ impl Prepared {
     }
 }
 
+/// Whether every segment from a corner of `outer` to a corner of `rec` (on opposite sides of
+/// the plane of the convex occluder `occ`, unit normal `no`) crosses `occ` more than `eps`
+/// inside each of its edges. The crossing of the segment `a b` is `(a d_b − b d_a) / (d_b −
+/// d_a)` (`d` the signed distances to the plane), so each edge's test is a sign with no
+/// division.
+fn corners_cross(occ: &[DVec3], no: DVec3, outer: &[DVec3], rec: &[DVec3], eps: f64) -> bool {
+    const MAX: usize = 16;
+    if occ.len() > MAX {
+        return outer.iter().all(|&x| hides(x, occ, rec, eps));
+    }
+    let ho = no.dot(occ[0]);
+    // Each edge's inward normal in the plane, and its offset moved `eps` inwards.
+    let turn: f64 = edge_pairs(occ).map(|(p, q)| p.cross(q).dot(no)).sum();
+    let sign = if turn < 0.0 { -1.0 } else { 1.0 };
+    let mut edges = [(DVec3::ZERO, 0.0); MAX];
+    for (e, (p, q)) in edges.iter_mut().zip(edge_pairs(occ)) {
+        let g = no.cross(q - p) * sign;
+        *e = (g, g.dot(p) + eps * g.length());
+    }
+    let edges = &edges[..occ.len()];
+    outer.iter().all(|&a| {
+        let da = no.dot(a) - ho;
+        rec.iter().all(|&b| {
+            let db = no.dot(b) - ho;
+            let (x, d) = if db > da {
+                (a * db - b * da, db - da)
+            } else {
+                (b * da - a * db, da - db)
+            };
+            edges.iter().all(|&(g, c)| g.dot(x) - d * c > 0.0)
+        })
+    })
+}
+
 /// Whether the convex occluder `occ` hides every corner of the convex receiver `rec` from the
 /// point `x`: each corner strictly inside the pyramid from `x` over `occ` (the occluder being
 /// between `x` and the receiver, as the occluders of a pair are clipped to be).
 fn hides(x: DVec3, occ: &[DVec3], rec: &[DVec3], eps: f64) -> bool {
     let c = occ.iter().copied().sum::<DVec3>() / occ.len() as f64;
-    let n = occ.len();
-    (0..n).all(|k| {
-        let m = (occ[k] - x).cross(occ[(k + 1) % n] - x);
+    edge_pairs(occ).all(|(p, q)| {
+        let m = (p - x).cross(q - x);
         let l = m.length();
         if l <= 0.0 {
             return false;
@@ -963,24 +1182,31 @@ fn hides(x: DVec3, occ: &[DVec3], rec: &[DVec3], eps: f64) -> bool {
 /// receiver, is convex (the intersection over the receiver's points of the convex regions
 /// behind the occluder seen from each), so it holds the outer patch when it holds its corners;
 /// it holds a corner beyond the occluder's plane when the receiver's corners all lie inside
-/// the pyramid over the occluder from it.
+/// the pyramid over the occluder from it, that is when the segments from it to them all cross
+/// the occluder ([`corners_cross`]).
 fn umbra(o: usize, eps: f64, s: &Scratch) -> bool {
     let (start, len) = s.occ_range[o];
     let occ = &s.occ[start as usize..(start + len) as usize];
-    let (no, ho) = (s.occ_normal[o], s.occ_normal[o].dot(occ[0]));
+    umbra_of(occ, s.occ_normal[o], &s.pa, &s.pb, eps)
+}
+
+/// [`umbra`] of the occluder `occ` (unit normal `no`), the outer patch `outer` and the
+/// receiver `rec`.
+fn umbra_of(occ: &[DVec3], no: DVec3, outer: &[DVec3], rec: &[DVec3], eps: f64) -> bool {
+    let ho = no.dot(occ[0]);
     // The receiver wholly on one side of the occluder's plane, every outer corner strictly on
     // the other (from a point in the plane the pyramid is flat).
     let side = |p: &DVec3| no.dot(*p) - ho;
-    let receiver_above = s.pb.iter().all(|p| side(p) >= -eps);
-    let receiver_below = s.pb.iter().all(|p| side(p) <= eps);
+    let receiver_above = rec.iter().all(|p| side(p) >= -eps);
+    let receiver_below = rec.iter().all(|p| side(p) <= eps);
     let beyond = if receiver_above {
-        s.pa.iter().all(|p| side(p) < -eps)
+        outer.iter().all(|p| side(p) < -eps)
     } else if receiver_below {
-        s.pa.iter().all(|p| side(p) > eps)
+        outer.iter().all(|p| side(p) > eps)
     } else {
         false
     };
-    beyond && s.pa.iter().all(|&x| hides(x, occ, &s.pb, eps))
+    beyond && corners_cross(occ, no, outer, rec, eps)
 }
 
 /// The convex hull of `points` (lying in a plane with unit normal `n`), counter-clockwise
@@ -1071,6 +1297,12 @@ fn map(poly: &[DVec3], region: u8, u: f64, v: f64) -> (DVec3, f64) {
     }
 }
 
+/// The edges `(p_k, p_{k+1})` of a polygon, `k = 0, …, n − 1`, the last closing it.
+fn edge_pairs(p: &[DVec3]) -> impl Iterator<Item = (DVec3, DVec3)> + '_ {
+    let n = p.len();
+    (0..n).map(move |k| (p[k], p[if k + 1 == n { 0 } else { k + 1 }]))
+}
+
 /// Area of a planar polygon (Newell).
 fn polygon_area(p: &[DVec3]) -> f64 {
     let mut s = DVec3::ZERO;
@@ -1099,9 +1331,33 @@ fn clip(poly: &[DVec3], origin: DVec3, normal: DVec3, slack: f64, out: &mut Vec<
     }
 }
 
-/// Split the convex `poly` by the plane through `x` with unit normal `m`: the part with
-/// `m · (p − x) ≥ 0` into `inside`, the rest into `outside` (points within `eps` of the plane
-/// go to both).
+/// `poly` clipped to the front of two planes (each an origin and a normal, no slack), into
+/// `out` (`tmp` between), as [`clip`] twice; a plane that has `poly` wholly in front is
+/// skipped (`clip` would give it back unchanged).
+fn clip_between(
+    poly: &[DVec3],
+    [(oa, na), (ob, nb)]: [(DVec3, DVec3); 2],
+    tmp: &mut Vec<DVec3>,
+    out: &mut Vec<DVec3>,
+) {
+    let front = |p: &[DVec3], o: DVec3, n: DVec3| p.iter().all(|a| (*a - o).dot(n) + 0.0 >= 0.0);
+    let src: &[DVec3] = if front(poly, oa, na) {
+        poly
+    } else {
+        clip(poly, oa, na, 0.0, tmp);
+        tmp
+    };
+    if front(src, ob, nb) {
+        out.clear();
+        out.extend_from_slice(src);
+    } else {
+        clip(src, ob, nb, 0.0, out);
+    }
+}
+
+/// Split the convex `poly` by the plane through `x` with normal `m`: the part with
+/// `m · (p − x) ≥ 0` into `inside`, the rest into `outside` (points with `|m · (p − x)| ≤ eps`,
+/// within `eps / |m|` of the plane, go to both).
 fn split(
     poly: &[DVec3],
     m: DVec3,
@@ -1132,7 +1388,6 @@ fn cut(
     if let Some(o) = outside.as_deref_mut() {
         o.clear();
     }
-    let n = poly.len();
     let side = |p: DVec3| {
         let d = m.dot(p - x);
         if d.abs() <= eps {
@@ -1141,6 +1396,7 @@ fn cut(
             d
         }
     };
+    let n = poly.len();
     let mut d0 = side(poly[0]);
     for k in 0..n {
         let a = poly[k];
@@ -1182,11 +1438,10 @@ fn cut(
 /// the sum is negated.
 pub fn point_polygon(x: DVec3, n: DVec3, p: &[DVec3]) -> f64 {
     let mut sum = 0.0;
-    let m = p.len();
     let mut r2 = p[0] - x;
-    for k in 0..m {
+    for (_, q) in edge_pairs(p) {
         let r1 = r2;
-        r2 = p[(k + 1) % m] - x;
+        r2 = q - x;
         let g = r1.cross(r2);
         // An edge whose plane through x contains the normal adds nothing (a wall's
         // vertical edge seen from the floor): no angle needed.
@@ -1233,8 +1488,7 @@ fn group_shadows(occ: &Occluders, na: DVec3, nb: DVec3, s: &mut Scratch) -> bool
         if flat(na, oa) || flat(nb, ob) {
             continue;
         }
-        clip(poly, oa, na, 0.0, &mut s.tmp);
-        clip(&s.tmp, ob, nb, 0.0, &mut s.inside);
+        clip_between(poly, [(oa, na), (ob, nb)], &mut s.tmp, &mut s.inside);
         if s.inside.len() < 3 || polygon_area(&s.inside) <= 1e-14 * size * size {
             continue;
         }
@@ -1323,8 +1577,17 @@ pub(super) fn row(est: &Estimator, i: usize, scratch: &mut super::Scratch) {
         .as_ref()
         .expect("prepared for the adaptive method");
     let ai = prep.patches[i].area;
+    let mut facing = std::mem::take(&mut scratch.adaptive.facing);
+    prep.facing_groups(i, &mut facing);
+    let gi = prep.occluders.group[i];
     for j in 0..prep.patches.len() {
-        if j == i {
+        // The pair's skip as the matrix decides it: from the lower index's side.
+        let faces = match j.cmp(&i) {
+            std::cmp::Ordering::Less => prep.group_faces(j, gi),
+            std::cmp::Ordering::Equal => false,
+            std::cmp::Ordering::Greater => facing[prep.occluders.group[j] as usize],
+        };
+        if !faces {
             continue;
         }
         // Rounded as the whole matrix rounds it, so the two give the same bits.
@@ -1333,6 +1596,7 @@ pub(super) fn row(est: &Estimator, i: usize, scratch: &mut super::Scratch) {
             scratch.add(j as u32, g as f64 / ai);
         }
     }
+    scratch.adaptive.facing = facing;
     prep.flush(&mut scratch.adaptive.stats);
 }
 
@@ -1351,12 +1615,18 @@ pub(super) fn matrix(est: &Estimator, storage: Storage, observer: &dyn Observer)
         .into_par_iter()
         .map_init(Scratch::default, |s, i| {
             let mut row = Vec::new();
+            let mut facing = std::mem::take(&mut s.facing);
+            prep.facing_groups(i, &mut facing);
             for j in i + 1..n {
+                if !facing[prep.occluders.group[j] as usize] {
+                    continue;
+                }
                 let g = prep.exchange(i, j, est.bvh, s);
                 if g > 0.0 {
                     row.push((j as u32, g as f32));
                 }
             }
+            s.facing = facing;
             prep.flush(&mut s.stats);
             observer.event(Event::Progress {
                 stage: Stage::FormFactors,
