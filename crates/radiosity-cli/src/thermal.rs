@@ -566,8 +566,16 @@ pub fn run(a: ThermalArgs) -> Result<()> {
         info.total_power, info.environment_loss, info.balance_error
     );
     if let Some(mf) = &info.matrix_free {
+        // The books close in expectation: the difference should be within a few of its
+        // standard errors; say so only when it is.
+        let z = (info.total_power - info.environment_loss).abs() / mf.balance_std_error;
+        let verdict = if z.is_finite() && z <= 3.0 {
+            "within its Monte Carlo error"
+        } else {
+            "more than its Monte Carlo error explains: see docs/heat-transfer.md, the books"
+        };
         println!(
-            "            standard errors: Σ power {:.3e} W, the difference {:.3e} W (the books close in expectation; the difference is the Monte Carlo error of the sums)",
+            "            standard errors: Σ power {:.3e} W, the difference {:.3e} W; the difference is {z:.1} of them ({verdict})",
             mf.total_power_std_error, mf.balance_std_error
         );
     }
