@@ -190,31 +190,16 @@ impl SkyPatches {
     /// in azimuth; the cap in `sub` rings of `4·sub` cells); `out[ground]` is left as it is.
     pub fn sky_means(&self, l: &dyn Fn([f64; 3]) -> f64, sub: usize, out: &mut [f64]) {
         assert!(out.len() >= self.sky_count() && sub >= 1);
+        out[..self.sky].fill(0.0);
+        self.each_sample(sub, |p, _, _, d| out[p] += l(d));
         for b in &self.bands {
-            let (s0, s1) = (b.lo.sin(), b.hi.sin());
-            let (na, nz) = if b.count == 1 {
-                (4 * sub, sub)
+            let cells = if b.count == 1 {
+                4 * sub * sub
             } else {
-                (sub, sub)
+                sub * sub
             };
-            let w = TAU / b.count as f64;
-            for j in 0..b.count {
-                let a0 = (j as f64 - 0.5) * w;
-                let mut sum = 0.0;
-                for iz in 0..nz {
-                    let z = s0 + (s1 - s0) * (iz as f64 + 0.5) / nz as f64;
-                    let r = (1.0 - z * z).max(0.0).sqrt();
-                    for ia in 0..na {
-                        let az = if b.count == 1 {
-                            TAU * (ia as f64 + 0.5) / na as f64
-                        } else {
-                            a0 + w * (ia as f64 + 0.5) / na as f64
-                        };
-                        let (sa, ca) = az.sin_cos();
-                        sum += l([r * sa, r * ca, z]);
-                    }
-                }
-                out[b.first + j] = sum / (na * nz) as f64;
+            for o in &mut out[b.first..b.first + b.count] {
+                *o /= cells as f64;
             }
         }
     }
@@ -229,6 +214,26 @@ impl SkyPatches {
             heights: Vec::new(),
             ends: Vec::with_capacity(self.sky),
         };
+        self.each_sample(sub, |p, row, z, d| {
+            if row == s.heights.len() {
+                s.heights.push(z);
+            }
+            if p == s.ends.len() {
+                s.ends.push(0);
+            }
+            s.directions.push(d);
+            s.row.push(row as u32);
+            s.ends[p] = s.directions.len() as u32;
+        });
+        s
+    }
+
+    /// Every sample direction of [`SkyPatches::sky_means`] at `sub` cells a side, patch by
+    /// patch in patch order: `visit(patch, row, z, direction)`, `row` numbering the heights
+    /// z = sin θ of the cells' rows over all bands (the rows of a band are shared by its
+    /// patches).
+    fn each_sample(&self, sub: usize, mut visit: impl FnMut(usize, usize, f64, [f64; 3])) {
+        let mut first_row = 0;
         for b in &self.bands {
             let (s0, s1) = (b.lo.sin(), b.hi.sin());
             let (na, nz) = if b.count == 1 {
@@ -236,16 +241,11 @@ impl SkyPatches {
             } else {
                 (sub, sub)
             };
-            let first_row = s.heights.len() as u32;
-            for iz in 0..nz {
-                s.heights
-                    .push(s0 + (s1 - s0) * (iz as f64 + 0.5) / nz as f64);
-            }
             let w = TAU / b.count as f64;
             for j in 0..b.count {
                 let a0 = (j as f64 - 0.5) * w;
                 for iz in 0..nz {
-                    let z = s.heights[first_row as usize + iz];
+                    let z = s0 + (s1 - s0) * (iz as f64 + 0.5) / nz as f64;
                     let r = (1.0 - z * z).max(0.0).sqrt();
                     for ia in 0..na {
                         let az = if b.count == 1 {
@@ -254,14 +254,12 @@ impl SkyPatches {
                             a0 + w * (ia as f64 + 0.5) / na as f64
                         };
                         let (sa, ca) = az.sin_cos();
-                        s.directions.push([r * sa, r * ca, z]);
-                        s.row.push(first_row + iz as u32);
+                        visit(b.first + j, first_row + iz, z, [r * sa, r * ca, z]);
                     }
                 }
-                s.ends.push(s.directions.len() as u32);
             }
+            first_row += nz;
         }
-        s
     }
 
     /// The 2-phase sun: add to `sky` (patch luminances, cd/m²) a sun of direct normal
