@@ -34,7 +34,7 @@
 
 use super::lighting::{luminance, LightingSettings};
 use super::panes::{End, Panes};
-use super::sun_cone::{Cone, SunCones, Viewpoint};
+use super::sun_cone::{Cone, SunCones, SunGroups, Viewpoint, Wide};
 use super::{patch_system, MemoryCheck};
 use crate::accel::Bvh;
 use crate::color::Rgb;
@@ -47,6 +47,7 @@ use crate::observe::{Event, Observer, Stage};
 use crate::sampling::{stream, uniform};
 use crate::scene::Scene;
 use crate::Error;
+use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -816,13 +817,38 @@ impl DirectSun {
     /// The illuminance at every point (lx) from a sun of 1 lx direct normal illuminance in
     /// each of the sky-frame directions `suns` (None: no sun, 0), point-major into `out`
     /// (`out[i * suns.len() + h]`): the points in parallel, each through every direction with
-    /// its own cache of what it sees (`sun_cone::Viewpoint`). The values are
-    /// [`DirectSun::illuminance`]'s.
+    /// its own cache of what it sees (`sun_cone::Viewpoint`), the suns grouped by direction
+    /// so that a group whose wide cone is decided whole is decided for all its suns at once
+    /// (`sun_cone::SunGroups`). The values are [`DirectSun::illuminance`]'s, bit for bit.
     pub fn illuminance_many(&self, suns: &[Option<[f64; 3]>], out: &mut [f64]) {
         let nh = suns.len();
         if nh == 0 {
             return;
         }
+        let outside = Outside {
+            bvh: &self.bvh,
+            glass: self.glass.as_ref(),
+            frame: self.frame,
+        };
+        // The suns' scene-frame directions as the rays take them, grouped by direction.
+        let groups = self.cones.as_ref().map(|cones| {
+            let dirs: Vec<(usize, DVec3)> = suns
+                .iter()
+                .enumerate()
+                .filter_map(|(h, s)| {
+                    let c = outside.sun_centre((*s)?).as_dvec3().normalize_or_zero();
+                    (c != DVec3::ZERO).then_some((h, c))
+                })
+                .collect();
+            // τ of every pane class for every sun (the same for every point).
+            let mut taus = vec![0.0; cones.pane_classes() * nh];
+            for (class, row) in taus.chunks_exact_mut(nh.max(1)).enumerate() {
+                for &(h, c) in &dirs {
+                    row[h] = cones.class_transmittance(class, c);
+                }
+            }
+            (cones, SunGroups::new(cones, &dirs), taus)
+        });
         out.par_chunks_mut(nh)
             .take(self.points.len())
             .enumerate()
@@ -832,11 +858,72 @@ impl DirectSun {
                     return;
                 };
                 let mut view = Viewpoint::new(origin.as_dvec3());
-                for (o, s) in row.iter_mut().zip(suns) {
-                    *o = match s {
-                        Some(d) => self.at(i, origin, n, *d, &mut view),
-                        None => 0.0,
+                let Some((cones, groups, taus)) = &groups else {
+                    for (o, s) in row.iter_mut().zip(suns) {
+                        *o = match s {
+                            Some(d) => self.at(i, origin, n, *d, &mut view),
+                            None => 0.0,
+                        };
+                    }
+                    return;
+                };
+                // Every entry is written below but for the hours without a sun.
+                row.fill(0.0);
+                let one = |h: usize, view: &mut Viewpoint| match suns[h] {
+                    Some(d) => self.at(i, origin, n, d, view),
+                    None => 0.0,
+                };
+                if groups.nodes.is_empty() {
+                    return;
+                }
+                let mut stack = [0u32; 64];
+                let mut top = 1;
+                while top > 0 {
+                    top -= 1;
+                    let k = stack[top] as usize;
+                    let g = groups.nodes[k];
+                    let wide = match g.aperture {
+                        Some(ap) => cones.classify_wide(&mut view, g.axis, ap),
+                        None => Wide::Partial,
                     };
+                    match wide {
+                        Wide::Partial if g.child != u32::MAX && top + 2 <= stack.len() => {
+                            stack[top] = g.child;
+                            stack[top + 1] = g.child + 1;
+                            top += 2;
+                        }
+                        Wide::Partial => {
+                            for &h in groups.members(k) {
+                                row[h] = one(h, &mut view);
+                            }
+                        }
+                        // Every member's disc is covered (its value 0, as `at` finds it).
+                        Wide::Blocked => {}
+                        Wide::Clear { panes, count } => {
+                            let margin = cones.horizon_margin();
+                            for &h in groups.members(k) {
+                                let Some(d) = suns[h] else { continue };
+                                let c = outside.sun_centre(d);
+                                let cos_c = n.dot(c);
+                                if cos_c <= 0.0 {
+                                    continue;
+                                }
+                                if cos_c <= margin {
+                                    row[h] = one(h, &mut view);
+                                    continue;
+                                }
+                                let mut tau = 1.0;
+                                for &p in &panes[..count] {
+                                    tau *= match cones.pane_class(p) {
+                                        Some(class) => taus[class * nh + h],
+                                        None => cones
+                                            .transmittance(&[p], c.as_dvec3().normalize_or_zero()),
+                                    };
+                                }
+                                row[h] = cos_c as f64 * tau;
+                            }
+                        }
+                    }
                 }
             });
     }

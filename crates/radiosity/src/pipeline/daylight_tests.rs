@@ -459,7 +459,7 @@ fn direct_sun_lights_the_footprint_through_the_pane() {
 
 /// The whole-disc decisions (`sun_cone`) change no point's direct sun beyond the pane's
 /// transmittance varying over the disc: a glazed roof opening with an opaque mullion across
-/// it, 30 sun positions, 3,600 floor points. Where a pane is crossed, the decided value is
+/// it, 30 sun positions, 3,600 floor points (and a week of suns by groups). Where a pane is crossed, the decided value is
 /// cos θ τ(centre) and the sampled one cos θ times the mean of τ over 16 directions within
 /// 0.27° of it (|dτ/dθ| < 0.5 a radian at these angles: under 2.5·10⁻³ of 1 lx); elsewhere
 /// the two are bit for bit equal. Most points are decided whole.
@@ -526,6 +526,32 @@ fn whole_disc_decisions_match_the_sampled_disc() {
             assert_eq!(many[i * suns.len() + h], *x, "point {i}, sun {h}");
         }
     }
+    // A week of suns at five hours of the day, each hour's within about 2° (the groups that
+    // are decided whole, `sun_cone::SunGroups`): the same values, bit for bit.
+    let week: Vec<Option<[f64; 3]>> = (0..35)
+        .map(|k| {
+            let (hour, day) = ((k / 7) as f64, (k % 7) as f64);
+            Some(
+                SunPosition::new(
+                    35.0 + 10.0 * hour + 0.3 * day,
+                    110.0 + 30.0 * hour + 0.2 * day,
+                )
+                .unwrap()
+                .direction(),
+            )
+        })
+        .collect();
+    let mut many = vec![1.0; points.len() * week.len()];
+    ds.illuminance_many(&week, &mut many);
+    let mut lit_week = 0;
+    for (h, s) in week.iter().enumerate() {
+        ds.illuminance(s.unwrap(), &mut a);
+        for (i, x) in a.iter().enumerate() {
+            assert_eq!(many[i * week.len() + h], *x, "point {i}, sun {h}");
+            lit_week += (*x > 0.0) as usize;
+        }
+    }
+    assert!(lit_week > week.len() * points.len() / 20, "{lit_week}");
     // Unlit points decided whole are exactly 0; the rest differ by τ's spread only.
     assert!(same > n / 2, "{same} of {n}");
 }

@@ -29,6 +29,23 @@
 //! caster's split), so a seam between two polygons is Partial along its shadow: sampled, not
 //! wrong.
 //!
+//! Two refinements keep the sampling for true penumbrae:
+//!
+//! - **Seams.** A cone cut by one edge of each of two opaque polygons that share that edge
+//!   (the same two corners), and otherwise inside both, is covered by the two together when
+//!   they lie on opposite sides of the edge's plane through the point: every direction on one
+//!   side meets that side's polygon. Walls in pieces around a window, and two walls at a
+//!   corner, then block the disc over their seam without sampling ([`SunCones`]'s
+//!   `seam_covers`). A seam between panes is still sampled.
+//! - **Groups of suns.** The same tests hold for a wider cone: the disc about every direction
+//!   within a spread s of an axis lies in the cone of half-angle α + s about it, and a
+//!   polygon that this cone misses or covers is missed or covered by each disc inside it. An
+//!   annual run's suns at one hour of the day over a week lie within about 1.5° of each other,
+//!   so [`SunGroups`] gathers the suns into a tree by direction and a point decides a group
+//!   at once ([`SunCones::classify_wide`]), splitting it only where it is partial. A Clear
+//!   group lists its panes, and each sun's τ comes from a table by pane class and sun (the
+//!   same arithmetic as the sun alone, so every value is bit for bit the single sun's).
+//!
 //! The same idea, classifying a pencil of rays against polygons by separating planes through
 //! the apex and edges, is the shadow-volume test of Nishita & Nakamae (1985) and the
 //! umbra/penumbra split of Teller (1992), applied here to the sun's narrow cone.
@@ -51,12 +68,52 @@ pub(crate) enum Cone {
     Partial,
 }
 
+/// What a wide cone about a group of suns' directions meets ([`SunCones::classify_wide`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Wide {
+    /// An opaque polygon covers the whole cone: every sun of the group is blocked.
+    Blocked,
+    /// No opaque polygon meets the cone and these panes (`panes[..count]`) each cover it.
+    Clear {
+        panes: [u32; WIDE_PANES],
+        count: usize,
+    },
+    /// Some polygon meets part of the cone, or it crosses more than [`WIDE_PANES`] panes.
+    Partial,
+}
+
+/// The widest spread (degrees) of a group of suns decided at once: a week's suns at one hour
+/// of the day lie within about 1.5° of their mean, and suns an hour apart 15° apart, so
+/// groups wider than this are rarely decided whole and are split instead.
+pub(crate) const WIDEST: f64 = 5.0;
+
+/// Most panes a wide cone's Clear answer lists.
+pub(crate) const WIDE_PANES: usize = 4;
+
+/// A cone's half-angle, as its sine (the planes' test) and tangent (the boxes' widening).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Aperture {
+    sin_a: f64,
+    tan_a: f64,
+}
+
+/// A cone against every polygon.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Outcome {
+    Clear,
+    Blocked,
+    Partial,
+}
+
 /// A polygon against a cone.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Meets {
     Miss,
     Cover,
-    Partial,
+    /// Partly: the bits of the edges whose planes cut the cone, every other edge's wedge
+    /// and the plane's front side holding it whole; 0 when the cone grazes the plane or the
+    /// point lies on an edge's line or in the plane (nothing more to say).
+    Partial(u8),
 }
 
 /// A convex planar polygon of three or four corners.
@@ -68,6 +125,16 @@ struct Convex {
     centre: DVec3,
     /// The pane it is, None for an opaque polygon.
     pane: Option<Glazing>,
+}
+
+impl Convex {
+    /// The transmittance τ(θ) along the unit direction `c` (1 for an opaque polygon, which
+    /// no caller asks).
+    #[inline]
+    fn transmittance(&self, c: DVec3) -> f64 {
+        self.pane
+            .map_or(1.0, |g| g.transmittance(self.normal.dot(c)))
+    }
 }
 
 /// A node of the hierarchy: its box, and either two children (`count == 0`, the first at
@@ -92,6 +159,16 @@ const MARGIN: f64 = 2e-5;
 pub(crate) struct SunCones {
     polygons: Vec<Convex>,
     nodes: Vec<Node>,
+    /// Each opaque polygon's neighbour across each edge: the one other opaque polygon with
+    /// that edge (the same two corners), else [`NONE`].
+    neighbours: Vec<[u32; 4]>,
+    /// Each pane's class (panes of one glazing and one normal up to sign pass the same
+    /// τ(θ) in every direction), [`NONE`] for opaque polygons and past [`CLASSES`] classes.
+    class: Vec<u32>,
+    /// Each class's pane (its first).
+    classes: Vec<u32>,
+    /// The sun's half-angle, widened by [`MARGIN`].
+    half_angle: f64,
     sin_a: f64,
     tan_a: f64,
 }
@@ -123,9 +200,15 @@ impl SunCones {
             });
             build(&mut polygons, 0, n, 0, &mut nodes);
         }
+        let neighbours = neighbours(&polygons);
+        let (class, classes) = pane_classes(&polygons);
         SunCones {
             polygons,
             nodes,
+            neighbours,
+            class,
+            classes,
+            half_angle,
             sin_a: half_angle.sin(),
             tan_a: half_angle.tan(),
         }
@@ -154,35 +237,128 @@ impl SunCones {
         if c == DVec3::ZERO {
             return Cone::Partial;
         }
+        let mut tau = 1.0;
+        let narrow = Aperture {
+            sin_a: self.sin_a,
+            tan_a: self.tan_a,
+        };
+        match self.decide(v, c, narrow, &mut |_, p| {
+            tau *= p.transmittance(c);
+            true
+        }) {
+            Outcome::Clear => Cone::Clear(tau),
+            Outcome::Blocked => Cone::Blocked,
+            Outcome::Partial => Cone::Partial,
+        }
+    }
+
+    /// The aperture of a cone that holds the disc about every direction within `spread`
+    /// radians of an axis (the sun's half-angle, widened, plus `spread`); None when it is too
+    /// wide to be worth deciding (`spread` over [`WIDEST`] degrees), or not a finite angle.
+    pub(crate) fn aperture(&self, spread: f64) -> Option<Aperture> {
+        // The margin covers the rounding of the spread and of the axis.
+        let a = self.half_angle + spread + 1e-9;
+        (spread.is_finite() && spread >= 0.0 && spread <= WIDEST.to_radians()).then(|| Aperture {
+            sin_a: a.sin(),
+            tan_a: a.tan(),
+        })
+    }
+
+    /// What the cone of aperture `ap` about the unit direction `axis` meets (a group of suns,
+    /// [`SunCones::aperture`]). Blocked and Clear hold for the disc about every direction in
+    /// the cone: a polygon that misses the wide cone misses each narrow one inside it, one
+    /// that covers it covers each, so [`SunCones::classify_from`] answers the same for each
+    /// sun, a Clear one crossing exactly the panes listed here. No allocation.
+    pub(crate) fn classify_wide(&self, v: &mut Viewpoint, axis: DVec3, ap: Aperture) -> Wide {
+        let mut panes = [NONE; WIDE_PANES];
+        let mut count = 0;
+        match self.decide(v, axis, ap, &mut |k, _| {
+            if count == WIDE_PANES {
+                return false;
+            }
+            panes[count] = k;
+            count += 1;
+            true
+        }) {
+            Outcome::Blocked => Wide::Blocked,
+            Outcome::Partial => Wide::Partial,
+            Outcome::Clear => Wide::Clear { panes, count },
+        }
+    }
+
+    /// The number of pane classes (see [`SunCones::pane_class`]).
+    pub(crate) fn pane_classes(&self) -> usize {
+        self.classes.len()
+    }
+
+    /// Pane `k`'s class: every pane of a class passes the same τ(θ) in a given direction, so
+    /// a table of [`SunCones::class_transmittance`] by class and direction gives the value
+    /// [`SunCones::transmittance`] computes, bit for bit. None for a pane past the classes
+    /// kept.
+    pub(crate) fn pane_class(&self, k: u32) -> Option<usize> {
+        let c = self.class[k as usize];
+        (c != NONE).then_some(c as usize)
+    }
+
+    /// The transmittance of class `class`'s panes along the unit direction `c`.
+    pub(crate) fn class_transmittance(&self, class: usize, c: DVec3) -> f64 {
+        self.polygons[self.classes[class] as usize].transmittance(c)
+    }
+
+    /// The product of the transmittances τ(θ) of `panes` (indices from
+    /// [`SunCones::classify_wide`]) for the unit direction `c`.
+    pub(crate) fn transmittance(&self, panes: &[u32], c: DVec3) -> f64 {
+        let mut tau = 1.0;
+        for &k in panes {
+            tau *= self.polygons[k as usize].transmittance(c);
+        }
+        tau
+    }
+
+    /// The cone of aperture `ap` about the unit direction `c` against every polygon:
+    /// Blocked at the first opaque cover, Partial if any polygon meets part of it (or
+    /// `pane` refuses a pane), else Clear, every pane that covers it handed to `pane` in the
+    /// order met.
+    fn decide(
+        &self,
+        v: &mut Viewpoint,
+        c: DVec3,
+        ap: Aperture,
+        pane: &mut impl FnMut(u32, &Convex) -> bool,
+    ) -> Outcome {
         for k in 0..BLOCKERS {
             let b = v.blockers[k];
-            if b != NONE && self.meets(v, b, c) == Meets::Cover {
-                return Cone::Blocked;
+            if b != NONE && self.meets(v, b, c, ap.sin_a) == Meets::Cover {
+                return Outcome::Blocked;
             }
         }
         let Some(root) = self.nodes.first() else {
-            return Cone::Clear(1.0);
+            return Outcome::Clear;
         };
         let o = v.o;
         // The cone's radius where it leaves the scene's box bounds its radius in every box.
         let far = (o - root.lo).abs().max((root.hi - o).abs()).length();
-        let e = far * self.tan_a;
+        let e = far * ap.tan_a;
         let inv = DVec3::new(1.0 / c.x, 1.0 / c.y, 1.0 / c.z);
         if box_entry(root, e, o, c, inv).is_none() {
-            return Cone::Clear(1.0);
+            return Outcome::Clear;
         }
         // Nodes whose boxes the cone may meet; children pushed farther first, so that the
         // polygons near the point, which block most cones, are met first.
         let mut stack = [0u32; STACK];
         let mut top = 1;
         let mut partial = false;
-        let mut tau = 1.0;
+        // Opaque polygons met partly, each cut by one edge's plane only (a seam's two sides),
+        // and whether anything else was met partly.
+        let mut seams = [(NONE, 0u8); SEAMS];
+        let mut count = 0;
+        let mut other = false;
         while top > 0 {
             top -= 1;
             let node = &self.nodes[stack[top] as usize];
             if node.count == 0 {
                 if top + 2 > STACK {
-                    return Cone::Partial;
+                    return Outcome::Partial;
                 }
                 let (a, b) = (node.first, node.first + 1);
                 let ta = box_entry(&self.nodes[a as usize], e, o, c, inv);
@@ -208,29 +384,85 @@ impl SunCones {
             }
             for k in node.first..node.first + node.count {
                 let p = &self.polygons[k as usize];
-                match (self.meets(v, k, c), p.pane) {
+                match (self.meets(v, k, c, ap.sin_a), p.pane) {
                     (Meets::Miss, _) => {}
                     (Meets::Cover, None) => {
                         v.blockers.copy_within(0..BLOCKERS - 1, 1);
                         v.blockers[0] = k;
-                        return Cone::Blocked;
+                        return Outcome::Blocked;
                     }
-                    (Meets::Cover, Some(g)) => tau *= g.transmittance(p.normal.dot(c)),
-                    (Meets::Partial, _) => partial = true,
+                    (Meets::Cover, Some(_)) => {
+                        if !pane(k, p) {
+                            partial = true;
+                            other = true;
+                        }
+                    }
+                    (Meets::Partial(cut), None) if cut.is_power_of_two() && count < SEAMS => {
+                        partial = true;
+                        seams[count] = (k, cut);
+                        count += 1;
+                    }
+                    (Meets::Partial(_), _) => {
+                        partial = true;
+                        other = true;
+                    }
                 }
             }
         }
-        if partial {
-            Cone::Partial
+        if !partial {
+            return Outcome::Clear;
+        }
+        if !other && self.seam_covers(v, &seams[..count]) {
+            return Outcome::Blocked;
+        }
+        Outcome::Partial
+    }
+
+    /// Whether two of the opaque polygons `seams` (each met partly, cut by the plane of one
+    /// edge only) share that edge and lie on opposite sides of its plane through the point:
+    /// the cone's directions on each side of the plane then meet that side's polygon, so
+    /// the two cover it together. A wall in pieces, or two walls at a corner, block the disc
+    /// over their seam without its being sampled.
+    fn seam_covers(&self, v: &Viewpoint, seams: &[(u32, u8)]) -> bool {
+        for (i, &(a, cut_a)) in seams.iter().enumerate() {
+            let ea = cut_a.trailing_zeros() as usize;
+            let b = self.neighbours[a as usize][ea];
+            if b == NONE {
+                continue;
+            }
+            for &(k, cut_b) in &seams[i + 1..] {
+                if k != b {
+                    continue;
+                }
+                let eb = cut_b.trailing_zeros() as usize;
+                if self.neighbours[b as usize][eb] != a {
+                    continue;
+                }
+                // Both set-ups are in the viewpoint's cache (just computed, distinct slots
+                // or recomputed here).
+                let (pa, pb) = (self.pre(v, a), self.pre(v, b));
+                if pa.edges[ea].dot(pb.edges[eb]) < 0.0 {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// Polygon `k`'s set-up from the viewpoint: the cached one, or computed afresh.
+    fn pre(&self, v: &Viewpoint, k: u32) -> Pre {
+        let slot = k as usize % WAYS;
+        if v.keys[slot] == k {
+            v.pre[slot]
         } else {
-            Cone::Clear(tau)
+            Pre::of(&self.polygons[k as usize], v.o)
         }
     }
 
     /// Polygon `k` against the cone about `c` from the viewpoint (module documentation),
     /// its set-up taken from or put into the viewpoint's cache.
     #[inline]
-    fn meets(&self, v: &mut Viewpoint, k: u32, c: DVec3) -> Meets {
+    fn meets(&self, v: &mut Viewpoint, k: u32, c: DVec3, sin_a: f64) -> Meets {
         let slot = k as usize % WAYS;
         if v.keys[slot] != k {
             v.pre[slot] = Pre::of(&self.polygons[k as usize], v.o);
@@ -238,34 +470,39 @@ impl SunCones {
         }
         let pre = &v.pre[slot];
         if pre.dead {
-            return Meets::Partial;
+            return Meets::Partial(0);
         }
         // cos β: the centre against the normal that faces the plane from the point. Every
         // direction runs parallel to or away from the plane when cos(β − α) ≤ 0, that is
         // cos β ≤ −sin α; some do when cos(β + α) ≤ 0, cos β ≤ sin α.
         let cz = pre.toward.dot(c);
-        if cz <= -self.sin_a {
+        if cz <= -sin_a {
             return Meets::Miss;
         }
-        let mut partial = pre.partial || cz <= self.sin_a;
-        for m in &pre.edges[..pre.count as usize] {
+        let grazes = pre.partial || cz <= sin_a;
+        let mut cut = 0u8;
+        for (e, m) in pre.edges[..pre.count as usize].iter().enumerate() {
             // The angle from c to the edge's plane against α, on the polygon's side.
             let d = m.dot(c);
-            if d <= -self.sin_a {
+            if d <= -sin_a {
                 return Meets::Miss;
             }
-            if d < self.sin_a {
-                partial = true;
+            if d < sin_a {
+                cut |= 1 << e;
             }
         }
-        if partial {
-            Meets::Partial
+        if grazes {
+            Meets::Partial(0)
+        } else if cut != 0 {
+            Meets::Partial(cut)
         } else {
             Meets::Cover
         }
     }
 }
 
+/// Most polygons a cone's seam test holds.
+const SEAMS: usize = 4;
 /// Entries of a viewpoint's cache of polygon set-ups (direct-mapped by polygon index).
 const WAYS: usize = 32;
 /// Latest blockers a viewpoint tries first.
@@ -336,6 +573,116 @@ impl Viewpoint {
             blockers: [NONE; BLOCKERS],
         }
     }
+}
+
+/// Suns of nearby directions gathered into a binary tree of cones, so that a point decides a
+/// whole group with one [`SunCones::classify_wide`] (a week's suns at one hour of the day lie
+/// within a few degrees). Each node holds the members `order[first..first + count]`, the
+/// unit axis of their mean direction and the aperture of the cone that holds the disc about
+/// every member (None when it is too wide to try); an inner node's children are at `child`
+/// and `child + 1`.
+pub(crate) struct SunGroups {
+    /// Member indices (into the directions given), grouped by node.
+    pub(crate) order: Vec<usize>,
+    pub(crate) nodes: Vec<SunGroup>,
+}
+
+/// A node of [`SunGroups`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SunGroup {
+    pub(crate) axis: DVec3,
+    pub(crate) aperture: Option<Aperture>,
+    pub(crate) first: u32,
+    pub(crate) count: u32,
+    /// The first child (the second follows it); [`NONE`] for a single sun.
+    pub(crate) child: u32,
+}
+
+impl SunGroups {
+    /// The tree over the unit directions `dirs` (index, direction), split at the median of
+    /// the longest axis of their extent until one sun is left, each node's aperture from
+    /// `cones`. Empty for no directions.
+    pub(crate) fn new(cones: &SunCones, dirs: &[(usize, DVec3)]) -> SunGroups {
+        let mut items = dirs.to_vec();
+        let mut nodes = Vec::with_capacity(2 * items.len());
+        if !items.is_empty() {
+            let n = items.len();
+            nodes.push(SunGroup {
+                axis: DVec3::Z,
+                aperture: None,
+                first: 0,
+                count: 0,
+                child: NONE,
+            });
+            group(cones, &mut items, 0, n, 0, &mut nodes);
+        }
+        SunGroups {
+            order: items.into_iter().map(|(i, _)| i).collect(),
+            nodes,
+        }
+    }
+
+    /// The members of node `k`.
+    pub(crate) fn members(&self, k: usize) -> &[usize] {
+        let g = &self.nodes[k];
+        &self.order[g.first as usize..(g.first + g.count) as usize]
+    }
+}
+
+/// Fill node `at` with `items[first..end]`.
+fn group(
+    cones: &SunCones,
+    items: &mut [(usize, DVec3)],
+    first: usize,
+    end: usize,
+    at: usize,
+    nodes: &mut Vec<SunGroup>,
+) {
+    let part = &items[first..end];
+    let sum: DVec3 = part.iter().map(|p| p.1).sum();
+    let axis = sum.normalize_or_zero();
+    // The largest angle from the axis to a member (rounding is covered by the aperture's
+    // margin).
+    let spread = part
+        .iter()
+        .map(|p| p.1.dot(axis).clamp(-1.0, 1.0).acos())
+        .fold(0.0, f64::max);
+    let n = end - first;
+    nodes[at] = SunGroup {
+        axis,
+        aperture: if axis == DVec3::ZERO || n < 2 {
+            None
+        } else {
+            cones.aperture(spread)
+        },
+        first: first as u32,
+        count: n as u32,
+        child: NONE,
+    };
+    if n < 2 {
+        return;
+    }
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for p in part {
+        lo = lo.min(p.1);
+        hi = hi.max(p.1);
+    }
+    let extent = hi - lo;
+    let axis = if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
+    };
+    items[first..end].select_nth_unstable_by(n / 2, |a, b| a.1[axis].total_cmp(&b.1[axis]));
+    let child = nodes.len();
+    let blank = nodes[at];
+    nodes.push(blank);
+    nodes.push(blank);
+    nodes[at].child = child as u32;
+    group(cones, items, first, first + n / 2, child, nodes);
+    group(cones, items, first + n / 2, end, child + 1, nodes);
 }
 
 /// Where the centre ray enters the node's box widened by `e`, the cone's radius at the
@@ -431,6 +778,80 @@ fn add_mesh(mesh: &Mesh, pane: &dyn Fn(u32) -> Option<Glazing>, out: &mut Vec<Co
             }
         }
     }
+}
+
+/// Most pane classes kept (a building's glazing has a few orientations and glasses).
+const CLASSES: usize = 64;
+
+/// The panes' classes (see [`SunCones`]): the same glazing, and normals equal or opposite
+/// bit for bit, so that |n · c| and τ are the same for every pane of a class.
+fn pane_classes(polygons: &[Convex]) -> (Vec<u32>, Vec<u32>) {
+    let mut class = vec![NONE; polygons.len()];
+    let mut classes: Vec<u32> = Vec::new();
+    for (k, p) in polygons.iter().enumerate() {
+        let Some(g) = p.pane else { continue };
+        let found = classes.iter().position(|&q| {
+            let q = &polygons[q as usize];
+            q.pane == Some(g) && (q.normal == p.normal || q.normal == -p.normal)
+        });
+        match found {
+            Some(c) => class[k] = c as u32,
+            None if classes.len() < CLASSES => {
+                class[k] = classes.len() as u32;
+                classes.push(k as u32);
+            }
+            None => {}
+        }
+    }
+    (class, classes)
+}
+
+/// An edge by its two corners' coordinates' bits, the lesser first.
+type EdgeKey = ([u64; 3], [u64; 3]);
+
+/// Each opaque polygon's neighbour across each edge (see [`SunCones`]): edges matched by
+/// their corners' exact coordinates, either way round, where exactly two opaque polygons
+/// hold the edge.
+fn neighbours(polygons: &[Convex]) -> Vec<[u32; 4]> {
+    let key = |a: DVec3, b: DVec3| {
+        let (a, b) = (
+            a.to_array().map(f64::to_bits),
+            b.to_array().map(f64::to_bits),
+        );
+        if a <= b {
+            (a, b)
+        } else {
+            (b, a)
+        }
+    };
+    // (the edge's corners' bits, the polygon, the edge's index in it)
+    let mut edges: Vec<(EdgeKey, u32, u8)> = Vec::new();
+    for (k, p) in polygons.iter().enumerate() {
+        if p.pane.is_some() {
+            continue;
+        }
+        for e in 0..p.count {
+            let (a, b) = (p.corners[e], p.corners[(e + 1) % p.count]);
+            edges.push((key(a, b), k as u32, e as u8));
+        }
+    }
+    edges.sort_unstable_by_key(|x| x.0);
+    let mut out = vec![[NONE; 4]; polygons.len()];
+    let mut i = 0;
+    while i < edges.len() {
+        let mut j = i + 1;
+        while j < edges.len() && edges[j].0 == edges[i].0 {
+            j += 1;
+        }
+        if j - i == 2 && edges[i].1 != edges[i + 1].1 {
+            let (a, ea) = (edges[i].1, edges[i].2);
+            let (b, eb) = (edges[i + 1].1, edges[i + 1].2);
+            out[a as usize][ea as usize] = b;
+            out[b as usize][eb as usize] = a;
+        }
+        i = j;
+    }
+    out
 }
 
 /// Fill node `at` with the polygons `first..end`, splitting at the median of the centres along

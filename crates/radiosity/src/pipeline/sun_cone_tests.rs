@@ -229,3 +229,141 @@ fn panes_seams_and_the_hierarchy() {
     }
     assert!(seen.iter().all(|&k| k > 50), "{seen:?}");
 }
+
+/// Two opaque polygons sharing an edge, in one plane (a wall in pieces) or folded along it at
+/// random (two walls at a corner, seen from either side), and cones aimed across the seam:
+/// Blocked only when every sampled direction meets one of the two, and the cones that the two
+/// cover only together (neither alone) are mostly decided Blocked rather than sampled.
+#[test]
+fn seams_block_what_their_two_sides_cover() {
+    let mut rng = stream(11, 4, 2, 9);
+    let alpha = (0.5 * 0.533f64).to_radians();
+    let (mut blocked, mut covered, mut covered_blocked) = (0usize, 0usize, 0usize);
+    for trial in 0..6_000 {
+        let centre = random_point(&mut rng, 1.0);
+        let (u, v) = (random_point(&mut rng, 1.5), random_point(&mut rng, 1.5));
+        let a = vec![
+            centre - u - v,
+            centre + u - v,
+            centre + u + v,
+            centre - u + v,
+        ];
+        // B across A's edge 1–2: in A's plane, or turned about the edge by up to ±170°.
+        let (p, q) = (a[1], a[2]);
+        let axis = (q - p).normalize();
+        let out = (p - a[0]) - axis * axis.dot(p - a[0]);
+        let turn = if trial % 3 == 0 {
+            0.0
+        } else {
+            (uniform(&mut rng) as f64 * 2.0 - 1.0) * 170f64.to_radians()
+        };
+        let w = glam::DQuat::from_axis_angle(axis, turn) * out * (0.3 + uniform(&mut rng) as f64);
+        let b = vec![q, p, p + w, q + w];
+        let (Some(pa), Some(pb)) = (convex(&a, None), convex(&b, None)) else {
+            continue;
+        };
+        let o = centre + random_point(&mut rng, 6.0);
+        // Near the seam, not on it (a direction exactly along the seam's plane is met by
+        // neither polygon in the brute force's rounding, by both in exact arithmetic).
+        let s = uniform(&mut rng) as f64;
+        let aim = p + (q - p) * s + (p - a[0]) * (0.02 * (uniform(&mut rng) as f64 - 0.5));
+        let c = (aim - o).normalize_or_zero();
+        if c == DVec3::ZERO {
+            continue;
+        }
+        let cones = SunCones::of(vec![pa, pb], alpha - MARGIN);
+        let dirs = cone(c, alpha);
+        let met = dirs
+            .iter()
+            .filter(|&&d| hits(&a, o, d) || hits(&b, o, d))
+            .count();
+        let got = cones.classify(o, c);
+        if got == Cone::Blocked {
+            blocked += 1;
+            assert_eq!(met, dirs.len(), "Blocked but a direction passes: {trial}");
+        }
+        // Covered by the two together, with room to spare, and cut by the seam.
+        let wide = cone(c, 2.0 * alpha);
+        let wide_met = wide
+            .iter()
+            .filter(|&&d| hits(&a, o, d) || hits(&b, o, d))
+            .count();
+        let far_corners = [a[0], a[3], b[2], b[3], p, q]
+            .iter()
+            .all(|&x| (x - o).normalize().dot(c) < (3.0 * alpha).cos());
+        // Neither alone covers it: only the seam rule can decide it.
+        let straddles =
+            wide.iter().any(|&d| !hits(&a, o, d)) && wide.iter().any(|&d| !hits(&b, o, d));
+        if wide_met == wide.len() && far_corners && straddles {
+            covered += 1;
+            covered_blocked += (got == Cone::Blocked) as usize;
+        }
+    }
+    assert!(blocked > 300, "{blocked}");
+    assert!(
+        covered > 300 && covered_blocked as f64 > 0.9 * covered as f64,
+        "{covered_blocked} of {covered}"
+    );
+}
+
+/// A wide cone about a group of suns against random polygons, opaque and glazed: Blocked only
+/// when every sun inside it is Blocked alone, and Clear only when every sun inside it is Clear
+/// alone with the product of the listed panes' τ, bit for bit; the three answers each occur.
+#[test]
+fn a_wide_cone_decides_every_sun_inside_it() {
+    let mut rng = stream(13, 2, 7, 1);
+    let glass = Glazing::new(0.8, crate::lighting::glazing::GLASS_INDEX).unwrap();
+    let alpha = (0.5 * 0.533f64).to_radians();
+    let mut seen = [0usize; 3];
+    for trial in 0..4_000 {
+        let polygons: Vec<Convex> = (0..4)
+            .filter_map(|k| {
+                let pane = (k % 2 == 1).then_some(glass);
+                convex(&random_polygon(&mut rng), pane)
+            })
+            .collect();
+        let cones = SunCones::of(polygons, alpha);
+        let o = random_point(&mut rng, 4.0);
+        let target = cones.polygons[trial % cones.polygons.len()].centre;
+        let axis = (target - o + random_point(&mut rng, 0.5)).normalize_or_zero();
+        if axis == DVec3::ZERO {
+            continue;
+        }
+        let spread = uniform(&mut rng) as f64 * WIDEST.to_radians();
+        let ap = cones.aperture(spread).unwrap();
+        let (t, b) = (
+            axis.any_orthonormal_vector(),
+            axis.cross(axis.any_orthonormal_vector()),
+        );
+        let suns: Vec<DVec3> = (0..8)
+            .map(|k| {
+                let r = spread * if k == 0 { 0.0 } else { (k as f64 / 7.0).sqrt() };
+                let phi = std::f64::consts::TAU * uniform(&mut rng) as f64;
+                (axis * r.cos() + (t * phi.cos() + b * phi.sin()) * r.sin()).normalize()
+            })
+            .collect();
+        let mut view = Viewpoint::new(o);
+        match cones.classify_wide(&mut view, axis, ap) {
+            Wide::Blocked => {
+                seen[0] += 1;
+                for &c in &suns {
+                    assert_eq!(cones.classify(o, c), Cone::Blocked, "{trial}");
+                }
+            }
+            Wide::Clear { panes, count } => {
+                seen[1] += 1;
+                for &c in &suns {
+                    // As the single sun's test takes it (normalised again).
+                    let tau = cones.transmittance(&panes[..count], c.normalize_or_zero());
+                    match cones.classify(o, c) {
+                        Cone::Clear(t) if count <= 1 => assert_eq!(t, tau, "{trial}"),
+                        Cone::Clear(t) => assert!((t - tau).abs() <= 1e-15, "{trial}"),
+                        other => panic!("{trial}: {other:?}"),
+                    }
+                }
+            }
+            Wide::Partial => seen[2] += 1,
+        }
+    }
+    assert!(seen.iter().all(|&k| k > 200), "{seen:?}");
+}
