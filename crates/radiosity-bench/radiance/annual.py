@@ -406,6 +406,9 @@ def main():
                     "default: " + "; ".join(o or "(defaults)" for o in OURS))
     ap.add_argument("--two-phase", default="all", choices=["all", "none"],
                     help="run Radiance's 2-phase years too (all three settings) or not")
+    ap.add_argument("--two-phase-settings",
+                    help="the 2-phase runs' rfluxmtx settings as 'AB,AD,LW' separated by ';' "
+                    "(default: " + "; ".join(f"{ab},{ad},{lw:g}" for ab, ad, lw in TWO_PHASE) + ")")
     ap.add_argument("--sun-study", action="store_true",
                     help="also the sun's share of the error on Radiance's matrix (one more "
                     "rfluxmtx -ab 8 -ad 16384 run)")
@@ -424,9 +427,12 @@ def main():
     # The years, side by side.
     ours_sets = OURS if args.ours is None else [o.strip() for o in args.ours.split(";")]
     settings = [("ours " + (o or "defaults"), "ours", o.split()) for o in ours_sets]
+    two_phase = TWO_PHASE if args.two_phase_settings is None else [
+        (int(ab), int(ad), float(lw))
+        for ab, ad, lw in (s.split(",") for s in args.two_phase_settings.split(";"))]
     if args.two_phase == "all":
         settings += [(f"2-phase -ab {ab} -ad {ad} -lw {lw:g}", "2phase", (ab, ad, lw))
-                     for ab, ad, lw in TWO_PHASE]
+                     for ab, ad, lw in two_phase]
     times = {name: [] for name, _, _ in settings}
     commands, errs = {}, {}
     if args.sky_check:

@@ -1018,7 +1018,7 @@ fn solve_columns(
     ls.mesh.validate()?;
     ls.form_factors.validate()?;
     ls.params.validate()?;
-    let (opaque, glass) = split_panes(scene)?;
+    let (opaque, mut glass) = split_panes(scene)?;
     let limit = ls.memory_limit.bytes();
     let memory = MemoryCheck {
         limit,
@@ -1031,6 +1031,9 @@ fn solve_columns(
     memory.check(mesh.len() as u64)?;
     observer.event(Event::Stage(Stage::Bvh));
     let bvh = Bvh::build(&mesh);
+    if let Some(g) = glass.as_mut() {
+        g.join(&mesh);
+    }
     let base = patch_system(&opaque, &mesh);
     let outside = Outside {
         bvh: &bvh,

@@ -61,6 +61,10 @@ pub(crate) struct Panes {
     bvh: Bvh,
     /// Per scene material, its pane (None: opaque).
     glazing: Vec<Option<Glazing>>,
+    /// One hierarchy over an opaque mesh's patches and then the panes' ([`Panes::join`]),
+    /// with that mesh's patch count: a branch then needs one ray cast where it needs two
+    /// apart.
+    joined: Option<(Bvh, u32)>,
 }
 
 impl Panes {
@@ -78,7 +82,45 @@ impl Panes {
         }
         let mesh = Mesh::build(&g, MeshParams::Faces)?;
         let bvh = Bvh::build(&mesh);
-        Ok(Some(Panes { mesh, bvh, glazing }))
+        Ok(Some(Panes {
+            mesh,
+            bvh,
+            glazing,
+            joined: None,
+        }))
+    }
+
+    /// Build one hierarchy over `opaque` (the mesh whose hierarchy [`Panes::follow`] is then
+    /// given) and the panes, so that each branch of a followed ray is one ray cast instead of
+    /// two. The ends are the same: the nearest of the two casts' hits is the nearest hit of
+    /// the one (the same triangles and the same intersection arithmetic). Costs a copy of the
+    /// mesh's vertices and patches for as long as it is built, and the hierarchy.
+    pub(crate) fn join(&mut self, opaque: &Mesh) {
+        let offset = opaque.vertices.len() as u32;
+        let mut vertices = Vec::with_capacity(opaque.vertices.len() + self.mesh.vertices.len());
+        vertices.extend_from_slice(&opaque.vertices);
+        vertices.extend_from_slice(&self.mesh.vertices);
+        let mut patches = Vec::with_capacity(opaque.patches.len() + self.mesh.patches.len());
+        patches.extend_from_slice(&opaque.patches);
+        patches.extend(self.mesh.patches.iter().map(|p| {
+            let mut q = *p;
+            for v in &mut q.vertices {
+                if *v != crate::mesh::Patch::NONE {
+                    *v += offset;
+                }
+            }
+            q
+        }));
+        let both = Mesh {
+            vertices,
+            patches,
+            max_edge: opaque.max_edge,
+            groups: Vec::new(),
+            hanging: Vec::new(),
+            grids: opaque.grids.clone(),
+            coincident: Default::default(),
+        };
+        self.joined = Some((Bvh::build(&both), opaque.len() as u32));
     }
 
     /// The panes' mesh (one patch a polygon).
@@ -134,9 +176,25 @@ impl Panes {
             top -= 1;
             let (o, d, w, events) = stack[top];
             let ray = Ray::new(o, d);
-            let wall = opaque.closest_hit(&ray, f32::INFINITY);
-            let t_wall = wall.map_or(f32::INFINITY, |h| h.t);
-            let Some(h) = self.bvh.closest_hit(&ray, t_wall) else {
+            // The nearest opaque hit and the nearest pane before it: one cast when joined.
+            let (wall, pane) = match &self.joined {
+                Some((both, n)) => match both.closest_hit(&ray, f32::INFINITY) {
+                    Some(h) if h.patch >= *n => (
+                        None,
+                        Some(crate::accel::Hit {
+                            patch: h.patch - n,
+                            ..h
+                        }),
+                    ),
+                    other => (other, None),
+                },
+                None => {
+                    let wall = opaque.closest_hit(&ray, f32::INFINITY);
+                    let t_wall = wall.map_or(f32::INFINITY, |h| h.t);
+                    (wall, self.bvh.closest_hit(&ray, t_wall))
+                }
+            };
+            let Some(h) = pane else {
                 visit(
                     match wall {
                         Some(h) if h.front => End::Front(h.patch),

@@ -319,3 +319,58 @@ fn light_crosses_a_pane_both_ways_in_the_interreflection() {
         );
     }
 }
+
+/// One hierarchy over the walls and the panes ([`Panes::join`]) follows every ray as the two
+/// apart do: 20,000 rays from random points in random directions in a closed box holding two
+/// free panes (none touching a wall, so no hit ties between a pane and a wall), every branch's
+/// end and weight the same, bit for bit, and the absorbed weight too.
+#[test]
+fn a_joined_hierarchy_follows_every_branch_as_the_two_apart() {
+    let mut polys = vec![
+        (rect(0, 0.0, [0.0, 1.0, 0.0, 1.0], true), 0),
+        (rect(0, 1.5, [0.0, 1.0, 0.0, 1.0], false), 0),
+        (rect(1, 0.0, [0.0, 1.5, 0.0, 1.0], true), 0),
+        (rect(1, 1.0, [0.0, 1.5, 0.0, 1.0], false), 0),
+        (rect(2, 0.0, [0.0, 1.5, 0.0, 1.0], true), 0),
+        (rect(2, 1.0, [0.0, 1.5, 0.0, 1.0], false), 0),
+        (rect(0, 0.75, [0.2, 0.8, 0.2, 0.8], true), 1),
+    ];
+    let tilted = vec![
+        Vec3::new(0.3, 0.1, 0.3),
+        Vec3::new(0.5, 0.1, 0.7),
+        Vec3::new(0.5, 0.9, 0.7),
+        Vec3::new(0.3, 0.9, 0.3),
+    ];
+    polys.push((tilted, 2));
+    let scene = scene_of(
+        vec![
+            Material::diffuse("wall", Rgb::splat(0.5)),
+            glass(0.8),
+            glass(0.6),
+        ],
+        polys,
+    );
+    let (_, mesh, bvh, apart) = split(&scene);
+    let (_, _, _, mut joined) = split(&scene);
+    joined.join(&mesh);
+    let mut rng = crate::sampling::stream(21, 0, 0, 0);
+    let mut u = || crate::sampling::uniform(&mut rng);
+    let (mut branches, mut crossed) = (0usize, 0usize);
+    for _ in 0..20_000 {
+        let o = Vec3::new(0.05 + 1.4 * u(), 0.05 + 0.9 * u(), 0.05 + 0.9 * u());
+        let d = Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5).normalize_or_zero();
+        if d == Vec3::ZERO {
+            continue;
+        }
+        let mut a = Vec::new();
+        let mut b = Vec::new();
+        let lost_a = apart.follow(&bvh, o, d, &mut |e, w| a.push((e, w)));
+        let lost_b = joined.follow(&bvh, o, d, &mut |e, w| b.push((e, w)));
+        assert_eq!(a, b, "from {o} along {d}");
+        assert_eq!(lost_a, lost_b);
+        branches += a.len();
+        crossed += (a.len() > 1) as usize;
+    }
+    // Many rays meet a pane and branch.
+    assert!(crossed > 2_000 && branches > 22_000, "{crossed} {branches}");
+}
