@@ -418,6 +418,9 @@ struct PatchSky {
     patches: Vec<PatchBounds>,
     /// Bands (lower, upper altitude) sorted, each with its patches' indices.
     bands: Vec<([f64; 2], Vec<usize>)>,
+    /// Each band's patches by where they start in azimuth, taken into [0, 2π), ascending:
+    /// (start, patch).
+    starts: Vec<Vec<(f64, usize)>>,
 }
 
 impl PatchSky {
@@ -430,7 +433,34 @@ impl PatchSky {
             }
         }
         bands.sort_by(|a, b| a.0[0].total_cmp(&b.0[0]));
-        Self { patches, bands }
+        let starts = bands
+            .iter()
+            .map(|(_, members)| {
+                let mut s: Vec<(f64, usize)> = members
+                    .iter()
+                    .map(|&k| {
+                        let a = patches[k].azimuth[0].rem_euclid(std::f64::consts::TAU);
+                        (a, k)
+                    })
+                    .collect();
+                s.sort_by(|a, b| a.0.total_cmp(&b.0));
+                s
+            })
+            .collect();
+        Self {
+            patches,
+            bands,
+            starts,
+        }
+    }
+
+    /// Whether patch `k` holds azimuth `az` (in [0, 2π)).
+    #[inline]
+    fn holds(&self, k: usize, az: f64) -> bool {
+        let p = &self.patches[k];
+        // The azimuth measured from the patch's start, in [0, 2π).
+        let from = (az - p.azimuth[0]).rem_euclid(std::f64::consts::TAU);
+        from < p.azimuth[1] - p.azimuth[0]
     }
 }
 
@@ -441,15 +471,28 @@ impl SkyColumns for PatchSky {
     fn bin(&self, d: [f64; 3]) -> Option<(usize, f64)> {
         let alt = d[2].clamp(-1.0, 1.0).asin();
         let az = d[0].atan2(d[1]).rem_euclid(std::f64::consts::TAU);
-        for (a, members) in &self.bands {
+        for ((a, members), starts) in self.bands.iter().zip(&self.starts) {
             if alt < a[0] || (alt >= a[1] && a[1] < std::f64::consts::FRAC_PI_2) {
                 continue;
             }
+            // The patch starting last at or before `az` (the last of all when none does,
+            // the band's patch across north), found by bisection, and its neighbours, which
+            // may also hold `az` by rounding at a boundary: the first of them in patch order
+            // that holds it, as the scan over the band's patches in order finds. The scan
+            // only when none does (a gap).
+            let n = starts.len();
+            let i = starts.partition_point(|&(s, _)| s <= az);
+            let at = if i == 0 { n - 1 } else { i - 1 };
+            let near = [
+                starts[(at + n - 1) % n].1,
+                starts[at].1,
+                starts[(at + 1) % n].1,
+            ];
+            if let Some(k) = near.into_iter().filter(|&k| self.holds(k, az)).min() {
+                return Some((k, 1.0));
+            }
             for &k in members {
-                let p = &self.patches[k];
-                // The azimuth measured from the patch's start, in [0, 2π).
-                let from = (az - p.azimuth[0]).rem_euclid(std::f64::consts::TAU);
-                if from < p.azimuth[1] - p.azimuth[0] {
+                if self.holds(k, az) {
                     return Some((k, 1.0));
                 }
             }

@@ -666,3 +666,73 @@ fn block_jacobi_solves_every_column() {
         assert!(work.unshot[c] <= 0.5 * work.emitted[c]);
     }
 }
+
+/// The sky patches' look-up by bisection finds, for every direction, the patch the plain scan
+/// over each band's patches finds: 200,000 random directions above the horizon and every
+/// patch's corners and edges' midpoints of the Reinhart skies MF:1 and MF:2, in either
+/// azimuth convention (a patch starting west of north, or east of it).
+#[test]
+fn patch_look_up_by_bisection_matches_the_scan() {
+    for mf in [1, 2] {
+        let sky = crate::daylight::patches::SkyPatches::reinhart(mf).unwrap();
+        for shift in [0.0, 0.5] {
+            let patches: Vec<PatchBounds> = (0..sky.sky_count())
+                .map(|p| {
+                    let (alt, [z0, z1]) = sky.bounds(p);
+                    let w = z1 - z0;
+                    PatchBounds {
+                        altitude: [alt[0], alt[1].min(std::f64::consts::FRAC_PI_2)],
+                        azimuth: if w < std::f64::consts::TAU {
+                            [z0 + shift * w, z1 + shift * w]
+                        } else {
+                            [z0, z1]
+                        },
+                        ground: 0.0,
+                    }
+                })
+                .collect();
+            let ps = PatchSky::new(patches.clone());
+            let scan = |d: [f64; 3]| -> Option<usize> {
+                let alt = d[2].clamp(-1.0, 1.0).asin();
+                let az = d[0].atan2(d[1]).rem_euclid(std::f64::consts::TAU);
+                for (a, members) in &ps.bands {
+                    if alt < a[0] || (alt >= a[1] && a[1] < std::f64::consts::FRAC_PI_2) {
+                        continue;
+                    }
+                    for &k in members {
+                        if ps.holds(k, az) {
+                            return Some(k);
+                        }
+                    }
+                }
+                None
+            };
+            let mut dirs = Vec::new();
+            let mut rng = stream(9, mf as u64, 0, 0);
+            for _ in 0..200_000 {
+                let z = uniform(&mut rng) as f64;
+                let phi = std::f64::consts::TAU * uniform(&mut rng) as f64;
+                let r = (1.0 - z * z).sqrt();
+                dirs.push([r * phi.sin(), r * phi.cos(), z]);
+            }
+            for p in &patches {
+                for &alt in &[p.altitude[0], 0.5 * (p.altitude[0] + p.altitude[1])] {
+                    for &az in &[
+                        p.azimuth[0],
+                        0.5 * (p.azimuth[0] + p.azimuth[1]),
+                        p.azimuth[1],
+                    ] {
+                        dirs.push(direction(alt, az));
+                    }
+                }
+            }
+            let mut found = 0;
+            for d in dirs {
+                let got = ps.bin(d).map(|(k, _)| k);
+                assert_eq!(got, scan(d), "MF:{mf} shift {shift} {d:?}");
+                found += got.is_some() as usize;
+            }
+            assert!(found > 200_000, "{found}");
+        }
+    }
+}
