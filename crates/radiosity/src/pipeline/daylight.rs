@@ -483,11 +483,15 @@ impl SkyColumns for PatchSky {
             let n = starts.len();
             let i = starts.partition_point(|&(s, _)| s <= az);
             let at = if i == 0 { n - 1 } else { i - 1 };
-            let near = [
-                starts[(at + n - 1) % n].1,
-                starts[at].1,
-                starts[(at + 1) % n].1,
-            ];
+            let k = starts[at].1;
+            // Well inside its patch (farther than rounding from either edge), no neighbour
+            // can hold `az`.
+            let p = &self.patches[k];
+            let from = (az - p.azimuth[0]).rem_euclid(std::f64::consts::TAU);
+            if from >= 1e-9 && from < p.azimuth[1] - p.azimuth[0] - 1e-9 {
+                return Some((k, 1.0));
+            }
+            let near = [starts[(at + n - 1) % n].1, k, starts[(at + 1) % n].1];
             if let Some(k) = near.into_iter().filter(|&k| self.holds(k, az)).min() {
                 return Some((k, 1.0));
             }
