@@ -31,11 +31,11 @@
 //!
 //! Two refinements keep the sampling for true penumbrae:
 //!
-//! - **Seams.** A cone cut by one edge of each of two opaque polygons that share that edge
-//!   (the same two corners), and otherwise inside both, is covered by the two together when
-//!   they lie on opposite sides of the edge's plane through the point: every direction on one
-//!   side meets that side's polygon. Walls in pieces around a window, and two walls at a
-//!   corner, then block the disc over their seam without sampling ([`SunCones`]'s
+//! - **Seams.** A cone cut by one edge of each of two opaque polygons, and otherwise inside
+//!   both, is covered by the two together when the two edges' planes through the point are
+//!   one plane and the polygons lie on its opposite sides: every direction on one side meets
+//!   that side's polygon. Walls in pieces around a window (T-junctions included), and two
+//!   walls at a corner, then block the disc over their seam without sampling ([`SunCones`]'s
 //!   `seam_covers`). A seam between panes is still sampled.
 //! - **Groups of suns.** The same tests hold for a wider cone: the disc about every direction
 //!   within a spread s of an axis lies in the cone of half-angle α + s about it, and a
@@ -159,9 +159,6 @@ const MARGIN: f64 = 2e-5;
 pub(crate) struct SunCones {
     polygons: Vec<Convex>,
     nodes: Vec<Node>,
-    /// Each opaque polygon's neighbour across each edge: the one other opaque polygon with
-    /// that edge (the same two corners), else [`NONE`].
-    neighbours: Vec<[u32; 4]>,
     /// Each pane's class (panes of one glazing and one normal up to sign pass the same
     /// τ(θ) in every direction), [`NONE`] for opaque polygons and past [`CLASSES`] classes.
     class: Vec<u32>,
@@ -200,12 +197,10 @@ impl SunCones {
             });
             build(&mut polygons, 0, n, 0, &mut nodes);
         }
-        let neighbours = neighbours(&polygons);
         let (class, classes) = pane_classes(&polygons);
         SunCones {
             polygons,
             nodes,
-            neighbours,
             class,
             classes,
             half_angle,
@@ -419,29 +414,23 @@ impl SunCones {
     }
 
     /// Whether two of the opaque polygons `seams` (each met partly, cut by the plane of one
-    /// edge only) share that edge and lie on opposite sides of its plane through the point:
-    /// the cone's directions on each side of the plane then meet that side's polygon, so
-    /// the two cover it together. A wall in pieces, or two walls at a corner, block the disc
-    /// over their seam without its being sampled.
+    /// edge only) are cut by the same plane through the point, one on each side: the cone's
+    /// directions on each side of the plane then meet that side's polygon (they lie inside
+    /// its other edges' planes, in front), so the two cover it together. The two edges need
+    /// not be one: a wall in pieces, two walls at a corner and a T-junction (a piece's edge
+    /// along part of another's) all block the disc over their seam without its being
+    /// sampled. The planes count as one when their unit normals are opposite within
+    /// [`SEAM_PLANE`] (an angle under 4.5·10⁻⁷ rad, far below the single-precision rays'
+    /// resolution that [`MARGIN`] covers); an edge shared by two polygons gives exactly
+    /// opposite normals.
     fn seam_covers(&self, v: &Viewpoint, seams: &[(u32, u8)]) -> bool {
         for (i, &(a, cut_a)) in seams.iter().enumerate() {
-            let ea = cut_a.trailing_zeros() as usize;
-            let b = self.neighbours[a as usize][ea];
-            if b == NONE {
-                continue;
-            }
-            for &(k, cut_b) in &seams[i + 1..] {
-                if k != b {
-                    continue;
-                }
-                let eb = cut_b.trailing_zeros() as usize;
-                if self.neighbours[b as usize][eb] != a {
-                    continue;
-                }
-                // Both set-ups are in the viewpoint's cache (just computed, distinct slots
-                // or recomputed here).
-                let (pa, pb) = (self.pre(v, a), self.pre(v, b));
-                if pa.edges[ea].dot(pb.edges[eb]) < 0.0 {
+            let pa = self.pre(v, a);
+            let ma = pa.edges[cut_a.trailing_zeros() as usize];
+            for &(b, cut_b) in &seams[i + 1..] {
+                let pb = self.pre(v, b);
+                let mb = pb.edges[cut_b.trailing_zeros() as usize];
+                if ma.dot(mb) <= -(1.0 - SEAM_PLANE) {
                     return true;
                 }
             }
@@ -501,6 +490,9 @@ impl SunCones {
     }
 }
 
+/// How far from −1 the dot product of two edges' plane normals may be for the planes to be
+/// one ([`SunCones`]'s `seam_covers`).
+const SEAM_PLANE: f64 = 1e-13;
 /// Most polygons a cone's seam test holds.
 const SEAMS: usize = 4;
 /// Entries of a viewpoint's cache of polygon set-ups (direct-mapped by polygon index).
@@ -804,54 +796,6 @@ fn pane_classes(polygons: &[Convex]) -> (Vec<u32>, Vec<u32>) {
         }
     }
     (class, classes)
-}
-
-/// An edge by its two corners' coordinates' bits, the lesser first.
-type EdgeKey = ([u64; 3], [u64; 3]);
-
-/// Each opaque polygon's neighbour across each edge (see [`SunCones`]): edges matched by
-/// their corners' exact coordinates, either way round, where exactly two opaque polygons
-/// hold the edge.
-fn neighbours(polygons: &[Convex]) -> Vec<[u32; 4]> {
-    let key = |a: DVec3, b: DVec3| {
-        let (a, b) = (
-            a.to_array().map(f64::to_bits),
-            b.to_array().map(f64::to_bits),
-        );
-        if a <= b {
-            (a, b)
-        } else {
-            (b, a)
-        }
-    };
-    // (the edge's corners' bits, the polygon, the edge's index in it)
-    let mut edges: Vec<(EdgeKey, u32, u8)> = Vec::new();
-    for (k, p) in polygons.iter().enumerate() {
-        if p.pane.is_some() {
-            continue;
-        }
-        for e in 0..p.count {
-            let (a, b) = (p.corners[e], p.corners[(e + 1) % p.count]);
-            edges.push((key(a, b), k as u32, e as u8));
-        }
-    }
-    edges.sort_unstable_by_key(|x| x.0);
-    let mut out = vec![[NONE; 4]; polygons.len()];
-    let mut i = 0;
-    while i < edges.len() {
-        let mut j = i + 1;
-        while j < edges.len() && edges[j].0 == edges[i].0 {
-            j += 1;
-        }
-        if j - i == 2 && edges[i].1 != edges[i + 1].1 {
-            let (a, ea) = (edges[i].1, edges[i].2);
-            let (b, eb) = (edges[i + 1].1, edges[i + 1].2);
-            out[a as usize][ea as usize] = b;
-            out[b as usize][eb as usize] = a;
-        }
-        i = j;
-    }
-    out
 }
 
 /// Fill node `at` with the polygons `first..end`, splitting at the median of the centres along

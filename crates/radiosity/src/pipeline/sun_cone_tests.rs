@@ -230,8 +230,9 @@ fn panes_seams_and_the_hierarchy() {
     assert!(seen.iter().all(|&k| k > 50), "{seen:?}");
 }
 
-/// Two opaque polygons sharing an edge, in one plane (a wall in pieces) or folded along it at
-/// random (two walls at a corner, seen from either side), and cones aimed across the seam:
+/// Two opaque polygons sharing an edge or part of one (a T-junction), in one plane (a wall in
+/// pieces) or folded along it at random (two walls at a corner, seen from either side), and
+/// cones aimed across the seam:
 /// Blocked only when every sampled direction meets one of the two, and the cones that the two
 /// cover only together (neither alone) are mostly decided Blocked rather than sampled.
 #[test]
@@ -258,7 +259,18 @@ fn seams_block_what_their_two_sides_cover() {
             (uniform(&mut rng) as f64 * 2.0 - 1.0) * 170f64.to_radians()
         };
         let w = glam::DQuat::from_axis_angle(axis, turn) * out * (0.3 + uniform(&mut rng) as f64);
-        let b = vec![q, p, p + w, q + w];
+        // B's edge along A's: the same edge, or (every other trial) a T-junction, B's edge
+        // running from inside A's past one of its ends.
+        let (s0, s1) = if trial % 2 == 0 {
+            (0.0, 1.0)
+        } else {
+            (
+                0.5 * uniform(&mut rng) as f64,
+                1.0 + 0.5 * uniform(&mut rng) as f64,
+            )
+        };
+        let (bp, bq) = (p + (q - p) * s0, p + (q - p) * s1);
+        let b = vec![bq, bp, bp + w, bq + w];
         let (Some(pa), Some(pb)) = (convex(&a, None), convex(&b, None)) else {
             continue;
         };
@@ -288,7 +300,7 @@ fn seams_block_what_their_two_sides_cover() {
             .iter()
             .filter(|&&d| hits(&a, o, d) || hits(&b, o, d))
             .count();
-        let far_corners = [a[0], a[3], b[2], b[3], p, q]
+        let far_corners = [a[0], a[3], b[2], b[3], p, q, bp, bq]
             .iter()
             .all(|&x| (x - o).normalize().dot(c) < (3.0 * alpha).cos());
         // Neither alone covers it: only the seam rule can decide it.
@@ -366,4 +378,31 @@ fn a_wide_cone_decides_every_sun_inside_it() {
         }
     }
     assert!(seen.iter().all(|&k| k > 200), "{seen:?}");
+}
+
+/// Two opaque squares side by side in the plane z = 1 and the sun's cone from the origin
+/// aimed across their seam: touching (one edge, or a T-junction where the second square's
+/// edge is longer) they block it; 0.002 apart, a gap of 0.002 rad that the cone straddles,
+/// the cone is Partial (sampled), not Blocked.
+#[test]
+fn a_seam_blocks_and_a_gap_does_not() {
+    let v = |x: f64, y: f64| DVec3::new(x, y, 1.0);
+    let alpha = (0.5 * 0.533f64).to_radians();
+    let left = convex(
+        &[v(-1.0, -1.0), v(0.0, -1.0), v(0.0, 1.0), v(-1.0, 1.0)],
+        None,
+    )
+    .unwrap();
+    let right = |x0: f64, y0: f64, y1: f64| {
+        convex(&[v(x0, y0), v(1.0, y0), v(1.0, y1), v(x0, y1)], None).unwrap()
+    };
+    let c = DVec3::new(0.001, 0.0, 1.0).normalize();
+    let o = DVec3::ZERO;
+    for (r, want) in [
+        (right(0.0, -1.0, 1.0), Cone::Blocked),
+        (right(0.0, -1.5, 2.0), Cone::Blocked),
+        (right(0.002, -1.0, 1.0), Cone::Partial),
+    ] {
+        assert_eq!(SunCones::of(vec![left, r], alpha).classify(o, c), want);
+    }
 }
