@@ -6,9 +6,9 @@
 use crate::args::{LightingArgs, SunMethod};
 use anyhow::{bail, Context, Result};
 use radiosity::daylight::annual::{
-    annual, write_hourly_header, write_hourly_npy_header, write_hourly_npy_rows, write_hourly_rows,
-    write_metrics_csv, AnnualParams, DaylightMatrix, EpwSkies, HourBlock, SkySource, Sun,
-    SunCoefficients,
+    annual_by_grids, write_hourly_header, write_hourly_npy_header, write_hourly_npy_rows,
+    write_hourly_rows, write_metrics_csv, AnnualParams, DaylightMatrix, EpwSkies, HourBlock,
+    SkySource, Sun, SunCoefficients,
 };
 use radiosity::daylight::epw::read_epw;
 use radiosity::daylight::metrics::{MetricParams, Occupancy, PointMetrics};
@@ -357,6 +357,8 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     };
     let t = std::time::Instant::now();
     let skies = EpwSkies::new(&epw, &patches, &params);
+    // EN 17037 a grid (file) at a time: each is a room's reference plane.
+    let ranges: Vec<std::ops::Range<usize>> = grids.iter().map(|(_, r)| r.clone()).collect();
     let mut staged = Staged::default();
     let year = match &a.hourly {
         Some(h) => {
@@ -384,7 +386,7 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
                             ))
                         })
                     };
-                    let r = annual(&skies, &d, sun, &params, Some(&mut sink));
+                    let r = annual_by_grids(&skies, &d, sun, &params, &ranges, Some(&mut sink));
                     if let Some(e) = failed {
                         return Err(e);
                     }
@@ -402,7 +404,7 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
                 })?;
             outcome.expect("the body runs the year")?
         }
-        None => annual(&skies, &d, sun, &params, None)?,
+        None => annual_by_grids(&skies, &d, sun, &params, &ranges, None)?,
     };
     let t_year = t.elapsed().as_secs_f64();
     let positions: Vec<[f64; 3]> = points.iter().map(|p| p.position).collect();
@@ -417,7 +419,8 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     if let Some(p) = &a.summary {
         let grids_json: Vec<serde_json::Value> = grid_metrics
             .iter()
-            .map(|(name, count, g)| {
+            .zip(&year.provision)
+            .map(|((name, count, g), p)| {
                 serde_json::json!({
                     "file": name,
                     "points": count,
@@ -431,6 +434,7 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
                         "exceeded": g.udi[3],
                         "useful": g.udi[1] + g.udi[2],
                     },
+                    "en17037": en17037_json(p),
                 })
             })
             .collect();
@@ -507,6 +511,20 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
             100.0 * g.udi[3]
         );
     }
+    for ((name, _, _), p) in grid_metrics.iter().zip(&year.provision) {
+        let [minimum, medium, high] = p.shares;
+        println!(
+            "EN 17037    {name}: daylight provision {} ({} daylight hours; share of them with 300 lx over 50 % / 100 lx over 95 % of the points {:.1} / {:.1} %, 500/300 lx {:.1} / {:.1} %, 750/500 lx {:.1} / {:.1} %)",
+            p.level_name(),
+            p.daylight_hours,
+            100.0 * minimum[0],
+            100.0 * minimum[1],
+            100.0 * medium[0],
+            100.0 * medium[1],
+            100.0 * high[0],
+            100.0 * high[1]
+        );
+    }
     if !c.converged {
         eprintln!(
             "radiosity: warning: the interreflection stopped before its tolerance {}",
@@ -552,4 +570,30 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// EN 17037's daylight provision of a grid as JSON: the level met, the daylight hours, and
+/// per level its illuminances and the shares of daylight hours meeting each.
+fn en17037_json(p: &radiosity::daylight::provision::Provision) -> serde_json::Value {
+    use radiosity::daylight::provision::LEVELS;
+    let levels: serde_json::Map<String, serde_json::Value> = LEVELS
+        .iter()
+        .zip(&p.shares)
+        .map(|(&(name, target, minimum), s)| {
+            (
+                name.to_string(),
+                serde_json::json!({
+                    "target_illuminance": target,
+                    "minimum_illuminance": minimum,
+                    "target_hours_share": s[0],
+                    "minimum_hours_share": s[1],
+                }),
+            )
+        })
+        .collect();
+    serde_json::json!({
+        "level": p.level_name(),
+        "daylight_hours": p.daylight_hours,
+        "levels": levels,
+    })
 }

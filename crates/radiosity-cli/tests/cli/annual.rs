@@ -173,6 +173,30 @@ fn an_open_floor_gets_the_weather_files_diffuse_illuminance_every_hour() {
         // Occupied 8:00–18:00: ten hours a day, all lit.
         assert_eq!(summary["annual"]["occupied_hours"], 3650);
         assert_eq!(summary["annual"]["lit_hours"], 12 * 365);
+        // EN 17037: the daylight hours are the brighter half of the year, here exactly the
+        // 4,380 lit hours. At 100 W/m² every point is far above 750 lx in each: every level's
+        // both criteria in every daylight hour, the high level. At 1 W/m² (100–300 lx) no
+        // hour reaches 300 lx over half the points, every hour 100 lx over all: not met.
+        let en = &g["en17037"];
+        assert_eq!(en["daylight_hours"], 4380);
+        let share = |level: &str, which: &str| en["levels"][level][which].as_f64().unwrap();
+        if bright {
+            assert_eq!(en["level"], "high");
+            for level in ["minimum", "medium", "high"] {
+                assert_eq!(share(level, "target_hours_share"), 1.0);
+                assert_eq!(share(level, "minimum_hours_share"), 1.0);
+            }
+            assert!(
+                stdout.contains("EN 17037    points.pts: daylight provision high"),
+                "{stdout}"
+            );
+        } else {
+            assert_eq!(en["level"], "not met");
+            assert_eq!(share("minimum", "target_hours_share"), 0.0);
+            assert_eq!(share("minimum", "minimum_hours_share"), 1.0);
+            assert_eq!(share("medium", "minimum_hours_share"), 0.0);
+            assert!(stdout.contains("daylight provision not met"), "{stdout}");
+        }
     }
 }
 

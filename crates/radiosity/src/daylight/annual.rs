@@ -31,12 +31,16 @@
 //! chunks and forms their dot products with every lit hour of the block, so memory stays
 //! points × block and each entry is summed by one thread in a fixed order (the result does
 //! not depend on the thread count). Dark hours (no diffuse light) give 0 without a product.
+//! Each block's hours go to the metrics ([`super::metrics`]) and to EN 17037's daylight
+//! provision per grid ([`super::provision`], over the daylight hours chosen first from every
+//! hour's diffuse horizontal illuminance, [`SkySource::diffuse_illuminance`]).
 
 use super::epw::Epw;
 use super::metrics::{Accumulator, MetricParams, Metrics, Occupancy};
 use super::patches::{PatchSamples, SkyPatches};
 use super::perez::{Condition, PerezSky, DEFAULT_DEW_POINT};
-use super::solar::{solar_position, Site};
+use super::provision::{daylight_hours, Provision, ProvisionAccumulator};
+use super::solar::{solar_position, Site, SolarPosition};
 use super::DaylightError;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -245,6 +249,12 @@ pub trait SkySource: Sync {
     fn stamp(&self, h: usize) -> [u32; 3] {
         [0, 0, h as u32]
     }
+    /// Hour `h`'s diffuse horizontal illuminance outside, lx (what its sky is scaled to);
+    /// by default from [`SkySource::sky`], which also computes the sky.
+    fn diffuse_illuminance(&self, h: usize) -> Result<f64, DaylightError> {
+        let mut out = vec![0.0; self.patches().len()];
+        Ok(self.sky(h, false, &mut out)?.diffuse_horizontal)
+    }
     /// Hour `h`'s patch luminances (cd/m², the ground last) into `out`, the sun added to its
     /// patch when `sun_in_patch`; its light otherwise.
     fn sky(
@@ -304,26 +314,17 @@ fn day_of_year(year: i32, month: u32, day: u32) -> u32 {
     days[..(month as usize - 1)].iter().sum::<u32>() + day
 }
 
-impl SkySource for EpwSkies<'_> {
-    fn patches(&self) -> &SkyPatches {
-        self.patches
-    }
+/// An hour's Perez condition with its diffuse horizontal and direct normal illuminances, lx.
+type PerezHour = (Condition, f64, f64);
 
-    fn hours(&self) -> usize {
-        self.epw.records.len()
-    }
-
-    fn stamp(&self, h: usize) -> [u32; 3] {
-        let r = &self.epw.records[h];
-        [r.month, r.day, r.hour]
-    }
-
-    fn sky(
+impl EpwSkies<'_> {
+    /// Hour `h`'s record checked: its light with the occupancy and the sun's direction set,
+    /// the sun's position, and, when it has diffuse light, its Perez condition with the
+    /// diffuse horizontal and direct normal illuminances (lx). Errors: a missing irradiance.
+    fn hour(
         &self,
         h: usize,
-        sun_in_patch: bool,
-        out: &mut [f64],
-    ) -> Result<HourLight, DaylightError> {
+    ) -> Result<(HourLight, SolarPosition, Option<PerezHour>), DaylightError> {
         let r = &self.epw.records[h];
         let at = |what: &str| {
             super::invalid(&self.epw.name, r.line, format!("{what} is missing (9999)"))
@@ -342,15 +343,13 @@ impl SkySource for EpwSkies<'_> {
             2019
         };
         let pos = solar_position(&self.site, year, r.month, r.day, r.mid_hour());
-        let mut light = HourLight {
+        let light = HourLight {
             occupied: self.params.occupancy.occupied(r.mid_hour()),
             sun: pos.direction(),
             ..Default::default()
         };
-        out.iter_mut().for_each(|v| *v = 0.0);
         if diffuse <= 0.0 {
-            // No diffuse light: a dark hour (gendaymtx does the same).
-            return Ok(light);
+            return Ok((light, pos, None));
         }
         let doy = day_of_year(year, r.month, r.day);
         let condition = Condition::new(
@@ -365,6 +364,40 @@ impl SkySource for EpwSkies<'_> {
             direct * condition.direct_efficacy()
         } else {
             0.0
+        };
+        Ok((light, pos, Some((condition, e_d, e_n))))
+    }
+}
+
+impl SkySource for EpwSkies<'_> {
+    fn patches(&self) -> &SkyPatches {
+        self.patches
+    }
+
+    fn hours(&self) -> usize {
+        self.epw.records.len()
+    }
+
+    fn stamp(&self, h: usize) -> [u32; 3] {
+        let r = &self.epw.records[h];
+        [r.month, r.day, r.hour]
+    }
+
+    fn diffuse_illuminance(&self, h: usize) -> Result<f64, DaylightError> {
+        Ok(self.hour(h)?.2.map_or(0.0, |(_, e_d, _)| e_d))
+    }
+
+    fn sky(
+        &self,
+        h: usize,
+        sun_in_patch: bool,
+        out: &mut [f64],
+    ) -> Result<HourLight, DaylightError> {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        let (mut light, pos, perez) = self.hour(h)?;
+        let Some((condition, e_d, e_n)) = perez else {
+            // No diffuse light: a dark hour (gendaymtx does the same).
+            return Ok(light);
         };
         let sky = PerezSky::relative(&condition, pos.azimuth);
         let patches = self.patches;
@@ -417,6 +450,8 @@ pub struct Annual {
     pub lit_hours: usize,
     /// The metrics over the occupied hours.
     pub metrics: Metrics,
+    /// EN 17037's daylight provision, a grid at a time.
+    pub provision: Vec<Provision>,
 }
 
 /// Dot product, four partial sums (the order is fixed: the result does not depend on
@@ -442,12 +477,28 @@ const POINT_CHUNK: usize = 32;
 
 /// Run the year: every hour of `skies` through `coefficients`, the sun as `sun` says, the
 /// metrics accumulated and each block of hourly illuminance handed to `hourly` (when given)
-/// in order.
+/// in order. EN 17037's daylight provision is taken over all the points as one grid
+/// ([`annual_by_grids`] for several).
 pub fn annual(
     skies: &dyn SkySource,
     coefficients: &DaylightMatrix,
     sun: Sun,
     params: &AnnualParams,
+    hourly: Option<HourlySink>,
+) -> Result<Annual, DaylightError> {
+    let all = 0..coefficients.points();
+    annual_by_grids(skies, coefficients, sun, params, &[all], hourly)
+}
+
+/// [`annual`] with EN 17037's daylight provision ([`super::provision`]) for each of `grids`
+/// (ranges of point indices, one a room's reference plane), over the daylight hours of
+/// `skies` (the half of its hours with the most diffuse horizontal illuminance).
+pub fn annual_by_grids(
+    skies: &dyn SkySource,
+    coefficients: &DaylightMatrix,
+    sun: Sun,
+    params: &AnnualParams,
+    grids: &[std::ops::Range<usize>],
     mut hourly: Option<HourlySink>,
 ) -> Result<Annual, DaylightError> {
     params.validate()?;
@@ -477,6 +528,18 @@ pub fn annual(
     let mut occupied = vec![false; block];
     let mut suns: Vec<Option<[f64; 3]>> = vec![None; block];
     let mut acc = Accumulator::new(points, params.metrics);
+    if let Some(g) = grids.iter().find(|g| g.end > points || g.start > g.end) {
+        return Err(DaylightError::Parameter(format!(
+            "a grid of points {}..{} outside the {points} points",
+            g.start, g.end
+        )));
+    }
+    let diffuse: Vec<f64> = (0..hours)
+        .into_par_iter()
+        .map(|h| skies.diffuse_illuminance(h))
+        .collect::<Result<_, _>>()?;
+    let daylight = daylight_hours(&diffuse);
+    let mut provision = ProvisionAccumulator::new(grids.to_vec());
     let mut lit_hours = 0;
     let mut first = 0;
     while first < hours {
@@ -558,6 +621,7 @@ pub fn annual(
             &total[..points * nb],
             &direct[..nb * points],
         );
+        provision.add_block(&daylight[first..first + nb], &total[..points * nb]);
         if let Some(sink) = hourly.as_mut() {
             sink(&HourBlock {
                 first,
@@ -572,6 +636,7 @@ pub fn annual(
         hours,
         lit_hours,
         metrics: acc.finish(),
+        provision: provision.finish(),
     })
 }
 

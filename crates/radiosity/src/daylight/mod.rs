@@ -33,6 +33,7 @@ pub mod epw;
 pub mod metrics;
 pub mod patches;
 pub mod perez;
+pub mod provision;
 pub mod solar;
 
 /// A unit direction from altitude and azimuth (radians; azimuth clockwise from north) in the

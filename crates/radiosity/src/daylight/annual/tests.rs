@@ -229,6 +229,8 @@ fn an_unobstructed_point_gets_the_weather_files_illuminance() {
     };
     let mut lit = 0;
     let mut sunny_occupied = 0;
+    let mut diffuse = vec![0.0; epw.records.len()];
+    let mut totals = vec![0.0; epw.records.len()];
     for (h, r) in epw.records.iter().enumerate() {
         let pos = solar_position(&site, 2005, r.month, r.day, r.mid_hour());
         let (dni, dhi) = (r.direct_normal.unwrap(), r.diffuse_horizontal.unwrap());
@@ -245,10 +247,19 @@ fn an_unobstructed_point_gets_the_weather_files_illuminance() {
             if e_n >= 1000.0 && Occupancy::default().occupied(r.mid_hour()) {
                 sunny_occupied += 1;
             }
+            diffuse[h] = dhi * c.diffuse_efficacy();
             dhi * c.diffuse_efficacy() + e_n
         } else {
             0.0
         };
+        totals[h] = want;
+        // The daylight hours' measure: the sky's diffuse horizontal illuminance, as the hour's
+        // sky is scaled to it.
+        assert_eq!(
+            skies.diffuse_illuminance(h).unwrap(),
+            diffuse[h],
+            "hour {h}"
+        );
         for e in [hours_a[h][0], hours_a[h][1], hours_b[h][0]] {
             assert!(
                 (e - want).abs() <= 1e-9 * want.max(1.0),
@@ -262,6 +273,22 @@ fn an_unobstructed_point_gets_the_weather_files_illuminance() {
     // are the ones counted here.
     assert_eq!(exact.metrics.points[0].sun_hours, sunny_occupied);
     assert_eq!(in_patch.metrics.points[0].sun_hours, sunny_occupied);
+    // EN 17037 over the two (equal) points as one grid, recounted here: the 4,380 hours of
+    // most diffuse light (of 5,110 lit), and in each whether the points reach E_T and E_TM.
+    let mut order: Vec<usize> = (0..diffuse.len()).collect();
+    order.sort_by(|&a, &b| diffuse[b].total_cmp(&diffuse[a]));
+    let day = &order[..diffuse.len() / 2];
+    assert!(day.iter().all(|&h| diffuse[h] > 0.0));
+    let p = &exact.provision[0];
+    assert_eq!(p.daylight_hours as usize, day.len());
+    for (k, &(_, target, minimum)) in super::super::provision::LEVELS.iter().enumerate() {
+        let share =
+            |e: f64| day.iter().filter(|&&h| totals[h] >= e).count() as f64 / day.len() as f64;
+        assert_eq!(p.shares[k], [share(target), share(minimum)], "level {k}");
+    }
+    // (Every daylight hour here is above 750 lx: the thresholds themselves are checked in
+    // `provision`'s tests.)
+    assert_eq!(p.level, Some(2));
 }
 
 #[test]
