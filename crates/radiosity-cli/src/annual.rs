@@ -11,7 +11,7 @@ use radiosity::daylight::annual::{
     SkySource, Sun, SunCoefficients,
 };
 use radiosity::daylight::epw::read_epw;
-use radiosity::daylight::metrics::{MetricParams, Occupancy, PointMetrics};
+use radiosity::daylight::metrics::{parse_schedule, MetricParams, Occupancy, PointMetrics};
 use radiosity::daylight::patches::{SkyPatches, MAX_SUBDIVISION};
 use radiosity::io::{FileFormat, OutputError, Staged};
 use radiosity::lighting::sky::SkyFrame;
@@ -131,7 +131,10 @@ fn check_csv(flag: &str, p: &Path, a: &LightingArgs) -> Result<()> {
             p.display()
         );
     }
-    if a.grid.iter().any(|g| g == p) || a.weather.as_deref() == Some(p) {
+    if a.grid.iter().any(|g| g == p)
+        || a.weather.as_deref() == Some(p)
+        || a.occupancy_schedule.as_deref() == Some(p)
+    {
         bail!("{flag} {}: an output would overwrite an input", p.display());
     }
     crate::settings::check_output(p)
@@ -213,6 +216,7 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
         }
         for (set, flag) in [
             (a.occupancy.is_some(), "--occupancy"),
+            (a.occupancy_schedule.is_some(), "--occupancy-schedule"),
             (a.sda_threshold.is_some(), "--sda-threshold"),
             (a.sda_fraction.is_some(), "--sda-fraction"),
             (a.ase_threshold.is_some(), "--ase-threshold"),
@@ -246,12 +250,18 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
         Some(spec) => occupancy(spec)?,
         None => Occupancy::default(),
     };
+    if a.occupancy.is_some() && a.occupancy_schedule.is_some() {
+        bail!("--occupancy and --occupancy-schedule both set the occupied hours: give one");
+    }
     let metrics = metric_params(&a)?;
     check_csv("--annual", out, &a)?;
     if let Some(h) = &a.hourly {
         if !is_npy(h) {
             check_csv("--hourly", h, &a)?;
-        } else if a.grid.iter().any(|g| g == h) || a.weather.as_deref() == Some(h) {
+        } else if a.grid.iter().any(|g| g == h)
+            || a.weather.as_deref() == Some(h)
+            || a.occupancy_schedule.as_deref() == Some(h)
+        {
             bail!(
                 "--hourly {}: an output would overwrite an input",
                 h.display()
@@ -277,6 +287,18 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     }
     let (up, _) = crate::lighting::scene_up(&a)?;
     let epw = read_epw(weather).with_context(|| format!("--weather {}", weather.display()))?;
+    let schedule = match &a.occupancy_schedule {
+        Some(p) => {
+            let name = p.display().to_string();
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("--occupancy-schedule {name}: cannot be read"))?;
+            Some(
+                parse_schedule(&text, &name, epw.records.len())
+                    .with_context(|| format!("--occupancy-schedule {name}"))?,
+            )
+        }
+        None => None,
+    };
     let (mut points, mut grids) = crate::lighting::read_grids(&a)?;
     let mut scene = crate::load_scene(&a.scene, false)?;
     crate::daylight::glaze(&mut scene, &a.glazing)?;
@@ -357,6 +379,10 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
     };
     let t = std::time::Instant::now();
     let skies = EpwSkies::new(&epw, &patches, &params);
+    let skies = match &schedule {
+        Some(s) => skies.with_schedule(s.clone())?,
+        None => skies,
+    };
     // EN 17037 a grid (file) at a time: each is a room's reference plane.
     let ranges: Vec<std::ops::Range<usize>> = grids.iter().map(|(_, r)| r.clone()).collect();
     let mut staged = Staged::default();
@@ -449,7 +475,10 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
                 "hours": year.hours,
                 "lit_hours": year.lit_hours,
                 "occupied_hours": m.occupied_hours,
-                "occupancy": [params.occupancy.start, params.occupancy.end],
+                "occupancy": match &a.occupancy_schedule {
+                    Some(p) => serde_json::json!(p.display().to_string()),
+                    None => serde_json::json!([params.occupancy.start, params.occupancy.end]),
+                },
                 "thresholds": {
                     "sda_illuminance": params.metrics.sda_illuminance,
                     "sda_fraction": params.metrics.sda_fraction,
@@ -475,14 +504,16 @@ pub(crate) fn run(a: LightingArgs) -> Result<()> {
         c.patches
     );
     println!(
-        "weather     {} ({}): {} hours, {} lit, {} occupied ({}:00–{}:00)",
+        "weather     {} ({}): {} hours, {} lit, {} occupied ({})",
         weather.display(),
         epw.location.city,
         year.hours,
         year.lit_hours,
         m.occupied_hours,
-        params.occupancy.start,
-        params.occupancy.end
+        match &a.occupancy_schedule {
+            Some(p) => format!("schedule {}", p.display()),
+            None => format!("{}:00–{}:00", params.occupancy.start, params.occupancy.end),
+        }
     );
     println!(
         "sky         {} patches (MF:{}), ground reflectance {}, {}",

@@ -503,6 +503,11 @@ pub struct LightingArgs {
     /// (hours 0…24; an hour counts when its middle lies inside). Default 8-18 (IES LM-83-12).
     #[arg(long, value_name = "START-END", help_heading = DAYLIGHT)]
     pub occupancy: Option<String>,
+    /// Annual daylight: the occupied hours from a file, one line an hour of the weather
+    /// file's, its last comma-separated field 1 (occupied) or 0 (`1`, or DAYSIM's
+    /// `month,day,hour,1`; `#` comments and a header line skipped); in place of --occupancy.
+    #[arg(long, value_name = "FILE", help_heading = DAYLIGHT)]
+    pub occupancy_schedule: Option<PathBuf>,
     /// Annual daylight: daylight autonomy's illuminance (lx) for sDA, and where UDI's
     /// autonomous bin starts. Default 300.
     #[arg(long, value_name = "LX", help_heading = DAYLIGHT)]

@@ -229,6 +229,7 @@ pub(crate) fn lighting_settings(a: &LightingArgs) -> LightingSettings {
 /// Run the command.
 pub fn run(a: LightingArgs) -> Result<()> {
     let annual_only = a.occupancy.is_some()
+        || a.occupancy_schedule.is_some()
         || a.sda_threshold.is_some()
         || a.sda_fraction.is_some()
         || a.ase_threshold.is_some()

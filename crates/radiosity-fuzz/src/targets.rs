@@ -64,11 +64,13 @@ pub enum Target {
     GltfLights,
     /// An EnergyPlus weather file (one day of hourly records) for the annual daylight run.
     Epw,
+    /// An occupancy schedule (a day of hours, DAYSIM's `month,day,hour,value`).
+    Occupancy,
 }
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 22] = [
+    pub const ALL: [Target; 23] = [
         Target::Obj,
         Target::Mtl,
         Target::Mgf,
@@ -91,6 +93,7 @@ impl Target {
         Target::Points,
         Target::GltfLights,
         Target::Epw,
+        Target::Occupancy,
     ];
 
     /// Its name.
@@ -118,6 +121,7 @@ impl Target {
             Target::Points => "points",
             Target::GltfLights => "gltf-lights",
             Target::Epw => "epw",
+            Target::Occupancy => "occupancy",
         }
     }
 }
@@ -192,6 +196,13 @@ fn corpus(target: Target, scratch: &Path) -> Vec<(String, Vec<u8>)> {
         Target::Schedule => vec![s("lights.csv", SCHEDULE), s("lamp.ies", IES)],
         Target::Points => vec![s("desk.pts", POINTS)],
         Target::Epw => vec![("golden.epw".into(), epw_day().into_bytes())],
+        Target::Occupancy => vec![("occupancy.csv".into(), {
+            let mut t = String::from("month,day,hour,occupancy\n# a working day\n");
+            for h in 0..24 {
+                t.push_str(&format!("6,21,{h}.5,{}\n", (8..18).contains(&h) as u8));
+            }
+            t.into_bytes()
+        })],
         Target::GltfLights => vec![s("lights.gltf", GLTF_LIGHTS)],
         Target::Pfm => vec![("ref.pfm".into(), {
             let mut b = b"PF\n2 2\n-1.0\n".to_vec();
@@ -418,6 +429,11 @@ fn parse(target: Target, dir: &Path) -> bool {
         }
         Target::Points => radiosity::lighting::read_points(&dir.join("desk.pts")).is_ok(),
         Target::Epw => radiosity::daylight::epw::read_epw(&dir.join("golden.epw")).is_ok(),
+        Target::Occupancy => std::fs::read_to_string(dir.join("occupancy.csv"))
+            .ok()
+            .is_some_and(|t| {
+                radiosity::daylight::metrics::parse_schedule(&t, "occupancy.csv", 24).is_ok()
+            }),
         Target::GltfLights => {
             radiosity::lighting::gltf_luminaires(&dir.join("lights.gltf")).is_ok()
         }

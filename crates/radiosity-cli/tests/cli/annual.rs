@@ -371,6 +371,23 @@ fn the_annual_flags_change_the_metrics_as_counted_by_hand() {
     assert_eq!(s["annual"]["occupied_hours"], 365);
     every(&h, &rows, "sun_hours", "200");
     every(&h, &rows, "daylight_autonomy", "1.0000");
+    let by_period = read(&dir, "annual.csv");
+    // The same hours from a schedule file, plain and DAYSIM's month,day,hour,value with a
+    // header and a comment: the same metrics, byte for byte.
+    let plain: String = (0..365 * 24)
+        .map(|k| if k % 24 == 12 { "1\n" } else { "0\n" })
+        .collect();
+    let daysim: String =
+        std::iter::once("month,day,hour,occupancy\n# hours ending 13\n".to_string())
+            .chain((0..365 * 24).map(|k| format!("1,1,{}.5,{}\n", k % 24, (k % 24 == 12) as u8)))
+            .collect();
+    for (name, text) in [("plain.csv", plain), ("daysim.csv", daysim)] {
+        write(&dir, name, &text);
+        let (_, _, s) = sunny_year(&dir, &["--occupancy-schedule", name]);
+        assert_eq!(s["annual"]["occupied_hours"], 365);
+        assert_eq!(s["annual"]["occupancy"], name);
+        assert_eq!(read(&dir, "annual.csv"), by_period, "{name}");
+    }
 
     for (fraction, inside) in [("0.85", "1"), ("0.9", "0")] {
         let (h, rows, s) = sunny_year(&dir, &["--occupancy", "6-20", "--sda-fraction", fraction]);
@@ -396,7 +413,16 @@ fn bad_annual_flags_are_refused_on_one_line() {
     let dir = scratch("annual-bad-flags");
     open_floor(&dir);
     write(&dir, "year.epw", &year_epw(1.0));
-    let keep = ["floor.obj", "floor.mtl", "points.pts", "year.epw"];
+    write(&dir, "half.csv", "occupancy\n1\n0.5\n");
+    write(&dir, "short.csv", "1\n0\n");
+    let keep = [
+        "floor.obj",
+        "floor.mtl",
+        "points.pts",
+        "year.epw",
+        "half.csv",
+        "short.csv",
+    ];
     let annual = [
         "lighting",
         "floor.obj",
@@ -422,6 +448,33 @@ fn bad_annual_flags_are_refused_on_one_line() {
         (&["--sda-fraction", "0"], &["--sda-fraction"]),
         (&["--sda-threshold", "0"], &["--sda-threshold"]),
         (&["--ase-threshold", "nan"], &["--ase-threshold"]),
+        (
+            &["--occupancy-schedule", "half.csv"],
+            &[
+                "--occupancy-schedule half.csv",
+                "half.csv:3: occupancy 0.5: must be 0 or 1",
+            ],
+        ),
+        (
+            &["--occupancy-schedule", "short.csv"],
+            &[
+                "--occupancy-schedule short.csv",
+                "2 hours of occupancy",
+                "8760",
+            ],
+        ),
+        (
+            &["--occupancy-schedule", "none.csv"],
+            &["--occupancy-schedule none.csv", "cannot be read"],
+        ),
+        (
+            &["--occupancy-schedule", "short.csv", "--occupancy", "8-18"],
+            &["--occupancy and --occupancy-schedule"],
+        ),
+        (
+            &["--occupancy-schedule", "points.pts"],
+            &["--occupancy-schedule points.pts", "is not numbers"],
+        ),
     ] {
         fails(&with(extra), &dir, words, &keep);
     }

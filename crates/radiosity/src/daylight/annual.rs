@@ -274,6 +274,9 @@ pub struct EpwSkies<'a> {
     /// The patches' sample directions, computed once (None past [`SAMPLE_TABLE_MAX`]
     /// directions: each hour then computes its own).
     samples: Option<PatchSamples>,
+    /// Which hours are occupied, in place of the params' daily period
+    /// ([`EpwSkies::with_schedule`]).
+    schedule: Option<Vec<bool>>,
 }
 
 /// Most sample directions kept in a table (32 bytes each).
@@ -302,7 +305,23 @@ impl<'a> EpwSkies<'a> {
                 (patches.sky_count().saturating_mul(sub * sub) <= SAMPLE_TABLE_MAX)
                     .then(|| patches.samples(sub))
             },
+            schedule: None,
         }
+    }
+
+    /// The occupied hours from a schedule, an hour each of the weather file's
+    /// ([`super::metrics::parse_schedule`]), in place of the params' daily period. Errors: a
+    /// schedule of another length.
+    pub fn with_schedule(mut self, schedule: Vec<bool>) -> Result<EpwSkies<'a>, DaylightError> {
+        if schedule.len() != self.epw.records.len() {
+            return Err(DaylightError::Parameter(format!(
+                "an occupancy schedule of {} hours for a weather file of {}",
+                schedule.len(),
+                self.epw.records.len()
+            )));
+        }
+        self.schedule = Some(schedule);
+        Ok(self)
     }
 }
 
@@ -344,7 +363,10 @@ impl EpwSkies<'_> {
         };
         let pos = solar_position(&self.site, year, r.month, r.day, r.mid_hour());
         let light = HourLight {
-            occupied: self.params.occupancy.occupied(r.mid_hour()),
+            occupied: match &self.schedule {
+                Some(s) => s[h],
+                None => self.params.occupancy.occupied(r.mid_hour()),
+            },
             sun: pos.direction(),
             ..Default::default()
         };

@@ -62,6 +62,60 @@ impl Occupancy {
     }
 }
 
+/// An occupancy schedule of `hours` hours from `text` (the file `name`, for errors): one
+/// line an hour, in the weather file's order, whose last comma-separated field is 1
+/// (occupied) or 0 (`1`, or `month,day,hour,1` as DAYSIM's files have it); blank lines and
+/// lines starting with `#` are skipped, and so is a first line that is not numbers (a
+/// header). Errors name the file and line: a value other than 0 or 1, a field that is not a
+/// number, more hours than `hours` (refused at the first one too many), or fewer.
+pub fn parse_schedule(text: &str, name: &str, hours: usize) -> Result<Vec<bool>, DaylightError> {
+    let mut out = Vec::with_capacity(hours.min(text.len() / 2 + 1));
+    let mut first = true;
+    for (k, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let numbers: Option<Vec<f64>> = fields.iter().map(|f| f.parse::<f64>().ok()).collect();
+        let Some(numbers) = numbers else {
+            if first {
+                first = false;
+                continue;
+            }
+            return Err(super::invalid(
+                name,
+                k + 1,
+                format!("{line:?} is not numbers (an hour's occupancy, 0 or 1, last)"),
+            ));
+        };
+        first = false;
+        let v = numbers[numbers.len() - 1];
+        if v != 0.0 && v != 1.0 {
+            return Err(super::invalid(
+                name,
+                k + 1,
+                format!("occupancy {v}: must be 0 or 1"),
+            ));
+        }
+        if out.len() == hours {
+            return Err(super::invalid(
+                name,
+                k + 1,
+                format!("more than the weather file's {hours} hours"),
+            ));
+        }
+        out.push(v == 1.0);
+    }
+    if out.len() != hours {
+        return Err(DaylightError::Parameter(format!(
+            "{name}: {} hours of occupancy, the weather file has {hours}",
+            out.len()
+        )));
+    }
+    Ok(out)
+}
+
 /// The metrics' thresholds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MetricParams {
@@ -322,6 +376,40 @@ mod tests {
         assert_eq!(m.points[0].sun_hours, 250);
         assert!(!m.points[0].in_ase && m.points[1].in_ase && !m.points[2].in_ase);
         assert!((m.ase - 1.0 / 3.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn occupancy_schedules_are_read_or_refused_on_one_line() {
+        let one = "1\n0\n\n# comment\n1\n";
+        assert_eq!(
+            parse_schedule(one, "s.csv", 3).unwrap(),
+            [true, false, true]
+        );
+        let daysim = "month,day,hour,occupancy\n1,1,0.5,0\n1,1,1.5,1.0\n";
+        assert_eq!(parse_schedule(daysim, "d.csv", 2).unwrap(), [false, true]);
+        let err = |text: &str, hours: usize| {
+            parse_schedule(text, "s.csv", hours)
+                .unwrap_err()
+                .to_string()
+        };
+        assert_eq!(err("1\n0.5\n", 2), "s.csv:2: occupancy 0.5: must be 0 or 1");
+        assert_eq!(err("1\nNaN\n", 2), "s.csv:2: occupancy NaN: must be 0 or 1");
+        assert_eq!(
+            err("1\nyes\n", 2),
+            "s.csv:2: \"yes\" is not numbers (an hour's occupancy, 0 or 1, last)"
+        );
+        assert_eq!(
+            err("1\n1\n1\n", 2),
+            "s.csv:3: more than the weather file's 2 hours"
+        );
+        assert_eq!(
+            err("1\n", 2),
+            "s.csv: 1 hours of occupancy, the weather file has 2"
+        );
+        assert_eq!(
+            err("", 1),
+            "s.csv: 0 hours of occupancy, the weather file has 1"
+        );
     }
 
     #[test]
